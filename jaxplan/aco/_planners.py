@@ -12,6 +12,8 @@ and says so here:
   * ``praco`` on grids uses α = 1, β = 7 like the other grid presets (seed 004 gives
     no values); its TSP mode uses β = 5.
   * ``max_steps`` defaults to ``min(free cells, 4·(H + W))``.
+  * ``keep_pheromone=True`` (every ACO planner; not a paper parameter) also returns the
+    final pheromone: ``BatchResult.tau`` and ``PlanResult.info["tau"]`` (for plots).
 """
 
 from __future__ import annotations
@@ -47,7 +49,7 @@ COLONIES: dict[str, Colony] = {
 }
 
 _COMMON = {"ants": 50, "iterations": 50, "alpha": 1.0, "beta": 7.0, "connectivity": 8, "max_steps": None,
-           "heuristic": "euclidean", "dead_end": "retreat", "vehicle_height": None}
+           "heuristic": "euclidean", "dead_end": "retreat", "vehicle_height": None, "keep_pheromone": False}
 
 _DEFAULTS: dict[str, dict[str, Any]] = {
     "aco": {**_COMMON, "dead_end": "die", "rho": 0.3, "q": 100.0, "tau0": 1.0},
@@ -62,7 +64,8 @@ _DEFAULTS: dict[str, dict[str, Any]] = {
 }
 
 # Parameters that shape the compiled program (everything else is a traced leaf of `params`).
-_STATIC = ("ants", "iterations", "connectivity", "max_steps", "heuristic", "dead_end", "vehicle_height", "colonies")
+_STATIC = ("ants", "iterations", "connectivity", "max_steps", "heuristic", "dead_end", "vehicle_height", "colonies",
+           "keep_pheromone")
 # Parameters that must lie in [0, 1].
 _UNIT = ("rho", "rho_res", "lambda_p", "delta")
 _DESCRIPTIONS = {
@@ -89,6 +92,8 @@ def _validate(name: str):
             raise ValueError(f"planner {name!r}: max_steps must be a positive integer or None, got {p['max_steps']!r}")
         if p["connectivity"] not in (4, 8, 16):
             raise ValueError(f"planner {name!r}: connectivity must be one of (4, 8, 16), got {p['connectivity']!r}")
+        if not isinstance(p.get("keep_pheromone", False), (bool, np.bool_)):
+            raise ValueError(f"planner {name!r}: keep_pheromone must be True or False, got {p['keep_pheromone']!r}")
         vh = p["vehicle_height"]
         if vh is not None and (not math.isfinite(vh) or vh < 0):
             raise ValueError(f"planner {name!r}: vehicle_height must be a finite height >= 0, got {vh!r}")
@@ -127,6 +132,7 @@ def split_params(grid: GridMap, p: Mapping[str, Any]) -> tuple[RunConfig, dict, 
         heuristic=p["heuristic"],
         dead_end=p["dead_end"],
         penalise="lambda_p" in p,
+        keep_pheromone=bool(p.get("keep_pheromone", False)),
     )
     params = {k: jnp.asarray(v, jnp.float32) for k, v in p.items() if k not in _STATIC}
     return cfg, params, int(p["connectivity"]), p["vehicle_height"]
@@ -194,7 +200,10 @@ class BatchResult(NamedTuple):
     paths ``int64[N, R, P, 2]`` cells, padded with −1 after ``n_cells``; n_cells ``[N, R]``;
     length (m), cost, turns, success, converged ``[N, R]`` (−1 without success);
     history and diversity ``[N, R, I]`` per iteration; successes ``[N, R, I]`` ants at the
-    goal per iteration; time_s for the whole call without compilation; compile_s.
+    goal per iteration; time_s for the whole call without compilation; compile_s;
+    tau ``f32[N, R, S, C, K]`` final pheromone per sub-colony and directed edge (cell
+    ``i = y * W + x``, neighbour slot k of `jaxplan.neighbour_table`), only with
+    ``keep_pheromone=True`` (else None).
     """
 
     paths: np.ndarray
@@ -210,10 +219,12 @@ class BatchResult(NamedTuple):
     time_s: float
     compile_s: float
     planner: str
+    tau: np.ndarray | None = None
 
     def result(self, i: int, r: int) -> PlanResult:
         """One scenario/seed as a `PlanResult`."""
         n = int(self.n_cells[i, r])
+        extra = {} if self.tau is None else {"tau": self.tau[i, r].copy()}
         return PlanResult(
             path=self.paths[i, r, :n].copy(),
             length=float(self.length[i, r]),
@@ -224,7 +235,7 @@ class BatchResult(NamedTuple):
             success=bool(self.success[i, r]),
             planner=self.planner,
             info={"converged_iteration": int(self.converged[i, r]), "diversity": self.diversity[i, r].copy(),
-                  "successes": self.successes[i, r].copy(), "compile_s": self.compile_s},
+                  "successes": self.successes[i, r].copy(), "compile_s": self.compile_s, **extra},
         )
 
 
@@ -255,7 +266,7 @@ def _to_batch(name: str, out, time_s: float, compile_s: float, width: int) -> Ba
         cost=np.asarray(out.cost, np.float64), turns=np.where(success, np.asarray(out.turns), 0).astype(np.int64),
         success=success, converged=np.asarray(out.converged), history=np.asarray(out.history, np.float64),
         diversity=np.asarray(out.diversity, np.float64), successes=np.asarray(out.successes), time_s=time_s,
-        compile_s=compile_s, planner=name,
+        compile_s=compile_s, planner=name, tau=None if out.tau is None else np.asarray(out.tau),
     )
 
 
