@@ -17,6 +17,7 @@ import jax.numpy as jnp
 from jaxplan.aco import _rules as R
 from jaxplan.aco._context import GoalTables, MapTables
 from jaxplan.aco._walk import DEAD_END_RULES, GOAL, Ants, move_lut, walk
+from jaxplan.metrics import _run as run_metrics
 
 __all__ = ["Colony", "RunConfig", "ColonyState", "RunOutput", "run", "run_batch", "HEURISTICS"]
 
@@ -224,10 +225,8 @@ def _update(colony: Colony, cfg: RunConfig, tables: MapTables, params: dict, sta
     if ants.marks is not None:
         alert = alert | ants.marks
     n_ok = jnp.sum(ok)
-    finite = jnp.isfinite(cost)
-    mean = jnp.sum(jnp.where(finite, cost, 0.0)) / jnp.maximum(n_ok, 1)
-    var = jnp.sum(jnp.where(finite, (cost - mean) ** 2, 0.0)) / jnp.maximum(n_ok - 1, 1)
-    diversity = jnp.where(n_ok >= 2, jnp.sqrt(var), 0.0)
+    # Failed ants carry cost inf, so the finite costs are the successful ants (all colonies').
+    diversity = run_metrics.diversity(cost, jnp.isfinite(cost), axis=None)
     new = ColonyState(tau, alert, bs_cells, bs_moves, bs_n, bs_cost, bs_length, bs_turns)
     return new, (jnp.min(bs_cost), diversity, n_ok.astype(jnp.int32), jnp.sum(ants.ant_steps))
 
@@ -291,8 +290,7 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
     pick = lambda a: a[jnp.arange(B), best]  # noqa: E731
     final = pick(state.bs_cost)
     success = jnp.isfinite(final)
-    within = history <= (final + 1e-3 * jnp.abs(final))[:, None]
-    converged = jnp.where(success, jnp.argmax(within, axis=1), -1).astype(jnp.int32)
+    converged = run_metrics.converged_iteration(history)  # history[:, -1] is the final best
     out = RunOutput(
         cells=pick(state.bs_cells), n=pick(state.bs_n), cost=final, length=pick(state.bs_length),
         turns=pick(state.bs_turns), success=success, history=history, diversity=diversity, successes=successes,

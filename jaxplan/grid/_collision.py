@@ -18,7 +18,9 @@ that any square within the radius of the segment is seen from some step.
 
 from __future__ import annotations
 
+import hashlib
 import math
+from collections import OrderedDict
 from typing import NamedTuple
 
 import jax
@@ -29,7 +31,7 @@ from jaxplan.grid._fields import clearance_field
 from jaxplan.grid._gridmap import GridMap
 
 __all__ = [
-    "CollisionMap", "collision_map", "point_square_distance", "segment_square_distance", "point_clearance",
+    "CollisionMap", "collision_map", "cached_collision_map", "point_square_distance", "segment_square_distance", "point_clearance",
     "segment_clearance", "segment_free", "polyline_free", "TOUCH",
 ]
 
@@ -72,6 +74,28 @@ def collision_map(grid: GridMap) -> CollisionMap:
     res = float(grid.resolution)
     field = clearance_field(grid) / res
     return CollisionMap(jnp.asarray(blocked), jnp.asarray(field, jnp.float32), jnp.asarray(res, jnp.float32))
+
+
+# Collision maps memoised by content (pure memoisation, bounded): building one runs a distance
+# transform, which would otherwise dominate repeated calls on the same map.
+_CMAPS: OrderedDict[tuple, CollisionMap] = OrderedDict()
+_CMAPS_MAX = 8
+
+
+def cached_collision_map(grid: GridMap) -> CollisionMap:
+    """`collision_map(grid)`, memoised on the map's free cells and resolution."""
+    free = np.asarray(grid.free, dtype=bool)
+    key = (free.shape, hashlib.blake2b(np.packbits(free).tobytes(), digest_size=16).hexdigest(),
+           float(grid.resolution))
+    hit = _CMAPS.get(key)
+    if hit is not None:
+        _CMAPS.move_to_end(key)
+        return hit
+    cmap = collision_map(grid)
+    _CMAPS[key] = cmap
+    if len(_CMAPS) > _CMAPS_MAX:
+        _CMAPS.popitem(last=False)
+    return cmap
 
 
 def point_square_distance(p: jnp.ndarray, c: jnp.ndarray) -> jnp.ndarray:
@@ -126,18 +150,19 @@ def _blocked_at(cmap: CollisionMap, cells: jnp.ndarray) -> jnp.ndarray:
     return jnp.where(inside, cmap.blocked[jnp.clip(y, 0, Hp - 1), jnp.clip(x, 0, Wp - 1)], True)
 
 
-def point_clearance(cmap: CollisionMap, points: jnp.ndarray) -> jnp.ndarray:
+def point_clearance(cmap: CollisionMap, points: jnp.ndarray, window: int = POINT_WINDOW) -> jnp.ndarray:
     """Distance (cells) from points ``[..., 2]`` (cell coordinates) to the nearest blocked square.
 
-    Exact at cell centres (integer points) and, elsewhere, exact whenever the answer is at
-    most ``POINT_WINDOW`` cells; beyond that it returns the smaller of the exact distance to
+    Exact at cell centres (integer points) and, elsewhere, exact whenever the answer is
+    below ``window`` cells (static; a square outside the window is at least that far);
+    otherwise it returns the smaller of the exact distance to
     the window's squares and ``field(centre) + |point − centre|``: an upper bound, at most
     ``2·|point − centre| <= √2`` cells above the truth. Points outside the map get 0.
     """
     points = jnp.asarray(points, jnp.float32)
     H, W = cmap.shape
     centre = jnp.round(points).astype(jnp.int32)
-    win = _window(POINT_WINDOW)
+    win = _window(window)
     cells = centre[..., None, :] + win  # [..., K, 2]
     d = point_square_distance(points[..., None, :], cells.astype(jnp.float32))
     near = jnp.min(jnp.where(_blocked_at(cmap, cells), d, jnp.inf), axis=-1)

@@ -1,7 +1,10 @@
-"""Path metrics of DESIGN §6 for one path on the host (numpy).
+"""One-path host versions of the geometry metrics (numpy, float64), for planners.
 
-These are the reference definitions used to fill `PlanResult` fields and the demo's
-table; batched JAX forms for padded paths live beside them.
+They evaluate the very definitions of `jaxplan.metrics._path` (written once over an
+array module) with numpy instead of JAX: a planner fills `PlanResult.turns` once per path,
+and there a compiled JAX call would cost more than the metric (measured: 0.13–0.23 ms
+per call plus about 0.7 s to compile each padded length, against tens of microseconds
+here). Batches belong to the JAX functions and `path_metrics`.
 """
 
 from __future__ import annotations
@@ -9,47 +12,54 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["path_length", "heading_changes", "count_turns", "count_sharp_turns", "smoothness"]
+from jaxplan.metrics import _path as P
 
-TURN_EPS = 1e-6
-SHARP_TURN = np.pi / 4
+__all__ = ["path_length", "heading_changes", "count_turns", "count_sharp_turns", "smoothness", "max_curvature"]
+
+
+def _points(points: ArrayLike) -> tuple[np.ndarray, int]:
+    p = np.asarray(points)
+    if p.ndim != 2 or p.shape[-1] != 2:
+        if p.size == 0:  # an empty list or array: no point
+            return np.zeros((0, 2)), 0
+        raise ValueError(f"points must have shape [L, 2], got {p.shape}")
+    return p, len(p)
 
 
 def path_length(points: ArrayLike, resolution: float = 1.0) -> float:
     """Summed segment lengths of ``[L, 2]`` points (cells or metres), times ``resolution``."""
-    p = np.asarray(points, dtype=np.float64)
-    if len(p) < 2:
-        return 0.0
-    return float(np.sum(np.hypot(*np.diff(p, axis=0).T)) * resolution)
+    p, n = _points(points)
+    return float(np.sum(P._segments(p, n, np)[2]) * resolution) if n >= 2 else 0.0
 
 
 def heading_changes(points: ArrayLike) -> np.ndarray:
-    """``f64[V]`` absolute heading change (rad, in [0, π]) at each interior vertex.
-
-    Repeated points (zero-length segments) are dropped first.
-    """
-    p = np.asarray(points, dtype=np.float64)
-    if len(p) < 3:
+    """``f64[V]`` absolute heading change (rad, in [0, π]) at each interior vertex, repeated points skipped."""
+    p, n = _points(points)
+    if n < 3:
         return np.zeros(0)
-    d = np.diff(p, axis=0)
-    d = d[np.hypot(d[:, 0], d[:, 1]) > 0]
-    if len(d) < 2:
-        return np.zeros(0)
-    ang = np.arctan2(d[:, 1], d[:, 0])
-    return np.abs((np.diff(ang) + np.pi) % (2 * np.pi) - np.pi)
+    heading, *_, vertex = P._vertex_turns(p, n, np)
+    return heading[vertex]
 
 
 def count_turns(points: ArrayLike) -> int:
     """Vertices whose heading change exceeds 1e-6 rad."""
-    return int(np.sum(heading_changes(points) > TURN_EPS))
+    p, n = _points(points)
+    return int(P._turn_counts(p, n, np, ("turns",))["turns"]) if n >= 3 else 0
 
 
 def count_sharp_turns(points: ArrayLike) -> int:
-    """Vertices whose heading change is at least 45°."""
-    return int(np.sum(heading_changes(points) >= SHARP_TURN - 1e-9))
+    """Vertices whose heading change is at least 45° (less a 1e-9 rad tolerance)."""
+    p, n = _points(points)
+    return int(P._turn_counts(p, n, np, ("sharp_turns",))["sharp_turns"]) if n >= 3 else 0
 
 
 def smoothness(points: ArrayLike) -> float:
-    """``1 − mean|Δheading|/π`` over interior vertices (1 for a straight path)."""
-    h = heading_changes(points)
-    return 1.0 if len(h) == 0 else float(1.0 - h.mean() / np.pi)
+    """``1 − mean|Δheading|/π`` over interior vertices (1 for a straight path or fewer than 3 points)."""
+    p, n = _points(points)
+    return float(P._turn_counts(p, n, np, ("smoothness",))["smoothness"]) if n >= 3 else 1.0
+
+
+def max_curvature(points: ArrayLike, resolution: float = 1.0) -> float:
+    """Largest Menger curvature (1/m) over interior vertices of cell-coordinate points (0 if none)."""
+    p, n = _points(points)
+    return float(P._geometry(p, n, resolution, np)["max_curvature"]) if n >= 3 else 0.0

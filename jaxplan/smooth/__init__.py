@@ -9,9 +9,9 @@ and falls back to the unsmoothed path where it would collide.
 
 from jaxplan.smooth._bspline import bspline
 from jaxplan.smooth._corners import bezier_corners, fillet
-from jaxplan.smooth._front import SMOOTHERS, collision_map_of, smooth
+from jaxplan.smooth._front import SMOOTHERS, smooth
 from jaxplan.smooth._prune import key_nodes, los_prune
 from jaxplan.smooth._result import Smoothed, compact, drop_repeats
 
-__all__ = ["SMOOTHERS", "Smoothed", "bezier_corners", "bspline", "collision_map_of", "compact", "drop_repeats",
+__all__ = ["SMOOTHERS", "Smoothed", "bezier_corners", "bspline", "compact", "drop_repeats",
            "fillet", "key_nodes", "los_prune", "smooth"]

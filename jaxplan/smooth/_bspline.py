@@ -18,7 +18,7 @@ import jax.numpy as jnp
 
 from jaxplan.grid._collision import CollisionMap, polyline_free, segment_free
 from jaxplan.smooth._result import Smoothed, compact, drop_repeats
-from jaxplan.smooth._turns import sharp_turn_count
+from jaxplan.metrics._path import count_sharp_turns_padded as sharp_turn_count
 
 __all__ = ["bspline"]
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from collections import OrderedDict
 from typing import Any, Callable, Sequence
 
 import jax
@@ -11,14 +10,14 @@ import jax.numpy as jnp
 import numpy as np
 from numpy.typing import ArrayLike
 
-from jaxplan.grid._collision import CollisionMap, collision_map
+from jaxplan.grid._collision import cached_collision_map
 from jaxplan.grid._gridmap import GridMap
 from jaxplan.smooth._bspline import bspline
 from jaxplan.smooth._corners import bezier_corners, fillet
 from jaxplan.smooth._prune import key_nodes, los_prune
 from jaxplan.smooth._result import Smoothed
 
-__all__ = ["SMOOTHERS", "smooth", "collision_map_of"]
+__all__ = ["SMOOTHERS", "smooth"]
 
 # name -> (function, {option: (default, unit)}); unit "m" options are given in metres and
 # passed in cells, "deg" in degrees and passed in radians; static options change shapes.
@@ -31,21 +30,7 @@ SMOOTHERS: dict[str, tuple[Callable[..., Smoothed], dict[str, tuple[Any, str]]]]
 }
 _STATIC_ALWAYS = {"threshold"}  # used to pick branches at trace time
 
-_MAPS: OrderedDict = OrderedDict()
 _FNS: dict = {}
-
-
-def collision_map_of(grid: GridMap) -> CollisionMap:
-    """The `CollisionMap` of ``grid``, built once per map object (a few maps are kept)."""
-    key = id(grid.free), float(grid.resolution)
-    hit = _MAPS.get(key)
-    if hit is None or hit[0] is not grid.free:
-        hit = (grid.free, collision_map(grid))
-        _MAPS[key] = hit
-        while len(_MAPS) > 8:
-            _MAPS.popitem(last=False)
-    _MAPS.move_to_end(key)
-    return hit[1]
 
 
 def _compiled(name: str, radius: float, static: tuple):
@@ -147,7 +132,7 @@ def smooth(path: ArrayLike, grid: GridMap, method: str | Sequence[str] = "los", 
     if np.any(v < -0.5) or np.any(v[:, 0] > W - 0.5) or np.any(v[:, 1] > H - 0.5):
         raise ValueError(f"path leaves the {W}x{H} map (cell coordinates)")
     res = float(grid.resolution)
-    cmap = collision_map_of(grid)
+    cmap = cached_collision_map(grid)
     cur = np.where(valid[..., None], pts, pts[np.arange(B), lens - 1][:, None, :]).astype(np.float32)
     cur_n = lens.astype(np.int32)
     removed = np.zeros(B, np.int64)

@@ -1,0 +1,257 @@
+"""`path_metrics`: the path metrics of DESIGN §6 for one path or a padded batch, in one compiled call.
+
+The host side validates the input (the compiled core cannot raise), pads the path length
+up to a power of two so that one compilation serves every length in a bucket, and calls
+two jitted cores: the per-path geometry and clearance metrics, and — only with a
+reference — the Hausdorff distance. Compiled functions are cached by JAX per input shape,
+so a second call with the same ``(B, L-bucket)`` and map shape does not trace again.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+from collections import OrderedDict
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from numpy.typing import ArrayLike
+
+from jaxplan.grid._collision import CollisionMap, cached_collision_map
+from jaxplan.grid._gridmap import GridMap
+from jaxplan.metrics._clearance import clearance_metrics
+from jaxplan.metrics._path import geometry_metrics
+from jaxplan.metrics._polyline import HAUSDORFF_SAMPLES, hausdorff_bounds
+
+__all__ = ["path_metrics", "PATH_METRICS", "bucket"]
+
+PATH_METRICS = (
+    "length", "turns", "sharp_turns", "smoothness", "min_clearance", "mean_clearance", "max_curvature",
+    "hausdorff", "optimality_gap",
+)
+"""Keys of the dict `path_metrics` returns, in order."""
+
+MIN_BUCKET = 4
+
+
+def bucket(length: int) -> int:
+    """The padded length for ``length`` points: the next power of two, at least `MIN_BUCKET`."""
+    return max(MIN_BUCKET, 1 << max(int(length) - 1, 0).bit_length())
+
+
+@jax.jit
+def _core(cmap: CollisionMap, paths: jnp.ndarray, n: jnp.ndarray) -> dict:
+    """Geometry and clearance metrics of ``paths [B, L, 2]`` with ``n [B]`` valid points."""
+    out = geometry_metrics(paths, n, cmap.resolution)
+    out["min_clearance"], out["mean_clearance"] = clearance_metrics(cmap, paths, n)
+    return out
+
+
+@functools.partial(jax.jit, static_argnames="samples")
+def _hausdorff_core(paths, n, refs, n_ref, resolution, samples: int):
+    """``[B]`` Hausdorff lower bounds of ``paths [B, L, 2]`` against ``refs [B, R, 2]``."""
+    return hausdorff_bounds(paths, n, refs, n_ref, resolution, samples)[0]
+
+
+def _as_points(a: ArrayLike, what: str) -> np.ndarray:
+    arr = np.asarray(a)
+    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
+        raise ValueError(f"{what} must hold numbers, got dtype {arr.dtype}")
+    if arr.ndim not in (2, 3) or arr.shape[-1] != 2:
+        raise ValueError(f"{what} must have shape [L, 2] or [B, L, 2], got {arr.shape}")
+    return arr
+
+
+def _counts(n: ArrayLike | None, B: int, L: int, single: bool, what: str) -> np.ndarray:
+    if n is None:
+        return np.full(B, L, np.int64)
+    arr = np.asarray(n)
+    if not np.issubdtype(arr.dtype, np.integer):
+        raise ValueError(f"{what} must be integers, got dtype {arr.dtype}")
+    arr = arr.reshape(1) if (single and arr.ndim == 0) else arr
+    if arr.shape != (B,):
+        raise ValueError(f"{what} must have shape {'[] or [1]' if single else f'[{B}]'}, got {np.shape(n)}")
+    if np.any(arr < 0) or np.any(arr > L):
+        raise ValueError(f"{what} must lie in [0, {L}] (the padded length), got {arr.min()}..{arr.max()}")
+    return arr.astype(np.int64)
+
+
+def _check_finite(points: np.ndarray, n: np.ndarray, what: str) -> None:
+    if np.issubdtype(points.dtype, np.integer):
+        return
+    valid = np.arange(points.shape[1])[None, :] < n[:, None]
+    bad = valid & ~np.isfinite(points).all(axis=-1)
+    if bad.any():
+        b, i = np.argwhere(bad)[0]
+        where = f"point {i}" if points.shape[0] == 1 else f"path {b}, point {i}"
+        raise ValueError(f"{what} has NaN or infinite coordinates ({where}: {points[b, i].tolist()})")
+
+
+def _pad(points: np.ndarray, length: int) -> np.ndarray:
+    """``[B, L, 2]`` -> ``[B, length, 2]``, padding with zeros; NaN in the padding is zeroed too."""
+    out = np.zeros((points.shape[0], length, 2), points.dtype)
+    out[:, : points.shape[1]] = points
+    if np.issubdtype(out.dtype, np.floating):
+        out[~np.isfinite(out)] = 0.0
+    return out
+
+
+def _is_grid_path(paths: np.ndarray, n: np.ndarray) -> bool:
+    """Integer points whose every valid step moves to one of the 8 neighbours (or stays)."""
+    if not np.issubdtype(paths.dtype, np.integer):
+        return False
+    step = np.abs(np.diff(paths.astype(np.int64), axis=1)).max(axis=-1)  # [B, L-1]
+    valid = np.arange(step.shape[1])[None, :] < (n[:, None] - 1)
+    return bool(np.all(step[valid] <= 1))
+
+
+def _optimal(grid: GridMap, paths: np.ndarray, n: np.ndarray, optimal: ArrayLike | None, single: bool):
+    """``f64[B]`` optimal lengths (m), or None when there is no sound reference."""
+    B = paths.shape[0]
+    if optimal is not None:
+        opt = np.asarray(optimal, dtype=np.float64)
+        if opt.ndim == 0:
+            opt = np.full(B, float(opt))
+        if opt.shape != (B,):
+            raise ValueError(f"optimal must be a number{'' if single else f' or have shape [{B}]'}, got shape "
+                             f"{np.shape(optimal)}")
+        if np.isnan(opt).any() or (opt < 0).any():
+            raise ValueError(f"optimal must be >= 0 and not NaN, got {opt[np.isnan(opt) | (opt < 0)][0]}")
+        return opt
+    if not _is_grid_path(paths, n):
+        return None
+    from jaxplan.search import shortest_lengths  # deferred: search imports the host metrics
+
+    opt = np.full(B, np.inf)
+    has = n > 0
+    if has.any():
+        idx = np.flatnonzero(has)
+        starts, goals = paths[idx, 0], paths[idx, n[idx] - 1]
+        opt[idx] = shortest_lengths(grid, starts, goals, connectivity=8)
+        if np.isinf(opt[idx]).any():
+            b = idx[np.isinf(opt[idx])][0]
+            raise ValueError(
+                f"path {b} joins {paths[b, 0].tolist()} to {paths[b, n[b] - 1].tolist()}, which are not connected "
+                "by 8-connected moves without corner cutting: the path crosses blocked cells or cuts a corner; "
+                "pass optimal= explicitly")
+    return opt
+
+
+def _gap(length: np.ndarray, opt: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """``length / optimal − 1``; 0 for 0/0 (start = goal), inf for x/0 and for empty paths."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        gap = length / opt - 1.0
+    gap = np.where(opt == 0, np.where(length == 0, 0.0, np.inf), gap)
+    return np.where(n == 0, np.inf, gap)
+
+
+def path_metrics(
+    path: ArrayLike,
+    grid: GridMap,
+    reference: ArrayLike | None = None,
+    optimal: ArrayLike | None = None,
+    n: ArrayLike | None = None,
+    *,
+    reference_n: ArrayLike | None = None,
+    hausdorff_samples: int = HAUSDORFF_SAMPLES,
+) -> dict[str, Any]:
+    """The path metrics of DESIGN §6 for one path or a padded batch of paths.
+
+    Args:
+      path: ``[L, 2]`` one path, or ``[B, L, 2]`` a batch, of points ``(x, y)`` in cell
+        coordinates: integers for raw grid paths, floats for smoothed or any-angle paths.
+      grid: the map (its resolution turns cells into metres; its blocked cells give clearance).
+      reference: optional path to compare with (cells): ``[R, 2]`` (shared by a whole
+        batch) or ``[B, R, 2]``.
+      optimal: optional optimal length(s) in metres, a number or ``[B]``, ``>= 0``.
+      n: ``int[B]`` (or a number for one path) valid points per path; default: all ``L``.
+      reference_n: ``int[B]`` valid points per reference (for a padded ``[B, R, 2]``);
+        default: all ``R``.
+      hausdorff_samples: points per segment for the Hausdorff distance (static; see
+        `jaxplan.metrics.hausdorff_bounds`).
+
+    Returns:
+      A dict with the keys of `PATH_METRICS`. For one path the values are Python ``float``
+      / ``int`` (or None), for a batch ``np.ndarray [B]`` (or None):
+
+      * ``length`` (m), ``turns`` (heading change > 1e-6 rad), ``sharp_turns`` (>= 45°),
+        ``smoothness`` (1 − mean|Δheading|/π), ``max_curvature`` (1/m, Menger, at the
+        vertices) — see `jaxplan.metrics._path`; repeated points are skipped;
+      * ``min_clearance``, ``mean_clearance`` (m) over the **vertices** (exact at cell
+        centres); a continuous path should be sampled densely first;
+      * ``hausdorff`` (m) between the path and ``reference`` as polylines (a lower bound
+        within ``segment/(2·hausdorff_samples)`` of the exact value, usually exact); None
+        without a reference;
+      * ``optimality_gap`` = length / optimal − 1 with ``optimal`` as given; without it,
+        for integer raw grid paths (every step to one of the 8 neighbours) the optimum is
+        `jaxplan.shortest_lengths` between each path's ends (8-connected, octile, no
+        corner cutting); for any other path None — a smoothed or any-angle path must be
+        compared with the same smoothing of the exact path (DESIGN §6), so pass it. A
+        start = goal path has gap 0.
+
+      Degenerate paths: with no point or one point, length 0, turns 0, sharp turns 0,
+      smoothness 1, curvature 0; with no point, clearances, Hausdorff distance and
+      optimality gap are ``inf`` (nothing was planned). Values are float32-precise
+      (relative ~1e-6: an optimal path's gap may read ±1e-7).
+
+    Raises:
+      ValueError: a path or reference of the wrong shape or dtype, NaN or infinite
+        coordinates among the valid points, ``n`` outside ``[0, L]``, a negative or NaN
+        ``optimal``, an empty reference, or (automatic gap) path ends that are not
+        connected on the map.
+
+    The compiled cores (`jit`) see the paths padded to a power-of-two length, so each
+    ``(B, bucket(L))`` and map shape compiles once. Called directly inside ``jit``, they
+    cannot raise: NaN coordinates propagate into length, smoothness and curvature, and
+    turns compare false.
+
+    Example:
+      >>> import numpy as np, jaxplan as jp
+      >>> grid = jp.grid_from_array(np.ones((4, 4), bool), resolution=0.5)
+      >>> m = jp.metrics.path_metrics(np.array([[0, 0], [1, 1], [2, 1]]), grid)
+      >>> round(m["length"], 4), m["turns"], m["sharp_turns"], round(m["optimality_gap"], 6)
+      (1.2071, 1, 1, 0.0)
+    """
+    paths = _as_points(path, "path")
+    single = paths.ndim == 2
+    if single:
+        paths = paths[None]
+    B, L = paths.shape[0], paths.shape[1]
+    counts = _counts(n, B, L, single, "n")
+    _check_finite(paths, counts, "path")
+    if hausdorff_samples < 1:
+        raise ValueError(f"hausdorff_samples must be >= 1, got {hausdorff_samples}")
+
+    refs = ref_counts = None
+    if reference is not None:
+        refs = _as_points(reference, "reference")
+        if refs.ndim == 2:
+            refs = np.broadcast_to(refs[None], (B,) + refs.shape)
+        elif single or refs.shape[0] != B:
+            raise ValueError(f"reference must have shape [R, 2]{'' if single else f' or [{B}, R, 2]'} to match the "
+                             f"path's {paths.shape if not single else paths.shape[1:]}, got {np.shape(reference)}")
+        ref_counts = _counts(reference_n, B, refs.shape[1], single, "reference_n")
+        _check_finite(refs, ref_counts, "reference")
+        if (ref_counts == 0).any():
+            raise ValueError("reference has no points")
+    elif reference_n is not None:
+        raise ValueError("reference_n given without a reference")
+
+    opt = _optimal(grid, paths, counts, optimal, single)
+    cmap = cached_collision_map(grid)
+    padded = jnp.asarray(_pad(paths, bucket(L)))
+    n_dev = jnp.asarray(counts, jnp.int32)
+    out = {k: np.asarray(v) for k, v in _core(cmap, padded, n_dev).items()}
+    out["hausdorff"] = None
+    if refs is not None:
+        out["hausdorff"] = np.asarray(_hausdorff_core(
+            padded, n_dev, jnp.asarray(_pad(refs, bucket(refs.shape[1]))), jnp.asarray(ref_counts, jnp.int32),
+            cmap.resolution, samples=int(hausdorff_samples)))
+        out["hausdorff"] = np.where(counts == 0, np.inf, out["hausdorff"])
+    out["optimality_gap"] = None if opt is None else _gap(out["length"].astype(np.float64), opt, counts)
+    result = {k: out[k] for k in PATH_METRICS}
+    if single:
+        result = {k: None if v is None else v[0].item() for k, v in result.items()}
+    return result
