@@ -39,6 +39,10 @@ from jaxplan.aco import BatchResult, TourResult, TSPProblem, load_tour, load_tsp
 from jaxplan.registry import PlannerSpec, plan, planners, register_planner
 from jaxplan.result import PlanResult
 from jaxplan import metrics
+from jaxplan.dwa import (
+    Ackermann, Disc, DiscObstacles, DWAConfig, DWAInfo, DWAParams, Rectangle, Unicycle, dwa_control,
+    dwa_control_batch, dwa_step,
+)
 from jaxplan.metrics import EnergyModel, EpisodeTiming, path_metrics
 from jaxplan.smooth import Smoothed, smooth
 from jaxplan.search import SearchGraph, astar, dijkstra, distance_from, search_graph, shortest_lengths
@@ -53,5 +57,5 @@ __all__ = [
     "Scene", "SearchGraph", "UrbanGenerator", "WarehouseGenerator", "astar", "clearance_field", "demo_warehouse",
     "dijkstra", "distance_from", "goal_distance_field", "grid_from_array", "load_map", "load_scenarios",
     "neighbour_table", "passable", "plan", "planners", "poisson_risk", "register_planner", "save_map",
-    "search_graph", "shortest_lengths", "smooth", "Smoothed", "metrics", "path_metrics", "EnergyModel", "EpisodeTiming", "warehouse_seed003", "warehouse_seed004",
+    "search_graph", "shortest_lengths", "smooth", "Smoothed", "metrics", "path_metrics", "Ackermann", "Disc", "DiscObstacles", "DWAConfig", "DWAInfo", "DWAParams", "Rectangle", "Unicycle", "dwa_control", "dwa_control_batch", "dwa_step", "EnergyModel", "EpisodeTiming", "warehouse_seed003", "warehouse_seed004",
 ]

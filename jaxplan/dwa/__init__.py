@@ -1,0 +1,40 @@
+"""Dynamic Window Approach local planner: robot models, dynamic window, batched rollouts, critics, fuzzy evaluation.
+
+Host front::
+
+    import jaxplan as jp
+    u, info = jp.dwa_step(state, subgoal, grid)             # state [5] or [B, 5]
+
+Pure core, for episodes (`lax.scan` over control steps, `vmap` over episodes)::
+
+    from jaxplan.dwa import DWAConfig, clearance_table, default_params, dwa_control
+    from jaxplan.grid._collision import collision_map
+    table = clearance_table(collision_map(grid))
+    u, info = dwa_control(table, DWAConfig(keep_rollouts=False), default_params(), state, subgoal)
+"""
+
+from jaxplan.dwa._clearance import (
+    HYBRID_EXACT_CELLS,
+    ClearanceTable,
+    DiscObstacles,
+    clearance_table,
+    disc_clearance,
+    no_obstacles,
+    static_clearance,
+)
+from jaxplan.dwa._config import CLEARANCE_MODES, EVALUATORS, SELECTIONS, DWAConfig, DWAParams, default_params
+from jaxplan.dwa._core import DWAInfo, dwa_control, dwa_control_batch, evaluate, trajectory
+from jaxplan.dwa._critics import Critics, critics
+from jaxplan.dwa._fuzzy import fuzzy_evaluate, input_memberships, rule_table
+from jaxplan.dwa._robot import Ackermann, Disc, Rectangle, Unicycle, advance, footprint_radius
+from jaxplan.dwa._rollout import Rollouts, rollout
+from jaxplan.dwa._step import dwa_step, table_of
+from jaxplan.dwa._window import Window, dynamic_window, sample_controls
+
+__all__ = [
+    "Ackermann", "CLEARANCE_MODES", "ClearanceTable", "Critics", "DWAConfig", "DWAInfo", "DWAParams", "Disc",
+    "DiscObstacles", "EVALUATORS", "HYBRID_EXACT_CELLS", "Rectangle", "Rollouts", "SELECTIONS", "Unicycle", "Window",
+    "advance", "clearance_table", "critics", "default_params", "disc_clearance", "dwa_control", "dwa_control_batch",
+    "dwa_step", "dynamic_window", "evaluate", "footprint_radius", "fuzzy_evaluate", "input_memberships",
+    "no_obstacles", "rollout", "rule_table", "sample_controls", "static_clearance", "table_of", "trajectory",
+]

@@ -1,0 +1,213 @@
+"""One DWA control step as a pure, jittable function of arrays, for one robot or a batch.
+
+`dwa_control` is what a navigation episode calls inside its `lax.scan` over control
+steps (and ``vmap``-s over episodes): window → samples → rollouts with clearance →
+feasibility → critics → evaluator → selection (or recovery). It cannot raise; the
+host front `jaxplan.dwa.dwa_step` validates inputs first.
+
+Selection:
+  * ``"argmax"`` — the best feasible sample (DWA as published).
+  * ``"softmax"`` — the temperature-relaxed choice for differentiable tuning: the
+    control is the average of the feasible samples' controls weighted by
+    ``softmax(score / temperature)``; it lies in the window (a convex combination of
+    points of a convex set) and tends to the argmax as the temperature goes to 0.
+
+Recovery (DESIGN §5): when no sample is feasible the robot brakes as hard as the
+window allows towards v = 0 and turns as fast as it allows towards the sub-goal's
+side (left when the sub-goal is dead ahead) — "stop and rotate in place"; an
+`Ackermann` robot cannot turn on the spot, so its yaw rate also follows the curvature
+limit and it simply stops. ``DWAInfo.recovery`` flags it.
+
+The ``"classic"`` evaluator adds PythonRobotics' stuck-escape rule: when the chosen
+speed and the current speed are both below 0.001 m/s, turn (PythonRobotics commands
+``-max_delta_yaw_rate``; here the most negative yaw rate inside the window, so the
+control stays admissible). ``DWAInfo.stuck`` flags it.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+from jax import lax
+
+from jaxplan.dwa import _critics as C
+from jaxplan.dwa._clearance import ClearanceTable, DiscObstacles, disc_clearance, static_clearance
+from jaxplan.dwa._config import DWAConfig, DWAParams
+from jaxplan.dwa._fuzzy import fuzzy_evaluate
+from jaxplan.dwa._robot import curvature_limit
+from jaxplan.dwa._rollout import rollout
+from jaxplan.dwa._window import dynamic_window, sample_controls
+
+__all__ = ["DWAInfo", "dwa_control", "dwa_control_batch", "evaluate", "trajectory", "STUCK_SPEED"]
+
+STUCK_SPEED = 0.001
+"""PythonRobotics' ``robot_stuck_flag_cons`` (m/s)."""
+
+
+class DWAInfo(NamedTuple):
+    """What a step saw and decided (a pytree; a batch adds a leading axis to every field).
+
+    Attributes:
+      scores: ``f32[S]`` evaluator scores of every sample (higher is better; computed
+        for infeasible samples too, but they are never chosen).
+      rollouts: ``f32[S, T, 3]`` every sample's trajectory points (x, y, theta) at
+        ``dt, 2·dt, …, T·dt`` (seed 000's Figure 4 fan), or None when the config does not
+        keep them (``keep_rollouts=False``, what episodes use).
+      feasible: ``bool[S]`` minimum clearance >= d_safe over the horizon.
+      chosen: ``i32`` index of the best feasible sample (−1 in recovery). With softmax
+        selection it is the argmax, the sample the blend leans on most.
+      samples: ``f32[S, 2]`` the (v, ω) samples.
+      clearance: ``f32[S]`` minimum clearance of each rollout (m).
+      window: ``f32[4]`` (v_lo, v_hi, ω_lo, ω_hi) of the dynamic window.
+      recovery: ``bool`` no sample was feasible; the control is the recovery manoeuvre.
+      stuck: ``bool`` the classic stuck-escape rule changed the control.
+    """
+
+    scores: jnp.ndarray
+    rollouts: jnp.ndarray
+    feasible: jnp.ndarray
+    chosen: jnp.ndarray
+    samples: jnp.ndarray
+    clearance: jnp.ndarray
+    window: jnp.ndarray
+    recovery: jnp.ndarray
+    stuck: jnp.ndarray
+
+
+def trajectory(state: jnp.ndarray, control: jnp.ndarray, steps: int, dt: float) -> jnp.ndarray:
+    """``[T, 3]`` poses at ``dt … T·dt`` under a constant control, in closed form (exact arcs).
+
+    For plotting the trajectory of a returned control (with argmax selection it equals
+    ``info.rollouts[info.chosen]``; a softmax blend is generally none of the samples).
+    """
+    t = jnp.arange(1, steps + 1, dtype=state.dtype) * dt
+    v, w = control[0], control[1]
+    chord = v * t * jnp.sinc(w * t / (2 * math.pi))
+    mid = state[2] + w * t / 2
+    return jnp.stack([state[0] + chord * jnp.cos(mid), state[1] + chord * jnp.sin(mid), state[2] + w * t], axis=-1)
+
+
+def evaluate(cr: C.Critics, v: jnp.ndarray, feasible: jnp.ndarray, config: DWAConfig, params: DWAParams,
+             with_path: bool = True) -> jnp.ndarray:
+    """Scores ``[S]`` of the rollouts under the configured evaluator (static choice; ``with_path``
+    static: whether a global path was given)."""
+    if config.evaluator == "weighted":
+        return C.weighted(cr, params, feasible, with_path)
+    if config.evaluator == "fuzzy":
+        f = fuzzy_evaluate(cr.heading_error / math.pi, cr.velocity, cr.min_clearance, params, config.d_safe,
+                           config.d_clip)
+        # Path and goal critics, if weighted, join the fuzzy rating as a weighted average.
+        main = params.heading + params.velocity + params.clearance
+        total = main + params.path + params.goal
+        return (main * f + params.path * cr.path + params.goal * cr.goal) / jnp.maximum(total, 1e-12)
+    if config.evaluator == "classic":
+        return C.classic(cr, params, v, config.robot)
+    raise ValueError(f"unknown evaluator {config.evaluator!r}")
+
+
+def _recovery(config: DWAConfig, state: jnp.ndarray, subgoal: jnp.ndarray, window) -> jnp.ndarray:
+    """Brake towards v = 0 and turn towards the sub-goal's side, as hard as the window allows."""
+    v = jnp.clip(0.0, window.v_lo, window.v_hi)
+    dx, dy = subgoal[0] - state[0], subgoal[1] - state[1]
+    c, s = jnp.cos(state[2]), jnp.sin(state[2])
+    side = jnp.where(c * dy - s * dx < 0, -1.0, 1.0)  # sub-goal to the right: turn right
+    w = side * config.robot.omega_max
+    kappa = curvature_limit(config.robot)
+    if kappa is not None:
+        w = jnp.clip(w, -kappa * jnp.abs(v), kappa * jnp.abs(v))
+    return jnp.stack([v, jnp.clip(w, window.w_lo, window.w_hi)])
+
+
+def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, state: jnp.ndarray,
+                subgoal: jnp.ndarray, obstacles: DiscObstacles | None = None,
+                path: jnp.ndarray | None = None) -> tuple[jnp.ndarray, DWAInfo]:
+    """One DWA step for one robot (pure; jit it, vmap it, scan it, differentiate it).
+
+    Args:
+      table: the map's `ClearanceTable` (`jaxplan.dwa.clearance_table`).
+      config: `DWAConfig` (static counts and switches, traced limits and distances).
+      params: `DWAParams` critic weights and temperature.
+      state: ``f32[5]`` (x, y, theta, v, omega) in m, rad, m/s, rad/s.
+      subgoal: ``f32[2]`` (m) the point the heading and goal critics aim at.
+      obstacles: `DiscObstacles` with ``M`` discs (``[M, 2]`` positions and velocities,
+        ``[M]`` radii) or None.
+      path: ``f32[L, 2]`` the global path (m) for the path critic, or None.
+
+    Returns:
+      ``(control f32[2] = (v, omega), DWAInfo)``.
+    """
+    robot = config.robot
+    steps, dt = config.steps, config.dt
+    window = dynamic_window(robot, state, config.period)
+    v, w = sample_controls(robot, window, config.n_v, config.n_omega)
+
+    def clearance(x, y, t):
+        c = static_clearance(table, x, y, config.clearance)
+        if obstacles is not None and obstacles.radii.shape[-1] > 0:
+            c = jnp.minimum(c, disc_clearance(obstacles, x, y, t))
+        return c
+
+    ro = rollout(state, v, w, clearance, robot.footprint, steps, dt, keep=config.keep_rollouts,
+                 unroll=config.unroll)
+    feasible = ro.clearance >= config.d_safe
+    reach = jnp.maximum(jnp.abs(robot.v_min), robot.v_max) * (steps * dt)
+    cr = C.critics(ro.end, ro.clearance, v, state, subgoal, robot, config.d_clip, config.path_clip, reach, path,
+                   ro.end_dir)
+    scores = evaluate(cr, v, feasible, config, params, path is not None)
+
+    masked = jnp.where(feasible, scores, -jnp.inf)
+    chosen = jnp.argmax(masked).astype(jnp.int32)
+    any_feasible = feasible[chosen]  # the argmax of the masked scores is feasible if any sample is
+    u_samples = jnp.stack([v, w], axis=-1)  # [S, 2]
+    if config.selection == "softmax":
+        logits = jnp.where(feasible, scores / params.temperature, -jnp.inf)
+        weights = jax.nn.softmax(jnp.where(any_feasible, logits, 0.0))
+        u = weights @ u_samples
+    elif config.selection == "argmax":
+        u = u_samples[chosen]
+    else:
+        raise ValueError(f"unknown selection {config.selection!r}")
+
+    stuck = any_feasible & False  # derived from the inputs, not a constant: shard_map needs it varying
+    if config.evaluator == "classic":
+        stuck = (jnp.abs(u[0]) < STUCK_SPEED) & (jnp.abs(state[3]) < STUCK_SPEED) & any_feasible
+        u = jnp.where(stuck, jnp.stack([u[0], window.w_lo]), u)
+
+    u = jnp.where(any_feasible, u, _recovery(config, state, subgoal, window))
+    info = DWAInfo(
+        scores=scores, rollouts=ro.poses, feasible=feasible, chosen=jnp.where(any_feasible, chosen, -1),
+        samples=u_samples, clearance=ro.clearance, window=jnp.stack(list(window)),
+        recovery=~any_feasible, stuck=stuck,
+    )
+    return u, info
+
+
+def dwa_control_batch(table: ClearanceTable, config: DWAConfig, params: DWAParams, states: jnp.ndarray,
+                      subgoals: jnp.ndarray, obstacles: DiscObstacles | None = None, path: jnp.ndarray | None = None,
+                      chunk: int | None = 128) -> tuple[jnp.ndarray, DWAInfo]:
+    """`dwa_control` for ``B`` robots: ``states [B, 5]``, ``subgoals [B, 2]``.
+
+    ``obstacles`` may be shared (``[M, 2]``/``[M]`` fields) or per robot (``[B, M, 2]``/``[B, M]``);
+    ``path`` shared ``[L, 2]`` or per robot ``[B, L, 2]``. Robots are processed ``chunk``
+    (static) at a time, each chunk vectorised (`lax.map` with ``batch_size``): the
+    working set of a rollout step then stays in cache (on 2 CPU cores 128 robots per
+    chunk measured 10–20 % faster than one vmap over 1,024, and smaller chunks were
+    slower: every kernel launch is amortised over fewer points). ``chunk=None``, or a
+    chunk of at least B, vmaps the whole batch (what a GPU wants). Returns controls
+    ``[B, 2]`` and a `DWAInfo` with a leading ``B`` axis.
+    """
+    ob_batched = obstacles is not None and obstacles.radii.ndim == 2
+    path_batched = path is not None and path.ndim == 3
+    xs = (states, subgoals, obstacles if ob_batched else None, path if path_batched else None)
+
+    def one(x):
+        st, sg, ob, pa = x
+        return dwa_control(table, config, params, st, sg, ob if ob_batched else obstacles,
+                           pa if path_batched else path)
+
+    if chunk is None or chunk >= states.shape[0]:
+        return jax.vmap(one)(xs)
+    return lax.map(one, xs, batch_size=chunk)

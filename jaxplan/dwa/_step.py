@@ -1,0 +1,287 @@
+"""`dwa_step`: the host front of the local planner (validation, map tables, compiled-function reuse).
+
+The compiled core (`jaxplan.dwa._core.dwa_control`) cannot raise, so everything a
+user can get wrong is checked here first, in numpy, with an error that names the
+problem. The map's `ClearanceTable` is built once per map object and kept; the step
+itself is jitted once per configuration (the static fields of `DWAConfig`, the array
+shapes and the number of moving discs) — limits, distances and weights are traced, so
+changing them does not recompile.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import OrderedDict
+from typing import Any, Mapping
+
+import jax
+import numpy as np
+from numpy.typing import ArrayLike
+
+from jaxplan.dwa._clearance import ClearanceTable, DiscObstacles, clearance_table
+from jaxplan.dwa._config import CLEARANCE_MODES, EVALUATORS, SELECTIONS, DWAConfig, DWAParams, default_params
+from jaxplan.dwa._core import DWAInfo, dwa_control, dwa_control_batch
+from jaxplan.dwa._fastmath import MAX_ROTOR_ANGLE
+from jaxplan.dwa._robot import Ackermann, Disc, Rectangle, Unicycle, footprint_radius
+from jaxplan.grid._collision import collision_map
+from jaxplan.grid._gridmap import GridMap
+
+__all__ = ["dwa_step", "table_of", "validate_config", "validate_params", "as_obstacles"]
+
+_TABLES: OrderedDict = OrderedDict()
+_DEFAULTS: dict = {}
+_VALID_CONFIGS: OrderedDict = OrderedDict()
+CHUNK = 128
+"""Robots per vectorised chunk of a batched step (see `dwa_control_batch`)."""
+
+_single = jax.jit(dwa_control)
+_batch = jax.jit(dwa_control_batch, static_argnames=("chunk",))
+
+
+def table_of(grid: GridMap) -> ClearanceTable:
+    """The `ClearanceTable` of ``grid``, built once per map object (a few maps are kept)."""
+    key = id(grid.free), float(grid.resolution)
+    hit = _TABLES.get(key)
+    if hit is None or hit[0] is not grid.free:
+        hit = (grid.free, clearance_table(collision_map(grid)))
+        _TABLES[key] = hit
+        while len(_TABLES) > 8:
+            _TABLES.popitem(last=False)
+    _TABLES.move_to_end(key)
+    return hit[1]
+
+
+def _number(name: str, x: Any, *, positive: bool = False, nonneg: bool = False) -> float:
+    try:
+        f = float(x)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {x!r}") from None
+    if not math.isfinite(f):
+        raise ValueError(f"{name} must be finite, got {f}")
+    if positive and f <= 0:
+        raise ValueError(f"{name} must be > 0, got {f}")
+    if nonneg and f < 0:
+        raise ValueError(f"{name} must be >= 0, got {f}")
+    return f
+
+
+def validate_config(config: DWAConfig) -> DWAConfig:
+    """Checks a `DWAConfig` and its robot; raises ValueError naming the first problem."""
+    if not isinstance(config, DWAConfig):
+        raise ValueError(f"config must be a DWAConfig, got {type(config).__name__}")
+    try:
+        if config in _VALID_CONFIGS:
+            return config
+        hashable = True
+    except TypeError:  # traced or array-valued fields: validate every time
+        hashable = False
+    r = config.robot
+    if not isinstance(r, (Unicycle, Ackermann)):
+        raise ValueError(f"config.robot must be a Unicycle or an Ackermann, got {type(r).__name__}")
+    name = type(r).__name__
+    v_min = _number(f"{name}.v_min", r.v_min)
+    v_max = _number(f"{name}.v_max", r.v_max, positive=True)
+    if v_min >= v_max:
+        raise ValueError(f"empty velocity range: {name}.v_min ({v_min}) must be below v_max ({v_max})")
+    for field in ("omega_max", "accel", "decel", "alpha"):
+        _number(f"{name}.{field}", getattr(r, field), positive=True)
+    if isinstance(r, Ackermann):
+        _number(f"{name}.wheelbase", r.wheelbase, positive=True)
+        steer = _number(f"{name}.steer_max", r.steer_max, positive=True)
+        if steer >= math.pi / 2:
+            raise ValueError(f"{name}.steer_max must be below π/2 rad, got {steer}")
+    fp = r.footprint
+    if isinstance(fp, Disc):
+        _number("footprint radius", fp.radius, positive=True)
+    elif isinstance(fp, Rectangle):
+        _number("footprint length", fp.length, positive=True)
+        _number("footprint width", fp.width, positive=True)
+        if not isinstance(fp.circles, (int, np.integer)) or fp.circles < 1:
+            raise ValueError(f"footprint circles must be a positive integer, got {fp.circles!r}")
+    else:
+        raise ValueError(f"footprint must be a Disc or a Rectangle, got {type(fp).__name__}")
+    _number("config.period", config.period, positive=True)
+    d_safe = _number("config.d_safe", config.d_safe, positive=True)
+    rad = float(footprint_radius(fp))
+    if d_safe < rad:
+        raise ValueError(f"config.d_safe ({d_safe} m) is below the footprint radius ({rad:.4g} m): "
+                         "feasible rollouts could collide")
+    d_clip = _number("config.d_clip", config.d_clip, positive=True)
+    if d_clip <= d_safe:
+        raise ValueError(f"config.d_clip ({d_clip} m) must exceed d_safe ({d_safe} m)")
+    _number("config.path_clip", config.path_clip, positive=True)
+    for field in ("n_v", "n_omega", "unroll"):
+        n = getattr(config, field)
+        if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 1:
+            raise ValueError(f"config.{field} must be a positive integer, got {n!r}")
+    horizon = _number("config.horizon", config.horizon, positive=True)
+    dt = _number("config.dt", config.dt, positive=True)
+    if abs(horizon / dt - round(horizon / dt)) > 1e-6 * max(1.0, horizon / dt):
+        raise ValueError(f"config.horizon ({horizon} s) must be a whole number of steps dt ({dt} s)")
+    if float(r.omega_max) * dt > 2 * MAX_ROTOR_ANGLE:
+        raise ValueError(f"{name}.omega_max · config.dt = {float(r.omega_max) * dt:.3g} rad: a sample may turn at most "
+                         f"π rad per rollout step (shorten dt)")
+    for field, choices in (("evaluator", EVALUATORS), ("clearance", CLEARANCE_MODES), ("selection", SELECTIONS)):
+        if getattr(config, field) not in choices:
+            raise ValueError(f"config.{field} must be one of {choices}, got {getattr(config, field)!r}")
+    if hashable:
+        _VALID_CONFIGS[config] = True
+        while len(_VALID_CONFIGS) > 64:
+            _VALID_CONFIGS.popitem(last=False)
+    return config
+
+
+def validate_params(params: DWAParams | Mapping[str, float] | None, evaluator: str) -> DWAParams:
+    """`DWAParams` from None (the evaluator's defaults), a mapping of overrides or `DWAParams`; checked."""
+    if params is None:
+        return _DEFAULTS.setdefault(evaluator, default_params(evaluator))
+    if isinstance(params, Mapping):
+        return validate_params(default_params(evaluator, **params), evaluator)
+    if not isinstance(params, DWAParams):
+        raise ValueError(f"params must be DWAParams, a dict of overrides or None, got {type(params).__name__}")
+    values = {}
+    for name, x in params._asdict().items():
+        a = np.asarray(x, dtype=np.float64)
+        if a.shape != ():
+            raise ValueError(f"params.{name} must be a scalar, got shape {a.shape}")
+        if np.isnan(a):
+            raise ValueError(f"params.{name} is NaN")
+        if not np.isfinite(a):
+            raise ValueError(f"params.{name} must be finite, got {float(a)}")
+        if name == "temperature" and a <= 0:
+            raise ValueError(f"params.temperature must be > 0, got {float(a)}")
+        if a < 0:
+            raise ValueError(f"params.{name} is a weight and must be >= 0, got {float(a)}")
+        values[name] = np.float32(a)
+    return DWAParams(**values)
+
+
+def as_obstacles(obstacles: Any, batch: int | None) -> DiscObstacles | None:
+    """Validated float32 `DiscObstacles` (shared ``[M, ...]`` or per robot ``[B, M, ...]``) from
+    `DiscObstacles` or a ``(positions, velocities, radii)`` tuple; None passes through."""
+    if obstacles is None:
+        return None
+    try:
+        pos, vel, rad = obstacles
+    except (TypeError, ValueError):
+        raise ValueError("obstacles must be DiscObstacles or a (positions, velocities, radii) tuple") from None
+    pos = np.asarray(pos, np.float64)
+    vel = np.asarray(vel, np.float64)
+    rad = np.asarray(rad, np.float64)
+    per_robot = rad.ndim == 2
+    lead = (batch,) if per_robot else ()
+    if per_robot and batch is None:
+        raise ValueError("per-robot obstacles [B, M, ...] need a batch of states [B, 5]")
+    if rad.ndim not in (1, 2) or (per_robot and rad.shape[0] != batch):
+        raise ValueError(f"obstacle radii must be [M] or [B, M] with B = {batch}, got shape {rad.shape}")
+    M = rad.shape[-1]
+    for name, a in (("positions", pos), ("velocities", vel)):
+        if a.shape != lead + (M, 2):
+            raise ValueError(f"obstacle {name} must have shape {lead + (M, 2)} to match radii {rad.shape}, "
+                             f"got {a.shape}")
+        if not np.isfinite(a).all():
+            raise ValueError(f"obstacle {name} contain NaN or infinite values")
+    if not np.isfinite(rad).all() or (rad < 0).any():
+        raise ValueError("obstacle radii must be finite and >= 0")
+    return DiscObstacles(*(a.astype(np.float32) for a in (pos, vel, rad)))
+
+
+def _check_window(config: DWAConfig, states: np.ndarray) -> None:
+    r = config.robot
+    v, w = states[:, 3], states[:, 4]
+    P = float(config.period)
+    v_lo = np.maximum(v - float(r.decel) * P, float(r.v_min))
+    v_hi = np.minimum(v + float(r.accel) * P, float(r.v_max))
+    w_lo = np.maximum(w - float(r.alpha) * P, -float(r.omega_max))
+    w_hi = np.minimum(w + float(r.alpha) * P, float(r.omega_max))
+    for lo, hi, what, x, lims in ((v_lo, v_hi, "v", v, (r.v_min, r.v_max)),
+                                  (w_lo, w_hi, "omega", w, (-r.omega_max, r.omega_max))):
+        bad = lo > hi
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise ValueError(f"empty dynamic window: state[{i}] has {what} = {x[i]:.4g}, which one control period "
+                             f"({P} s) of acceleration cannot bring into [{float(lims[0]):.4g}, {float(lims[1]):.4g}]")
+
+
+def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any = None,
+             params: DWAParams | Mapping[str, float] | None = None, *, config: DWAConfig | None = None,
+             path: ArrayLike | None = None) -> tuple[np.ndarray, DWAInfo]:
+    """One Dynamic Window Approach step for one robot or a batch (DESIGN §3, §5).
+
+    Args:
+      state: ``[5]`` = (x, y, theta, v, omega) in m, rad, m/s, rad/s, or ``[B, 5]``.
+      subgoal: ``[2]`` (m), or ``[B, 2]``: the point the robot heads for (a key node of
+        the global path).
+      grid: the map (`GridMap`); its clearance tables are built on the first call and kept.
+      obstacles: moving discs: `DiscObstacles` or ``(positions [M, 2] m, velocities
+        [M, 2] m/s, radii [M] m)``, shared by all robots, or ``[B, M, ...]`` per robot
+        (``M`` may be 0); predicted at constant velocity over the horizon.
+      params: `DWAParams`, a dict of overrides of the evaluator's defaults
+        (e.g. ``{"heading": 0.5}``), or None for the defaults.
+      config: `DWAConfig` (robot, window, horizon, evaluator, clearance mode, selection);
+        default `DWAConfig()` — seed 000's robot and weighted evaluator.
+      path: the global path ``[L, 2]`` (m) for the path critic, or ``[B, L, 2]``.
+
+    Returns:
+      ``(control, info)``: ``control`` ``[2]`` = (v, omega) for the next control period
+      (``[B, 2]`` for a batch) and a `DWAInfo` of numpy arrays (leading ``B`` axis for a
+      batch): scores ``[S]``, rollouts ``[S, T, 3]``, feasible ``[S]``, chosen index, …
+
+    Raises:
+      ValueError: non-finite or mis-shaped state, sub-goal, obstacles or path; an
+        invalid robot or config (non-positive limits, v_min >= v_max, d_safe below the
+        footprint radius, …); negative, NaN or infinite weights; an empty dynamic window.
+
+    Example:
+      >>> import numpy as np, jaxplan as jp
+      >>> grid = jp.grid_from_array(np.ones((20, 20), bool), resolution=0.5)
+      >>> u, info = jp.dwa_step([2.0, 5.0, 0.0, 0.5, 0.0], [8.0, 5.0], grid)
+      >>> u.shape, info.rollouts.shape, bool(info.feasible[info.chosen])
+      ((2,), (800, 20, 3), True)
+    """
+    config = validate_config(DWAConfig() if config is None else config)
+    prm = validate_params(params, config.evaluator)
+    st = np.asarray(state, dtype=np.float64)
+    single = st.ndim == 1
+    if st.shape[-1:] != (5,) or st.ndim not in (1, 2) or st.shape[0] == 0:
+        raise ValueError(f"state must be [5] (x, y, theta, v, omega) or [B, 5], got shape {st.shape}")
+    st2 = st[None] if single else st
+    if not np.isfinite(st2).all():
+        i = int(np.argmax(~np.isfinite(st2).all(axis=1)))
+        raise ValueError(f"state{'' if single else f'[{i}]'} has NaN or infinite values: {st2[i].tolist()}")
+    B = st2.shape[0]
+    sg = np.asarray(subgoal, dtype=np.float64)
+    if sg.shape != ((2,) if single else (B, 2)):
+        raise ValueError(f"subgoal must have shape {(2,) if single else (B, 2)} to match the state, got {sg.shape}")
+    if not np.isfinite(sg).all():
+        raise ValueError("subgoal has NaN or infinite values")
+    _check_window(config, st2)
+    obs = as_obstacles(obstacles, None if single else B)
+    pa = None
+    if path is not None:
+        pa = np.asarray(path, dtype=np.float64)
+        want = 2 if single or pa.ndim == 2 else 3
+        if pa.ndim != want or pa.shape[-1] != 2 or pa.shape[-2] < 1 or (pa.ndim == 3 and pa.shape[0] != B):
+            raise ValueError(f"path must be [L, 2] (m) or [B, L, 2] with B = {B}, got shape {pa.shape}")
+        if not np.isfinite(pa).all():
+            raise ValueError("path has NaN or infinite values")
+        pa = pa.astype(np.float32)
+    if not isinstance(grid, GridMap):
+        raise ValueError(f"grid must be a GridMap, got {type(grid).__name__}")
+    table = table_of(grid)
+    if single:
+        out = _single(table, config, prm, st.astype(np.float32), sg.astype(np.float32), obs, pa)
+    else:
+        # Pad the batch to whole chunks: one compilation per bucket, no remainder trace.
+        Bp = B if B <= CHUNK else -(-B // CHUNK) * CHUNK
+        pad = lambda a: np.concatenate([a, np.repeat(a[-1:], Bp - B, axis=0)]) if Bp > B else a
+        if obs is not None and obs.radii.ndim == 2:
+            obs = DiscObstacles(*(pad(a) for a in obs))
+        if pa is not None and pa.ndim == 3:
+            pa = pad(pa)
+        out = _batch(table, config, prm, pad(st2).astype(np.float32), pad(sg).astype(np.float32), obs, pa,
+                     chunk=CHUNK)
+        if Bp > B:
+            out = jax.tree_util.tree_map(lambda a: a[:B], out)
+    u, info = jax.device_get(out)
+    return np.asarray(u), DWAInfo(*(None if a is None else np.asarray(a) for a in info))

@@ -1,0 +1,380 @@
+"""Dynamic Window Approach: window and limits, safety, closed loop, fuzzy evaluation, batching, errors, gradients."""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxplan as jp
+from jaxplan.dwa import (
+    Ackermann, DWAConfig, DWAParams, DiscObstacles, Rectangle, Unicycle, advance, clearance_table,
+    default_params, dwa_control, dwa_step, input_memberships, rule_table, static_clearance,
+)
+from jaxplan.dwa import _fuzzy
+from jaxplan.dwa._fuzzy import fuzzy_evaluate
+from jaxplan.grid._collision import collision_map
+
+
+def _brute_clearance(points_m, free, res):
+    """Exact distance (m) from world points to the nearest blocked square (outside counts), by brute force."""
+    pad = 3
+    ys, xs = np.nonzero(~np.pad(free, pad, constant_values=False))
+    squares = np.stack([xs - pad, ys - pad], 1).astype(np.float64)
+    p = np.asarray(points_m, np.float64).reshape(-1, 2) / res - 0.5
+    out = np.empty(len(p))
+    for i in range(0, len(p), 2048):  # chunks keep the [points, squares] temporaries small
+        d = np.maximum(np.abs(p[i:i + 2048, None, :] - squares[None]) - 0.5, 0.0)
+        out[i:i + 2048] = np.min(np.hypot(d[..., 0], d[..., 1]), axis=1)
+    return out.reshape(np.shape(points_m)[:-1]) * res
+
+
+@pytest.fixture(scope="module")
+def clutter():
+    """A 24x24 map at 0.5 m per cell with scattered blocked cells and a wall."""
+    rng = np.random.default_rng(7)
+    free = rng.random((24, 24)) > 0.08
+    free[4:20, 15] = False
+    free[10:14, 2:6] = True
+    return jp.grid_from_array(free, resolution=0.5)
+
+
+def _states(rng, n, grid, robot):
+    """Random states on free cells with speeds inside the limits."""
+    free = np.argwhere(np.asarray(grid.free))  # (y, x)
+    pick = free[rng.integers(0, len(free), n)]
+    res = grid.resolution
+    xy = (pick[:, ::-1] + 0.5 + rng.uniform(-0.3, 0.3, (n, 2))) * res
+    th = rng.uniform(-math.pi, math.pi, n)
+    v = rng.uniform(robot.v_min, robot.v_max, n)
+    w = rng.uniform(-robot.omega_max, robot.omega_max, n)
+    if isinstance(robot, Ackermann):
+        w = np.clip(w, -np.abs(v) * math.tan(robot.steer_max) / robot.wheelbase,
+                    np.abs(v) * math.tan(robot.steer_max) / robot.wheelbase)
+    goals = rng.uniform(0, np.array(grid.shape[::-1]) * res, (n, 2))
+    return np.column_stack([xy, th, v, w]), goals
+
+
+CONFIGS = [
+    DWAConfig(),
+    DWAConfig(evaluator="fuzzy", selection="softmax"),
+    DWAConfig(evaluator="classic"),
+    DWAConfig(robot=Ackermann(), n_v=8, n_omega=12),
+]
+
+
+@pytest.mark.parametrize("config", CONFIGS, ids=["weighted", "fuzzy-softmax", "classic", "ackermann"])
+def test_control_stays_in_window_and_limits(clutter, config):
+    rng = np.random.default_rng(0)
+    r = config.robot
+    states, goals = _states(rng, 40, clutter, r)
+    u, info = dwa_step(states, goals, clutter, config=config)
+    P, tol = config.period, 1e-5
+    v, w = u[:, 0], u[:, 1]
+    assert np.all(v >= r.v_min - tol) and np.all(v <= r.v_max + tol)
+    assert np.all(np.abs(w) <= r.omega_max + tol)
+    assert np.all(v >= states[:, 3] - r.decel * P - tol) and np.all(v <= states[:, 3] + r.accel * P + tol)
+    assert np.all(np.abs(w - states[:, 4]) <= r.alpha * P + tol)
+    lo, hi = info.window[:, 0], info.window[:, 1]
+    assert np.all((v >= lo - tol) & (v <= hi + tol))
+    assert np.all((w >= info.window[:, 2] - tol) & (w <= info.window[:, 3] + tol))
+    # Every sample lies in the window too.
+    s = info.samples
+    assert np.all((s[..., 0] >= lo[:, None] - tol) & (s[..., 0] <= hi[:, None] + tol))
+    if isinstance(r, Ackermann):
+        kappa = math.tan(r.steer_max) / r.wheelbase
+        assert np.all(np.abs(s[..., 1]) <= kappa * np.abs(s[..., 0]) + 1e-4)
+        assert np.all(np.abs(w) <= kappa * np.abs(v) + 1e-4)
+    assert info.scores.shape == (40, config.samples)
+    assert info.rollouts.shape == (40, config.samples, config.steps, 3)
+
+
+@pytest.mark.parametrize("res", [0.5, 1.0])
+def test_chosen_rollout_keeps_d_safe_when_one_is_feasible(res):
+    rng = np.random.default_rng(1)
+    free = rng.random((20, 20)) > 0.08
+    grid = jp.grid_from_array(free, resolution=res)
+    config = DWAConfig()
+    states, goals = _states(rng, 64, grid, config.robot)
+    u, info = dwa_step(states, goals, grid, config=config)
+    rows = np.arange(64)
+    ok = ~info.recovery
+    assert ok.sum() >= 20  # enough cases where something was feasible
+    chosen = info.rollouts[rows[ok], info.chosen[ok]]  # [n, T, 3]
+    exact = _brute_clearance(chosen[..., :2], free, res)
+    assert np.all(exact.min(axis=1) >= config.d_safe - 1e-4)
+    # The planner's own clearance of every rollout agrees with brute force (hybrid: exact below 1.5 cells).
+    want = _brute_clearance(info.rollouts[:3, ..., :2], free, res).min(axis=-1)  # [3, S]
+    got = info.clearance[:3]
+    near = want < 1.5 * res
+    np.testing.assert_allclose(got[near], want[near], atol=2e-5)
+    # Infeasible samples exist and are never chosen.
+    assert (~info.feasible).any()
+    assert np.all(info.feasible[rows[ok], info.chosen[ok]])
+
+
+def test_moving_disc_rollouts_are_checked_at_predicted_positions():
+    grid = jp.grid_from_array(np.ones((20, 40), bool), resolution=0.5)
+    state = np.array([2.0, 5.0, 0.0, 1.0, 0.0])
+    # A disc coming head-on at 1 m/s: straight fast rollouts meet it within the horizon.
+    obs = DiscObstacles(np.array([[5.5, 5.0]]), np.array([[-1.0, 0.0]]), np.array([0.3]))
+    u, info = dwa_step(state, [18.0, 5.0], grid, obstacles=obs)
+    t = (np.arange(20) + 1) * 0.1
+    centre = np.array([5.5, 5.0]) + t[:, None] * np.array([-1.0, 0.0])
+    gap = np.linalg.norm(info.rollouts[..., :2] - centre[None], axis=-1) - 0.3  # [S, T]
+    static = _brute_clearance(info.rollouts[..., :2], np.ones((20, 40), bool), 0.5)
+    want = np.minimum(gap, static).min(axis=1)
+    np.testing.assert_allclose(info.clearance, want, atol=1e-4)
+    assert not info.recovery and info.feasible[info.chosen]
+    assert (~info.feasible).sum() > 100  # the disc rules out a good part of the fan
+    # Without the disc the robot would drive straight at full speed; with it, it turns away.
+    u0, _ = dwa_step(state, [18.0, 5.0], grid)
+    assert abs(u0[1]) < 0.2 and abs(u[1]) > 0.2
+
+
+def test_robot_facing_a_wall_in_a_corridor_stops_without_colliding():
+    free = np.zeros((7, 30), bool)
+    free[2:5, 1:20] = True  # a corridor 3 cells (1.5 m) wide, closed at x = 20 cells
+    grid = jp.grid_from_array(free, resolution=0.5)
+    config = DWAConfig(keep_rollouts=False)
+    state = np.array([1.5, 1.75, 0.0, 1.0, 0.0])  # centre line, 1 m/s towards the wall
+    goal = np.array([14.0, 1.75])  # behind the wall
+    xs, speeds, recoveries = [], [], 0
+    for _ in range(80):
+        u, info = dwa_step(state, goal, grid, config=config)
+        for k in range(1, 5):  # check the executed arc, not only the sampled states
+            xs.append(np.asarray(advance(state, u, 0.05 * k))[:2])
+        state = np.asarray(advance(state, u, config.period))
+        speeds.append(state[3])
+        recoveries += bool(info.recovery)
+    clear = _brute_clearance(np.array(xs), free, 0.5)
+    assert clear.min() >= 0.25  # never closer than the robot radius: no collision
+    assert clear.min() >= 0.3 - 0.01  # and (between the checked points, up to a chord's sag) it kept d_safe
+    assert max(np.abs(speeds[-10:])) < 0.02  # it came to rest ...
+    assert 7.0 < state[0] < 10.0 - 0.3  # ... after driving down the corridor, short of the wall face (x = 10 m)
+
+
+def test_classic_stuck_rule_turns_a_robot_at_rest():
+    free = np.ones((9, 9), bool)
+    free[3:6, 5] = False  # a wall whose face is at x = 2.5 m
+    grid = jp.grid_from_array(free, resolution=0.5)
+    # At rest, facing the wall 0.32 m away: every forward sample ends inside the 0.3 m margin,
+    # so the best sample stands still and PythonRobotics' rule turns the robot instead.
+    state = np.array([2.18, 2.25, 0.0, 0.0, 0.0])
+    config = DWAConfig(evaluator="classic", n_v=5, n_omega=9)
+    u, info = dwa_step(state, [3.75, 2.25], grid, config=config)
+    assert info.stuck and not info.recovery
+    assert info.samples[info.chosen, 0] == 0.0
+    assert u[0] == 0.0 and u[1] == pytest.approx(info.window[2]) and u[1] == pytest.approx(-0.6)
+    _, weighted = dwa_step(state, [3.75, 2.25], grid, config=DWAConfig(n_v=5, n_omega=9))
+    assert not weighted.stuck  # the rule belongs to the classic preset only
+
+
+def test_recovery_when_nothing_is_feasible():
+    free = np.ones((10, 10), bool)
+    free[4, 5] = False
+    grid = jp.grid_from_array(free, resolution=0.5)
+    # 0.2 m from the blocked cell's face: every rollout starts inside the 0.3 m margin.
+    state = np.array([2.3, 2.25, 0.0, 0.4, 0.0])
+    u, info = dwa_step(state, [4.0, 0.5], grid)  # sub-goal ahead and to the right (y down is +y)
+    assert info.recovery and info.chosen == -1 and not info.feasible.any()
+    assert u[0] == pytest.approx(max(0.0, 0.4 - 0.5 * 0.2))  # braking as hard as allowed
+    # The sub-goal is at negative cross product (to the right): turn right as hard as allowed.
+    assert u[1] == pytest.approx(-3.0 * 0.2)
+
+
+def test_fuzzy_memberships_and_output_by_hand(monkeypatch):
+    e, s, c = jnp.array([0.25]), jnp.array([0.8]), jnp.array([0.475])  # 45° off, 80 % speed, 0.475 m
+    mh, ms, mc = (np.asarray(m)[:, 0] for m in input_memberships(e, s, c, 0.3, 1.0))
+    np.testing.assert_allclose(mh, [0.5, 0.5, 0.0], atol=1e-6)  # small, medium, large
+    np.testing.assert_allclose(ms, [0.0, 0.4, 0.6], atol=1e-6)  # slow, medium, fast
+    np.testing.assert_allclose(mc, [0.5, 0.5, 0.0], atol=1e-6)  # close, safe, far (0.3, 0.65, 1.0 m)
+    p = default_params("fuzzy")
+    z = np.asarray(rule_table(p))
+    # Table of the module docstring (heading small row): close 0.2/0.275/0.35, safe 0.55/0.7/0.85, far 0.7/0.85/1.
+    np.testing.assert_allclose(z[0], [[0.2, 0.55, 0.7], [0.275, 0.7, 0.85], [0.35, 0.85, 1.0]], atol=1e-6)
+    np.testing.assert_allclose(z[2, 2], [0.15, 0.225, 0.3], atol=1e-6)  # heading large, fast
+    # Eight rules fire: 0.1·(0.275 + 0.7 + 0.175 + 0.5) + 0.15·(0.35 + 0.85 + 0.25 + 0.65) = 0.48.
+    out = fuzzy_evaluate(e, s, c, p, 0.3, 1.0)
+    np.testing.assert_allclose(out, [0.48], atol=1e-6)
+    # Corners: small/fast/far is rated 1; large/fast/far is cut to half of 0.6.
+    out = fuzzy_evaluate(jnp.array([0.0, 1.0]), jnp.array([1.0, 1.0]), jnp.array([1.5, 1.5]), p, 0.3, 1.0)
+    np.testing.assert_allclose(out, [1.0, 0.3], atol=1e-6)
+    # Without the veto the rule base is the weighted sum of the linearly interpolated levels.
+    rng = np.random.default_rng(5)
+    e, s, c = (jnp.asarray(rng.uniform(lo, hi, 50), jnp.float32) for lo, hi in ((0, 1), (0, 1), (0, 1.4)))
+    monkeypatch.setattr(_fuzzy, "VETO", 1.0)
+    linear = (0.4 * (1 - e) + 0.3 * s + 0.3 * jnp.clip((c - 0.3) / 0.7, 0, 1)) / 1.0
+    np.testing.assert_allclose(fuzzy_evaluate(e, s, c, p, 0.3, 1.0), linear, atol=1e-6)
+    # Membership degrees of every input sum to one (Ruspini partitions), also outside the breakpoints.
+    x = jnp.linspace(-0.5, 1.5, 41)
+    for m in input_memberships(x, x, x, 0.3, 1.0):
+        np.testing.assert_allclose(np.sum(m, axis=0), 1.0, atol=1e-6)
+        assert np.all(np.asarray(m) >= -1e-7)
+
+
+def test_batched_equals_per_robot(clutter):
+    rng = np.random.default_rng(2)
+    config = DWAConfig(evaluator="fuzzy")
+    states, goals = _states(rng, 6, clutter, config.robot)
+    obs = DiscObstacles(np.array([[3.0, 3.0], [8.0, 6.0]]), np.array([[0.5, 0.0], [0.0, -0.5]]), np.array([0.3, 0.4]))
+    u, info = dwa_step(states, goals, clutter, obstacles=obs, config=config)
+    for i in range(6):
+        ui, ii = dwa_step(states[i], goals[i], clutter, obstacles=obs, config=config)
+        np.testing.assert_allclose(ui, u[i], atol=1e-5)
+        assert ii.chosen == info.chosen[i] and ii.recovery == info.recovery[i]
+        np.testing.assert_allclose(ii.scores, info.scores[i], rtol=1e-5, atol=1e-5)
+        np.testing.assert_array_equal(ii.feasible, info.feasible[i])
+    # Per-robot obstacles [B, M, ...]: each robot sees its own discs (e.g. the other robots).
+    per = DiscObstacles(states[None, :, :2].repeat(6, 0), np.zeros((6, 6, 2)), np.full((6, 6), 0.25))
+    per = DiscObstacles(*(np.delete(a.reshape(36, -1), np.arange(6) * 7, axis=0).reshape((6, 5) + a.shape[2:])
+                          for a in per))  # drop each robot itself
+    u, info = dwa_step(states, goals, clutter, obstacles=per, config=config)
+    for i in (0, 3):
+        ui, ii = dwa_step(states[i], goals[i], clutter, obstacles=DiscObstacles(*(a[i] for a in per)), config=config)
+        np.testing.assert_allclose(ui, u[i], atol=1e-5)
+        np.testing.assert_allclose(ii.clearance, info.clearance[i], atol=1e-5)
+
+
+def test_same_input_same_output(clutter):
+    rng = np.random.default_rng(3)
+    states, goals = _states(rng, 5, clutter, Unicycle())
+    a = dwa_step(states, goals, clutter)
+    b = dwa_step(states, goals, clutter)
+    np.testing.assert_array_equal(a[0], b[0])
+    for x, y in zip(a[1], b[1]):
+        np.testing.assert_array_equal(x, y)
+
+
+def test_hybrid_clearance_exact_near_obstacles_and_close_beyond():
+    rng = np.random.default_rng(4)
+    free = rng.random((18, 22)) > 0.2
+    grid = jp.grid_from_array(free, resolution=0.5)
+    table = clearance_table(collision_map(grid))
+    pts = rng.uniform(-0.6, [11.6, 9.6], (3000, 2))
+    want = _brute_clearance(pts, free, 0.5)
+    got = {m: np.asarray(jax.jit(lambda t, x, m=m: static_clearance(t, x[:, 0], x[:, 1], m))(table, pts))
+           for m in ("hybrid", "bilinear", "exact")}
+    near = want < 1.5 * 0.5
+    np.testing.assert_allclose(got["hybrid"][near], want[near], atol=2e-5)
+    assert np.all(got["hybrid"] - want <= 0.09 * 0.5)  # beyond 1.5 cells: interpolation, ≤ 0.083 cells high
+    exact_range = want <= 2 * 0.5
+    np.testing.assert_allclose(got["exact"][exact_range], want[exact_range], atol=2e-5)
+    assert np.max(got["bilinear"] - want) > 0.05  # the plain interpolation over-estimates at corners
+
+
+def test_rollouts_follow_the_motion_model():
+    grid = jp.grid_from_array(np.ones((30, 30), bool), resolution=0.5)
+    state = np.array([7.0, 7.0, 0.3, 0.6, -0.5])
+    u, info = dwa_step(state, [12.0, 9.0], grid)
+    for i in (0, 123, 517, 799):
+        v, w = info.samples[i]
+        s = state.copy()
+        for k in range(20):
+            s = np.asarray(advance(s, np.array([v, w]), 0.1))
+            np.testing.assert_allclose(info.rollouts[i, k, :2], s[:2], atol=2e-5)
+        assert abs(math.remainder(info.rollouts[i, -1, 2] - s[2], 2 * math.pi)) < 1e-5
+
+
+def test_rectangle_footprint_sees_its_corners():
+    free = np.ones((12, 12), bool)
+    free[:, 6] = False  # a wall at x in [3.0, 3.5] m
+    grid = jp.grid_from_array(free, resolution=0.5)
+    # Facing the wall, centre 0.6 m from it: a 0.25 m disc keeps 0.6 m, a 1.0 m long body only 0.1 m.
+    state = np.array([2.4, 3.0, 0.0, 0.0, 0.0])
+    disc = dwa_step(state, [1.0, 3.0], grid, config=DWAConfig(n_v=3, n_omega=5))[1]
+    rect_robot = Unicycle(footprint=Rectangle(1.0, 0.4, 4))
+    rect = dwa_step(state, [1.0, 3.0], grid, config=DWAConfig(robot=rect_robot, n_v=3, n_omega=5, d_safe=0.32))[1]
+    assert disc.feasible.any() and not disc.recovery
+    assert disc.clearance.max() > 0.55
+    # The rectangle's covering discs (radius 0.236 m) sit up to 0.375 m ahead: clearance ≈ 0.6 − 0.375.
+    assert rect.clearance.max() < 0.6 - 0.375 + 0.005
+    assert not rect.feasible.any() and rect.recovery
+
+
+def test_path_critic_pulls_towards_the_global_path():
+    grid = jp.grid_from_array(np.ones((20, 30), bool), resolution=0.5)
+    state = np.array([3.0, 5.0, 0.0, 0.6, 0.0])
+    path = np.array([[2.0, 6.5], [12.0, 6.5], [12.0, 6.5]])  # 1.5 m to the side (+y); last point repeated
+    base, _ = dwa_step(state, [12.0, 5.0], grid)
+    pulled, info = dwa_step(state, [12.0, 5.0], grid, params={"path": 1.0}, path=path)
+    assert pulled[1] > base[1] + 0.1  # turns towards +y, the side of the path
+    end = info.rollouts[np.arange(800), -1, :2]
+    d = np.abs(end[:, 1] - 6.5)  # distance of each end point to the (horizontal) path
+    assert d[info.chosen] <= np.percentile(d[info.feasible], 10)
+
+
+@pytest.mark.parametrize("bad, match", [
+    (dict(state=[np.nan, 0, 0, 0, 0]), "NaN or infinite"),
+    (dict(state=[1, 1, 0, 0]), r"state must be \[5\]"),
+    (dict(subgoal=[np.inf, 1.0]), "subgoal"),
+    (dict(config=DWAConfig(robot=Unicycle(accel=-0.5))), "accel must be > 0"),
+    (dict(config=DWAConfig(robot=Unicycle(v_min=1.0, v_max=0.5))), "v_min"),
+    (dict(config=DWAConfig(robot=Unicycle(omega_max=float("nan")))), "omega_max must be finite"),
+    (dict(config=DWAConfig(d_safe=0.1)), "d_safe"),
+    (dict(config=DWAConfig(n_v=0)), "n_v"),
+    (dict(config=DWAConfig(evaluator="best")), "evaluator"),
+    (dict(config=DWAConfig(horizon=1.05, dt=0.1)), "whole number"),
+    (dict(config=DWAConfig(robot=Unicycle(omega_max=40.0))), "at most π"),
+    (dict(params={"heading": -0.1}), "must be >= 0"),
+    (dict(params={"velocity": float("nan")}), "NaN"),
+    (dict(params={"temperature": 0.0}), "temperature"),
+    (dict(params={"speed": 1.0}), "unknown DWA parameter"),
+    (dict(state=[1, 1, 0, 5.0, 0]), "empty dynamic window"),
+    (dict(state=[1, 1, 0, 0.5, 9.0]), "empty dynamic window"),
+    (dict(obstacles=(np.zeros((2, 2)), np.zeros((2, 2)), np.array([0.3, -1.0]))), "radii"),
+    (dict(obstacles=(np.zeros((2, 2)), np.zeros((3, 2)), np.array([0.3, 0.3]))), "velocities"),
+    (dict(path=np.zeros((4, 3))), "path"),
+])
+def test_bad_input_is_a_clear_error(bad, match):
+    grid = jp.grid_from_array(np.ones((8, 8), bool), resolution=0.5)
+    args = dict(state=[1.0, 1.0, 0.0, 0.5, 0.0], subgoal=[3.0, 3.0], params=None, config=None, obstacles=None,
+                path=None)
+    args.update(bad)
+    with pytest.raises(ValueError, match=match):
+        dwa_step(args["state"], args["subgoal"], grid, args["obstacles"], args["params"], config=args["config"],
+                 path=args["path"])
+
+
+def test_softmax_episode_is_differentiable_in_the_weights():
+    free = np.ones((16, 16), bool)
+    free[5:11, 8] = False
+    grid = jp.grid_from_array(free, resolution=0.5)
+    table = clearance_table(collision_map(grid))
+    config = DWAConfig(selection="softmax", keep_rollouts=False, n_v=6, n_omega=9, horizon=1.0, unroll=1)
+    goal = jnp.array([7.0, 4.0])
+
+    def loss(params):
+        def step(state, _):
+            u, _ = dwa_control(table, config, params, state, goal)
+            return advance(state, u, config.period), None
+        final, _ = jax.lax.scan(step, jnp.array([1.0, 4.0, 0.0, 0.0, 0.0]), None, length=6)
+        return jnp.sum((final[:2] - goal) ** 2)
+
+    p = default_params("weighted")
+    p = DWAParams(*(jnp.asarray(x) for x in p))
+    g = jax.jit(jax.grad(loss))(p)
+    weights = np.array([g.heading, g.velocity, g.clearance, g.goal, g.temperature])
+    assert np.all(np.isfinite(weights)), weights
+    assert np.all(np.abs(weights[:3]) > 0), weights
+
+
+def test_core_traces_once_per_configuration(clutter):
+    table = clearance_table(collision_map(clutter))
+    traces = []
+
+    @jax.jit
+    def step(config, params, state):
+        traces.append(1)
+        return dwa_control(table, config, params, state, jnp.array([5.0, 5.0]))[0]
+
+    cfg = DWAConfig(keep_rollouts=False, n_v=4, n_omega=6)
+    s = jnp.array([2.0, 2.0, 0.0, 0.3, 0.0])
+    step(cfg, default_params(), s)
+    step(cfg.replace(d_safe=0.35, robot=Unicycle(v_max=1.0)), default_params(heading=0.9), s + 0.1)
+    assert len(traces) == 1  # limits, distances and weights are traced
+    step(cfg.replace(n_v=5), default_params(), s)
+    assert len(traces) == 2  # sample counts are static
