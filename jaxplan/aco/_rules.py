@@ -53,8 +53,11 @@ def path_stats(tables: MapTables, ants: Ants) -> PathStats:
     step_mask = t[None, :] < ants.n[:, None]  # [A, L]
     length = jnp.sum(jnp.where(step_mask, tables.step[ants.moves], 0.0), axis=1)
     turn_mask = step_mask[:, 1:]
-    a = tables.angle[ants.moves]
-    d = jnp.abs((a[:, 1:] - a[:, :-1] + jnp.pi) % (2 * jnp.pi) - jnp.pi)
+    # |heading change| looked up per pair of moves (`MapTables.turn_angle`, the same arithmetic
+    # as on the gathered angles). The lookup runs on whole rows (next move by `roll`, the wrapped
+    # last column sliced off after it): indexed by odd-length slices, XLA's gather is ~3x slower.
+    K = tables.angle.shape[0]
+    d = tables.turn_angle.reshape(K * K)[ants.moves * K + jnp.roll(ants.moves, -1, axis=1)][:, :-1]
     changed = ants.moves[:, 1:] != ants.moves[:, :-1]
     turns = jnp.sum(turn_mask & changed, axis=1).astype(jnp.float32)
     heading = jnp.sum(jnp.where(turn_mask & changed, d, 0.0), axis=1)
