@@ -5,9 +5,10 @@ move; on a CPU each step is ~15 small XLA kernels (gathers, scatters) of 1.5–2
 so the loop costs far more than the arithmetic it does. Here the whole walk of one
 iteration (every run, colony and ant, from the start until goal, dead end or step
 limit) is one compiled call: each ant walks to the end on its own, the ants are shared
-out over the cores with `prange`. It is invoked from the JAX program with
-`jax.pure_callback`, so the iterations' `lax.scan`, the move tables, deposits and
-everything else stay in JAX, and the JAX walk stays the one for GPUs.
+out over the cores with `prange`. The JAX program calls it as an XLA FFI custom call (a
+numba `cfunc` registered with `jax.ffi`; CPU only), so the iterations' `lax.scan`, the
+move tables, deposits and everything else stay in JAX, and the JAX walk stays the one
+for GPUs.
 
 The result equals `walk`'s bit for bit: the same counter-based uniforms (`hash_uniform`,
 one per ant and step), the same float32 inverse-CDF sums in the same order, the same
@@ -290,9 +291,15 @@ def _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, c
     steps_out[a] = t
     # `walk` derives every move from consecutive slots, stale ones included: slots up to n hold
     # the path (moves recorded above); past it, a retreat may have left an older branch behind.
-    for j in range(n, min(high + 1, L)):
+    # The output buffers come uninitialised from XLA: `walk`'s zeros past the deepest slot.
+    for j in range(high + 1, L + 1):
+        cells[a, j] = 0
+    stale_end = min(high + 1, L)
+    for j in range(n, stale_end):
         m = _move_between(cells[a, j], cells[a, j + 1], width, lut)
         moves[a, j] = max(m, 0)
+    for j in range(max(n, stale_end), L):
+        moves[a, j] = 0
 
 
 @njit(cache=True, nogil=True, parallel=True)
@@ -303,6 +310,7 @@ def _walk_all(nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell
     and colony are spread over the chunks, which evens out their different walk lengths)."""
     A = start.shape[0]
     C, K = nbr.shape
+    marks[:] = 0
     parts = np.zeros((n_chunks if penalise else 1, penalty.shape[0]), np.float32)
     for c in prange(n_chunks):
         seen = np.zeros(C, np.int32)
@@ -314,10 +322,192 @@ def _walk_all(nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell
             _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
                       max_steps, width, lut, mode, has_hook, penalise, cells, moves, n_out, status_out, steps_out,
                       part, marks, seen, p, ok, is_goal)
+    # Counts of +1.0 are exact in float32 (below 2^24), so the chunk order does not matter.
+    penalty[:] = 0.0
     if penalise:
-        # Counts of +1.0 are exact in float32 (below 2^24), so the chunk order does not matter.
         for c in range(n_chunks):
             penalty += parts[c]
+
+
+@njit(cache=True, nogil=True)
+def _loop_counters(steps, max_steps, out):
+    """``out[:] = (loop_steps, slots)`` the JAX step loop reports for ants that walked ``steps [A]`` steps.
+
+    The loop runs until every ant has stopped; from `COMPACT_MIN_ANTS` ants on it continues with
+    A / `COMPACT_FACTOR` slots once no more than that many are walking. int32 (wrapping) like `walk`'s.
+    """
+    A = steps.shape[0]
+    loop = 0
+    for a in range(A):
+        loop = max(loop, np.int64(steps[a]))
+    if A >= COMPACT_MIN_ANTS:
+        small = A // COMPACT_FACTOR
+        hist = np.zeros(max_steps + 1, np.int64)
+        for a in range(A):
+            hist[steps[a]] += 1
+        t_full = max_steps
+        walking = A
+        for t in range(max_steps):
+            walking -= hist[t]  # ants with more than t steps
+            if walking <= small:
+                t_full = t
+                break
+        loop = max(loop, t_full)
+        slots = t_full * A + (loop - t_full) * small
+    else:
+        slots = loop * A
+    out[0] = np.int32(loop)
+    out[1] = np.int32(slots)
+
+
+# ---------------------------------------------------------------------------------------------
+# The XLA FFI handler: XLA calls it with its own buffers, so nothing is copied or allocated per
+# call and no Python runs (`jax.pure_callback` costs 0.2–2 ms per call on this 2-core CPU, more
+# than the whole walk of a small colony). The call frame is read with the offsets of XLA's FFI
+# C API (``xla/ffi/api/c_api.h``, API version 0.x, x86-64/aarch64 layout).
+
+
+def _pointer(nbtype):
+    """An intrinsic turning an int64 address into a ``CPointer(nbtype)`` (for `numba.carray`)."""
+
+    @intrinsic
+    def ptr(typingctx, addr):
+        sig = types.CPointer(nbtype)(types.int64)
+
+        def codegen(context, builder, signature, args):
+            return builder.inttoptr(args[0], context.get_value_type(types.CPointer(nbtype)))
+
+        return sig, codegen
+
+    return ptr
+
+
+_I64P, _I32P, _U32P, _F32P, _I8P, _U8P = (_pointer(t) for t in (types.int64, types.int32, types.uint32, types.float32,
+                                                                  types.int8, types.uint8))
+
+
+@intrinsic
+def _address(typingctx, p):
+    """int64 address of a void pointer."""
+    sig = types.int64(types.voidptr)
+
+    def codegen(context, builder, signature, args):
+        return builder.ptrtoint(args[0], ir.IntType(64))
+
+    return sig, codegen
+
+
+@intrinsic
+def _null(typingctx):
+    """The null void pointer (an FFI handler's "no error")."""
+    sig = types.voidptr()
+
+    def codegen(context, builder, signature, args):
+        return context.get_constant_null(types.voidptr)
+
+    return sig, codegen
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _i64(addr):
+    return numba.carray(_I64P(addr), (1,))[0]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _i32(addr):
+    return numba.carray(_I32P(addr), (1,))[0]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _buffer(lst, i):
+    """``(data address, dims address)`` of the i-th `XLA_FFI_Buffer*` of an args/rets list."""
+    b = _i64(lst + 8 * i)
+    return _i64(b + 24), _i64(b + 40)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _dim(dims, i):
+    return _i64(dims + 8 * i)
+
+
+def _handler(frame):
+    """``XLA_FFI_Error* handler(XLA_FFI_CallFrame*)`` for `walk`'s call; see `_ARGS` for the buffers."""
+    base = _address(frame)
+    ext = _i64(base + 8)
+    if ext != 0 and _i32(ext + 8) == 1:
+        # XLA asks for the handler's metadata (XLA_FFI_Metadata_Extension): FFI API version 0.1,
+        # no traits, stateless. Older minor versions are accepted by every newer XLA.
+        meta = _i64(ext + 24)
+        m64 = numba.carray(_I64P(meta), (6,))
+        m32 = numba.carray(_I32P(meta), (12,))
+        m64[1] = 24  # api_version.struct_size
+        m64[2] = 0  # api_version.extension_start
+        m32[6] = 0  # major
+        m32[7] = 1  # minor
+        m32[8] = 0  # traits
+        m64[5] = 0  # state_type_id: XLA_FFI_UNKNOWN_TYPE_ID
+        return _null()
+    if _i32(base + 32) != 3:  # only the EXECUTE stage has work
+        return _null()
+    args = _i64(base + 40 + 32)
+    rets = _i64(base + 80 + 32)
+    d, s = _buffer(args, 0)
+    C = _dim(s, 0)
+    K = _dim(s, 1)
+    nbr = numba.carray(_I32P(d), (C, K))
+    d, s = _buffer(args, 1)
+    table = numba.carray(_F32P(d), (_dim(s, 0), K))
+    d, s = _buffer(args, 2)
+    hook_l = numba.carray(_F32P(d), (2, _dim(s, 1), K))
+    d, s = _buffer(args, 3)
+    right_turn = numba.carray(_I32P(d), (K,))
+    d, s = _buffer(args, 4)
+    turn_rule = numba.carray(_U8P(d), (_dim(s, 0),))
+    d, s = _buffer(args, 5)
+    A = _dim(s, 1)
+    ints = numba.carray(_I32P(d), (5, A))
+    d, s = _buffer(args, 6)
+    seed = numba.carray(_U32P(d), (A,))
+    d, s = _buffer(args, 7)
+    lut = numba.carray(_I32P(d), (25,))
+    d, s = _buffer(args, 8)
+    alert = numba.carray(_U8P(d), (_dim(s, 0),))
+    d, s = _buffer(args, 9)
+    cfg = numba.carray(_I32P(d), (6,))
+    L = np.int64(cfg[0])
+    d, s = _buffer(rets, 0)
+    cells = numba.carray(_I32P(d), (A, L + 1))
+    d, s = _buffer(rets, 1)
+    moves = numba.carray(_I8P(d), (A, L))
+    d, s = _buffer(rets, 2)
+    per_ant = numba.carray(_I32P(d), (3, A))
+    d, s = _buffer(rets, 3)
+    counters = numba.carray(_I32P(d), (2,))
+    d, s = _buffer(rets, 4)
+    penalty = numba.carray(_F32P(d), (_dim(s, 0),))
+    d, s = _buffer(rets, 5)
+    marks = numba.carray(_U8P(d), (_dim(s, 0),))
+    _walk_all(nbr, table, hook_l, right_turn, turn_rule, ints[0], ints[1], ints[2], ints[3], seed, ints[4], alert,
+              L, np.int64(cfg[1]), lut, np.int64(cfg[2]), cfg[3] != 0, cfg[4] != 0, np.int64(cfg[5]),
+              cells, moves, per_ant[0], per_ant[1], per_ant[2], penalty, marks)
+    _loop_counters(per_ant[2], L, counters)
+    return _null()
+
+
+_TARGET = "jaxplan_aco_walk"
+_HANDLER = None  # the compiled cfunc, kept alive while XLA may call it
+
+
+def _register() -> None:
+    """Compiles (or loads from numba's cache) the handler and registers it with XLA, once."""
+    global _HANDLER
+    if _HANDLER is None:
+        # Start numba's thread pool first: loading the cached handler links the parallel kernel
+        # against the pool's launch functions, which are null until then.
+        numba.get_num_threads()
+        handler = numba.cfunc(types.voidptr(types.voidptr), cache=True, nopython=True)(_handler)
+        jax.ffi.register_ffi_target(_TARGET, jax.ffi.pycapsule(handler.ctypes), platform="cpu")
+        _HANDLER = handler
 
 
 def _n_chunks(A: int) -> int:
@@ -327,79 +517,6 @@ def _n_chunks(A: int) -> int:
     except AttributeError:  # not on Linux
         cores = os.cpu_count() or 1
     return max(1, min(numba.get_num_threads(), cores, A))
-
-
-def _loop_counters(steps: np.ndarray, max_steps: int) -> tuple[np.int32, np.int32]:
-    """``(loop_steps, slots)`` the JAX step loop reports for ants that walked ``steps [A]`` steps.
-
-    The loop runs until every ant has stopped; from `COMPACT_MIN_ANTS` ants on it continues with
-    A / `COMPACT_FACTOR` slots once no more than that many are walking. int32 like the JAX counters.
-    """
-    A = steps.shape[0]
-    loop = int(steps.max()) if A else 0
-    if A >= COMPACT_MIN_ANTS:
-        small = A // COMPACT_FACTOR
-        walking = A - np.cumsum(np.bincount(steps, minlength=max_steps + 1))  # walking[t]: ants with > t steps
-        below = np.nonzero(walking[:max_steps] <= small)[0]
-        t_full = int(below[0]) if below.size else max_steps
-        loop = max(loop, t_full)
-        slots = t_full * A + (loop - t_full) * small
-    else:
-        slots = loop * A
-    return np.int64(loop).astype(np.int32), np.int64(slots).astype(np.int32)
-
-
-# Number of axes of each argument of one walk (more leading axes = a vmapped batch).
-_CORE_NDIM = {"nbr": 2, "table": 2, "start": 1, "goal": 1, "row0": 1, "cell0": 1, "seed": 1, "local": 1, "lut": 1,
-              "alert": 1, "hook_logits": 3, "right_turn": 1, "turn_rule": 1}
-
-
-def _host_walk(args: dict, *, max_steps: int, width: int, mode: int, penalty_size: int, n_marks: int) -> dict:
-    """The callback: runs `_walk_all` once per element of the (vmapped) batch, on numpy views."""
-    args = {k: np.asarray(v) for k, v in args.items()}
-    batch = np.broadcast_shapes(*(v.shape[: v.ndim - _CORE_NDIM[k]] for k, v in args.items()))
-    A = args["start"].shape[-1]
-    L = max_steps
-    K = args["nbr"].shape[-1]
-    out = {
-        "cells": np.zeros(batch + (A, L + 1), np.int32),
-        "moves": np.zeros(batch + (A, L), np.int8),
-        "n": np.empty(batch + (A,), np.int32),
-        "status": np.empty(batch + (A,), np.int32),
-        "ant_steps": np.empty(batch + (A,), np.int32),
-        "loop_steps": np.empty(batch, np.int32),
-        "slots": np.empty(batch, np.int32),
-        "penalty": np.zeros(batch + (max(penalty_size, 1),), np.float32),
-        "marks": np.zeros(batch + (max(n_marks, 1),), np.bool_),
-    }
-    dummy_f3 = np.zeros((2, 1, K), np.float32)
-    dummy_i = np.zeros(1, np.int32)
-    dummy_b = np.zeros(1, np.bool_)
-    n_chunks = _n_chunks(A)
-    for idx in np.ndindex(*batch):
-        def arg(k, dummy=None):
-            if k not in args:
-                return dummy
-            v = args[k]
-            lead = v.ndim - _CORE_NDIM[k]
-            # Size-1 leading axes (unbatched arguments under vmap) broadcast to every element.
-            sub = tuple(i if v.shape[j] > 1 else 0 for j, i in enumerate(idx[len(idx) - lead:])) if lead else ()
-            return np.ascontiguousarray(v[sub])
-
-        o = {k: v[idx] for k, v in out.items()}
-        _walk_all(
-            arg("nbr"), arg("table"), arg("hook_logits", dummy_f3), arg("right_turn", dummy_i),
-            arg("turn_rule", dummy_b), arg("start"), arg("goal"), arg("row0"), arg("cell0"), arg("seed"),
-            arg("local"), arg("alert", dummy_b), L, width, arg("lut"), mode, "hook_logits" in args,
-            penalty_size > 0, n_chunks,
-            o["cells"], o["moves"], o["n"], o["status"], o["ant_steps"], o["penalty"], o["marks"],
-        )
-        out["loop_steps"][idx], out["slots"][idx] = _loop_counters(o["ant_steps"], L)
-    if not penalty_size:
-        del out["penalty"]
-    if not n_marks:
-        del out["marks"]
-    return out
 
 
 def walk(
@@ -420,48 +537,41 @@ def walk(
     penalty_size: int = 0,
     hook: HookTables | None = None,
 ) -> Ants:
-    """`jaxplan.aco._walk.walk` as one host call: same arguments, same `Ants`, bit for bit.
+    """`jaxplan.aco._walk.walk` as one native call (XLA FFI, CPU): same arguments, same `Ants`, bit for bit.
 
-    Differences in the arguments: ``table`` is not used when ``hook`` is given (the hook's
-    logits are in `HookTables.logits`, built by the colony's ``hook_logits`` rule). Works
-    under `jit`, `lax.scan` and `vmap` (a vmapped batch is walked element by element, each
-    element in parallel over its ants).
+    ``table`` is not used when ``hook`` is given (the hook's logits are in `HookTables.logits`,
+    built by the colony's ``hook_logits`` rule). Works under `jit`, `lax.scan` and `vmap` (a
+    vmapped batch is walked element by element, each in parallel over its ants).
     """
+    _register()
     A = start.shape[0]
+    C, K = nbr.shape
     L = max_steps
     mode = _MODES[dead_end]
-    args = {"nbr": nbr, "start": start, "goal": goal, "row0": row0, "cell0": cell0, "seed": seed, "local": local,
-            "lut": lut}
-    args = {k: jnp.asarray(v, jnp.uint32 if k == "seed" else jnp.int32) for k, v in args.items()}
+    i32 = functools.partial(jnp.asarray, dtype=jnp.int32)
     if hook is None:
-        args["table"] = jnp.asarray(table, jnp.float32)
+        hook_l, right_turn, turn_rule = jnp.zeros((2, 1, K), jnp.float32), jnp.zeros((K,), jnp.int32), jnp.zeros((1,), bool)
     else:
-        args["table"] = jnp.zeros((1, nbr.shape[1]), jnp.float32)  # unused: keeps the kernel's signature
-        args["hook_logits"] = jnp.asarray(hook.logits, jnp.float32)
-        args["right_turn"] = jnp.asarray(hook.right_turn, jnp.int32)
-        args["turn_rule"] = jnp.asarray(hook.turn_rule, bool)
-    n_marks = 0
-    if mode == _ALERT:
-        args["alert"] = jnp.asarray(alert, bool)
-        n_marks = alert.shape[0]
-    shapes = {
-        "cells": jax.ShapeDtypeStruct((A, L + 1), jnp.int32),
-        # Move indices (< 16) travel as int8: a quarter of the bytes to allocate and copy
-        # back; the conversion fuses into the consumers of `Ants.moves`.
-        "moves": jax.ShapeDtypeStruct((A, L), jnp.int8),
-        "n": jax.ShapeDtypeStruct((A,), jnp.int32),
-        "status": jax.ShapeDtypeStruct((A,), jnp.int32),
-        "ant_steps": jax.ShapeDtypeStruct((A,), jnp.int32),
-        "loop_steps": jax.ShapeDtypeStruct((), jnp.int32),
-        "slots": jax.ShapeDtypeStruct((), jnp.int32),
-    }
-    if penalty_size:
-        shapes["penalty"] = jax.ShapeDtypeStruct((penalty_size,), jnp.float32)
-    if n_marks:
-        shapes["marks"] = jax.ShapeDtypeStruct((n_marks,), jnp.bool_)
-    host = functools.partial(_host_walk, max_steps=L, width=width, mode=mode, penalty_size=penalty_size,
-                             n_marks=n_marks)
-    out = jax.pure_callback(host, shapes, args, vmap_method="expand_dims")
-    return Ants(cells=out["cells"], moves=out["moves"].astype(jnp.int32), n=out["n"], status=out["status"],
-                penalty=out.get("penalty"), ant_steps=out["ant_steps"], loop_steps=out["loop_steps"],
-                marks=out.get("marks"), slots=out["slots"])
+        hook_l, right_turn, turn_rule = hook.logits, hook.right_turn, hook.turn_rule
+        table = jnp.zeros((1, K), jnp.float32)  # unused
+    n_marks = alert.shape[0] if mode == _ALERT else 0
+    cfg = np.array([L, width, mode, hook is not None, penalty_size > 0, _n_chunks(A)], np.int32)
+    shapes = [
+        jax.ShapeDtypeStruct((A, L + 1), jnp.int32),  # cells
+        # Move indices (< 16) as int8: a quarter of the bytes; the conversion fuses into their consumers.
+        jax.ShapeDtypeStruct((A, L), jnp.int8),
+        jax.ShapeDtypeStruct((3, A), jnp.int32),  # n, status, ant_steps
+        jax.ShapeDtypeStruct((2,), jnp.int32),  # loop_steps, slots
+        jax.ShapeDtypeStruct((max(penalty_size, 1),), jnp.float32),
+        jax.ShapeDtypeStruct((max(n_marks, 1),), jnp.bool_),
+    ]
+    call = jax.ffi.ffi_call(_TARGET, shapes, vmap_method="sequential")
+    cells, moves, per_ant, counters, penalty, marks = call(
+        i32(nbr), jnp.asarray(table, jnp.float32), jnp.asarray(hook_l, jnp.float32), i32(right_turn),
+        jnp.asarray(turn_rule, bool), jnp.stack([i32(start), i32(goal), i32(row0), i32(cell0), i32(local)]),
+        jnp.asarray(seed, jnp.uint32), i32(lut), jnp.asarray(alert, bool) if n_marks else jnp.zeros((1,), bool),
+        jnp.asarray(cfg),
+    )
+    return Ants(cells=cells, moves=moves.astype(jnp.int32), n=per_ant[0], status=per_ant[1],
+                penalty=penalty if penalty_size else None, ant_steps=per_ant[2], loop_steps=counters[0],
+                marks=marks if n_marks else None, slots=counters[1])
