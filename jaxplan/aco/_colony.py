@@ -16,8 +16,10 @@ import jax.numpy as jnp
 
 from jaxplan.aco import _rules as R
 from jaxplan.aco._context import GoalTables, MapTables
+from jaxplan.aco import _walk_numba
 from jaxplan.aco._walk import DEAD_END_RULES, GOAL, Ants, move_lut, walk
 from jaxplan.metrics import _run as run_metrics
+from jaxplan.aco._walk_numba import WALK_BACKENDS, HookTables
 
 __all__ = ["Colony", "RunConfig", "ColonyState", "RunOutput", "run", "run_batch", "HEURISTICS"]
 
@@ -38,6 +40,9 @@ class Colony:
         param ``rho_res``, seed 002's Eq. 4).
       hook: optional walk hook (state-dependent logits / move restrictions).
       heuristic_in_hook: the hook adds β·log η itself (the static η table is not used).
+      hook_logits: the hook's logits as a table for the numba walk,
+        ``hook_logits(tables, params, h_cell [B, C], logits [B, S, C, K]) -> f32[2, B * S * C, K]``
+        (``[1]``: the move keeps the previous heading); None: a hooked colony walks in JAX.
     """
 
     name: str
@@ -48,6 +53,7 @@ class Colony:
     evaporation: str = "rate"
     hook: Callable | None = None
     heuristic_in_hook: bool = False
+    hook_logits: Callable | None = None
 
 
 @dataclass(frozen=True)
@@ -65,6 +71,9 @@ class RunConfig:
         ``"alert"`` (step back, and true dead ends become pseudo-obstacles for the rest of the run).
       penalise: seed 004's dead-corner penalty on retreat edges (param ``lambda_p``).
       keep_pheromone: return the final pheromone (``[S, C, K]`` per run) for plots.
+      walk_backend: ``"jax"`` (the `lax.while_loop` walk, for any device), ``"numba"`` (one
+        native call per iteration, `jaxplan.aco._walk_numba`; same results) or ``"auto"``
+        (numba when JAX computes on the CPU).
     """
 
     colonies: int
@@ -76,6 +85,7 @@ class RunConfig:
     dead_end: str = "retreat"
     penalise: bool = False
     keep_pheromone: bool = False
+    walk_backend: str = "auto"
 
     def __post_init__(self) -> None:
         for name in ("colonies", "ants", "iterations", "max_steps", "width"):
@@ -88,6 +98,8 @@ class RunConfig:
             raise ValueError(f"dead_end must be one of {DEAD_END_RULES}, got {self.dead_end!r}")
         if self.penalise and self.dead_end != "retreat":
             raise ValueError("the dead-corner penalty needs dead_end='retreat'")
+        if self.walk_backend not in WALK_BACKENDS:
+            raise ValueError(f"walk_backend must be one of {WALK_BACKENDS}, got {self.walk_backend!r}")
 
 
 class ColonyState(NamedTuple):
@@ -231,6 +243,16 @@ def _update(colony: Colony, cfg: RunConfig, tables: MapTables, params: dict, sta
     return new, (jnp.min(bs_cost), diversity, n_ok.astype(jnp.int32), jnp.sum(ants.ant_steps))
 
 
+def walk_backend(colony: Colony, cfg: RunConfig) -> str:
+    """The walk this run uses, ``"jax"`` or ``"numba"`` (``"auto"`` resolved for the default device)."""
+    backend = _walk_numba.resolve_backend(cfg.walk_backend)
+    if backend == "numba" and colony.hook is not None and colony.hook_logits is None:
+        if cfg.walk_backend == "numba":
+            raise ValueError(f"colony {colony.name!r}: its walk hook has no table form for walk_backend='numba'")
+        return "jax"
+    return backend
+
+
 def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys: jax.Array) -> RunOutput:
     """Plays ``cfg.iterations`` iterations on every scenario of ``goals`` (leading axis N) with
     every key of ``keys [R]``. Outputs have leading axes ``[N, R]``.
@@ -259,7 +281,8 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
     local = jnp.tile(jnp.arange(M), B)
     start, goal = goal_b.start[run_of], goal_b.goal[run_of]
     hook = None
-    if colony.hook is not None:
+    backend = walk_backend(colony, cfg)
+    if colony.hook is not None and backend == "jax":
         hook = functools.partial(colony.hook, tables, params, h_cell.reshape(B * C))
     iter_keys = jnp.swapaxes(jax.vmap(lambda k: jax.random.split(k, I))(key_b), 0, 1)  # [I, B]
     update = jax.vmap(functools.partial(_update, colony, cfg, tables, params))
@@ -267,12 +290,18 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
     def iteration(state: ColonyState, keys_i):
         table = jax.vmap(functools.partial(_move_table, colony, tables, params))(state.tau, log_eta)
         seeds = jax.vmap(lambda k: jax.random.bits(k, (), jnp.uint32))(keys_i)
-        ants = walk(
-            nbr, table.reshape(B * S * C, K), start, goal, row0, cell0, seeds[run_of], local,
-            state.alert.reshape(B * C) if cfg.dead_end == "alert" else None,
-            max_steps=L, width=cfg.width, lut=lut, dead_end=cfg.dead_end,
-            penalty_size=B * S * C * K if cfg.penalise else 0, hook=hook,
-        )
+        walk_args = (nbr, table.reshape(B * S * C, K), start, goal, row0, cell0, seeds[run_of], local,
+                     state.alert.reshape(B * C) if cfg.dead_end == "alert" else None)
+        sizes = dict(max_steps=L, width=cfg.width, lut=lut, dead_end=cfg.dead_end,
+                     penalty_size=B * S * C * K if cfg.penalise else 0)
+        if backend == "numba":
+            hook_tables = None
+            if colony.hook is not None:
+                logits = colony.hook_logits(tables, params, h_cell, table)
+                hook_tables = HookTables(logits, tables.right_turn, tables.turn_rule)
+            ants = _walk_numba.walk(*walk_args, **sizes, hook=hook_tables)
+        else:
+            ants = walk(*walk_args, **sizes, hook=hook)
         per_run = Ants(
             cells=ants.cells.reshape(B, M, L + 1), moves=ants.moves.reshape(B, M, L), n=ants.n.reshape(B, M),
             status=ants.status.reshape(B, M),

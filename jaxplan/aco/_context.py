@@ -39,6 +39,7 @@ class MapTables(NamedTuple):
       n_blocked: ``f32[C]`` blocked (or outside) cells among the 8 neighbours.
       boundary: ``bool[C]`` cells on the map's edge.
       resolution: metres per cell (f32 scalar).
+      turn_angle: ``f32[K, K]`` |heading change| from move i to move j (rad, in [0, π]).
     """
 
     index: jnp.ndarray
@@ -55,6 +56,7 @@ class MapTables(NamedTuple):
     n_blocked: jnp.ndarray
     boundary: jnp.ndarray
     resolution: jnp.ndarray
+    turn_angle: jnp.ndarray
 
 
 class GoalTables(NamedTuple):
@@ -106,7 +108,18 @@ def map_tables(grid: GridMap, connectivity: int = 8, vehicle_height: float | Non
         n_blocked=jnp.asarray(n_blocked.ravel(), jnp.float32),
         boundary=jnp.asarray(boundary.ravel()),
         resolution=jnp.asarray(res, jnp.float32),
+        turn_angle=_turn_angle(jnp.asarray(angle, jnp.float32)),
     )
+
+
+def _turn_angle(angle: jnp.ndarray) -> jnp.ndarray:
+    """``f32[K, K]``: |heading change| |(θ_j − θ_i + π) mod 2π − π| between moves i and j.
+
+    Path statistics look it up instead of computing it per path step: over ``[A, L]`` steps
+    the float remainder is the costliest operation of an iteration's update on a CPU, and XLA
+    fuses a table computed inside the program back into the lookup (recomputing it per step).
+    """
+    return jnp.abs((angle[None, :] - angle[:, None] + jnp.pi) % (2 * jnp.pi) - jnp.pi)
 
 
 def goal_tables(

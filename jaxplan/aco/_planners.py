@@ -14,6 +14,9 @@ and says so here:
   * ``max_steps`` defaults to ``min(free cells, 4·(H + W))``.
   * ``keep_pheromone=True`` (every ACO planner; not a paper parameter) also returns the
     final pheromone: ``BatchResult.tau`` and ``PlanResult.info["tau"]`` (for plots).
+  * ``walk_backend`` (every ACO planner; not a paper parameter): ``"auto"`` (default) walks
+    the ants in one numba call per iteration when JAX runs on the CPU and in the JAX step
+    loop elsewhere; ``"jax"`` / ``"numba"`` force one. Both give identical results.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ from numpy.typing import ArrayLike
 from jaxplan.aco import _rules as R
 from jaxplan.aco._colony import Colony, RunConfig, run_batch
 from jaxplan.aco._context import GoalTables, MapTables, check_one, goal_tables, map_tables
+from jaxplan.aco._walk_numba import WALK_BACKENDS
 from jaxplan.grid._gridmap import GridMap, passable
 from jaxplan.registry import register_planner, resolve
 from jaxplan.result import PlanResult
@@ -43,13 +47,14 @@ COLONIES: dict[str, Colony] = {
     "risk_aco": Colony("risk_aco", R.init_obstacle_aware, R.cost_risk, (R.deposit_inverse,)),
     "opt_ant": Colony(
         "opt_ant", R.init_opt_ant, R.cost_opt_ant, (R.deposit_inverse,), bound=R.bound_min_max,
-        evaporation="residual", hook=R.hook_opt_ant, heuristic_in_hook=True,
+        evaporation="residual", hook=R.hook_opt_ant, heuristic_in_hook=True, hook_logits=R.hook_opt_ant_logits,
     ),
     "praco": Colony("praco", R.init_uniform, R.cost_praco, (R.deposit_ranked, R.deposit_neighbour)),
 }
 
 _COMMON = {"ants": 50, "iterations": 50, "alpha": 1.0, "beta": 7.0, "connectivity": 8, "max_steps": None,
-           "heuristic": "euclidean", "dead_end": "retreat", "vehicle_height": None, "keep_pheromone": False}
+           "heuristic": "euclidean", "dead_end": "retreat", "vehicle_height": None, "keep_pheromone": False,
+           "walk_backend": "auto"}
 
 _DEFAULTS: dict[str, dict[str, Any]] = {
     "aco": {**_COMMON, "dead_end": "die", "rho": 0.3, "q": 100.0, "tau0": 1.0},
@@ -65,7 +70,7 @@ _DEFAULTS: dict[str, dict[str, Any]] = {
 
 # Parameters that shape the compiled program (everything else is a traced leaf of `params`).
 _STATIC = ("ants", "iterations", "connectivity", "max_steps", "heuristic", "dead_end", "vehicle_height", "colonies",
-           "keep_pheromone")
+           "keep_pheromone", "walk_backend")
 # Parameters that must lie in [0, 1].
 _UNIT = ("rho", "rho_res", "lambda_p", "delta")
 _DESCRIPTIONS = {
@@ -92,6 +97,8 @@ def _validate(name: str):
             raise ValueError(f"planner {name!r}: max_steps must be a positive integer or None, got {p['max_steps']!r}")
         if p["connectivity"] not in (4, 8, 16):
             raise ValueError(f"planner {name!r}: connectivity must be one of (4, 8, 16), got {p['connectivity']!r}")
+        if p.get("walk_backend", "auto") not in WALK_BACKENDS:
+            raise ValueError(f"planner {name!r}: walk_backend must be one of {WALK_BACKENDS}, got {p['walk_backend']!r}")
         if not isinstance(p.get("keep_pheromone", False), (bool, np.bool_)):
             raise ValueError(f"planner {name!r}: keep_pheromone must be True or False, got {p['keep_pheromone']!r}")
         vh = p["vehicle_height"]
@@ -133,6 +140,7 @@ def split_params(grid: GridMap, p: Mapping[str, Any]) -> tuple[RunConfig, dict, 
         dead_end=p["dead_end"],
         penalise="lambda_p" in p,
         keep_pheromone=bool(p.get("keep_pheromone", False)),
+        walk_backend=p.get("walk_backend", "auto"),
     )
     params = {k: jnp.asarray(v, jnp.float32) for k, v in p.items() if k not in _STATIC}
     return cfg, params, int(p["connectivity"]), p["vehicle_height"]

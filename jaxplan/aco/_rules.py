@@ -53,8 +53,11 @@ def path_stats(tables: MapTables, ants: Ants) -> PathStats:
     step_mask = t[None, :] < ants.n[:, None]  # [A, L]
     length = jnp.sum(jnp.where(step_mask, tables.step[ants.moves], 0.0), axis=1)
     turn_mask = step_mask[:, 1:]
-    a = tables.angle[ants.moves]
-    d = jnp.abs((a[:, 1:] - a[:, :-1] + jnp.pi) % (2 * jnp.pi) - jnp.pi)
+    # |heading change| looked up per pair of moves (`MapTables.turn_angle`, the same arithmetic
+    # as on the gathered angles). The lookup runs on whole rows (next move by `roll`, the wrapped
+    # last column sliced off after it): indexed by odd-length slices, XLA's gather is ~3x slower.
+    K = tables.angle.shape[0]
+    d = tables.turn_angle.reshape(K * K)[ants.moves * K + jnp.roll(ants.moves, -1, axis=1)][:, :-1]
     changed = ants.moves[:, 1:] != ants.moves[:, :-1]
     turns = jnp.sum(turn_mask & changed, axis=1).astype(jnp.float32)
     heading = jnp.sum(jnp.where(turn_mask & changed, d, 0.0), axis=1)
@@ -236,3 +239,31 @@ def hook_opt_ant(tables: MapTables, params, h_flat, pos, prev, nb, ok, logits, g
     ok = jnp.where(on_rule[:, None], ok & only_right, ok)
     ok = jnp.where(jnp.any(is_goal, axis=1, keepdims=True), is_goal, ok)
     return logits, ok
+
+
+def hook_opt_ant_logits(tables: MapTables, params, h_cell, logits):
+    """`hook_opt_ant`'s logits for every colony, cell and move, as a table (for the numba walk).
+
+    The hook's η depends on the ant's state only through "does the move keep the previous
+    heading" (the straightness term μ), so two values per move cover every case. The
+    arithmetic is the hook's, operation for operation, so the walk draws the same moves.
+
+    Args:
+      h_cell: ``f32[B, C]`` each run's distance to the goal (inf: unreachable).
+      logits: ``f32[B, S, C, K]`` α·log τ (−inf where a move is not allowed).
+
+    Returns:
+      ``f32[2, B * S * C, K]``: ``[0]`` for a move that turns, ``[1]`` for one that keeps the heading.
+    """
+    K = logits.shape[-1]
+    safe = jnp.maximum(jnp.where(tables.valid, tables.index, -1), 0)  # [C, K], as the walk's max(nb, 0)
+    d_to = h_cell[:, safe]  # [B, C, K]
+    d_from = h_cell[:, :, None]
+    progress = (d_from - d_to) / tables.step[None, None, :]
+    dist_term = jnp.where(jnp.isfinite(d_to) & jnp.isfinite(d_from), jnp.clip(0.5 + 0.5 * progress, 0.0, 1.0), 0.0)
+    flat = 1.0 / (1.0 + jnp.abs(tables.height[safe] - tables.height[:, None]))
+    out = []
+    for straight in (jnp.zeros_like(params["mu"]), params["mu"]):
+        eta = dist_term + straight + flat
+        out.append(logits + params["beta"] * jnp.log(eta)[:, None])
+    return jnp.stack(out).reshape(2, -1, K)

@@ -1,0 +1,577 @@
+"""The ants' walk as one native call per iteration (numba), for the CPU backend.
+
+`jaxplan.aco._walk.walk` advances all ants together, one `lax.while_loop` step per
+move; on a CPU each step is ~15 small XLA kernels (gathers, scatters) of 1.5–20 µs,
+so the loop costs far more than the arithmetic it does. Here the whole walk of one
+iteration (every run, colony and ant, from the start until goal, dead end or step
+limit) is one compiled call: each ant walks to the end on its own, the ants are shared
+out over the cores with `prange`. The JAX program calls it as an XLA FFI custom call (a
+numba `cfunc` registered with `jax.ffi`; CPU only), so the iterations' `lax.scan`, the
+move tables, deposits and everything else stay in JAX, and the JAX walk stays the one
+for GPUs.
+
+The result equals `walk`'s bit for bit: the same counter-based uniforms (`hash_uniform`,
+one per ant and step), the same float32 inverse-CDF sums in the same order, the same
+dead-end rules, path buffers (including entries past ``n``), penalty counts, dead-end
+marks and throughput counters (``loop_steps`` and ``slots`` are those the JAX loop,
+with its compaction, would report). With a walk hook (seed 002's `opt_ant`) the hook's
+state-dependent logits come from a table precomputed in JAX (`hook_logits`: one value
+per cell and move for "keeps the previous heading" and one for "turns"); the step then
+only needs the exponential of the logits relative to their maximum, computed with XLA's
+own float32 exp algorithm (`_exp_xla`), so this case is bit-identical too.
+
+Ants of one iteration never see each other's moves (the dead-end marks become
+pseudo-obstacles only from the next iteration), so walking them one after another
+gives the same paths as walking them in lockstep.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numba
+import numpy as np
+from llvmlite import ir
+from numba import njit, prange, types
+from numba.extending import intrinsic
+
+from jaxplan.aco._walk import COMPACT_FACTOR, COMPACT_MIN_ANTS, DEAD_END, GOAL, STEP_LIMIT, WALKING, Ants
+
+__all__ = ["WALK_BACKENDS", "HookTables", "resolve_backend", "walk"]
+
+WALK_BACKENDS = ("jax", "numba", "auto")
+_MODES = {"die": 0, "retreat": 1, "alert": 2}
+_DIE, _RETREAT, _ALERT = 0, 1, 2
+
+_F = np.float32
+_TINY = np.finfo(np.float32).tiny  # as `walk`: keeps allowed moves drawable when their weights underflowed
+_M32 = np.uint64(0xFFFFFFFF)
+_H1, _H2, _H3, _H4 = np.uint64(0x9E3779B9), np.uint64(0x85EBCA6B), np.uint64(0x7FEB352D), np.uint64(0x846CA68B)
+_S8, _S15, _S16 = np.uint64(8), np.uint64(15), np.uint64(16)
+_INV24 = np.float32(1.0 / (1 << 24))
+_NEG_INF = np.float32(-np.inf)
+
+
+class HookTables(NamedTuple):
+    """What the numba walk needs for seed 002's hook (`jaxplan.aco._rules.hook_opt_ant`).
+
+    Attributes:
+      logits: ``f32[2, G * C, K]`` the hook's logits of each colony's cell and move:
+        ``[0]`` when the move changes the ant's heading, ``[1]`` when it keeps it.
+      right_turn: ``i32[K]`` the move a quarter turn to the right of each move.
+      turn_rule: ``bool[C]`` right-hand-rule cells.
+    """
+
+    logits: jnp.ndarray
+    right_turn: jnp.ndarray
+    turn_rule: jnp.ndarray
+
+
+def resolve_backend(name: str) -> str:
+    """``"jax"`` or ``"numba"``: ``"auto"`` picks numba when JAX computes on the CPU."""
+    if name not in WALK_BACKENDS:
+        raise ValueError(f"walk_backend must be one of {WALK_BACKENDS}, got {name!r}")
+    if name == "auto":
+        return "numba" if jax.default_backend() == "cpu" else "jax"
+    return name
+
+
+# ---------------------------------------------------------------------------------------------
+# Scalar pieces, each the exact counterpart of a `walk` array operation.
+
+
+@intrinsic
+def _fma32(typingctx, a, b, c):
+    """float32 fused multiply-add (one rounding), as LLVM emits it for XLA's contracted a*b + c."""
+    sig = types.float32(types.float32, types.float32, types.float32)
+
+    def codegen(context, builder, signature, args):
+        f = ir.FloatType()
+        fn = builder.module.declare_intrinsic("llvm.fma", [f], fnty=ir.FunctionType(f, [f, f, f]))
+        return builder.call(fn, args)
+
+    return sig, codegen
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _uniform(seed, t, ant):
+    """`hash_uniform` for one (seed, step, ant): lowbias32, in uint64 arithmetic masked to 32 bits."""
+    x = ((np.uint64(ant) * _H1) & _M32) ^ ((np.uint64(t) * _H2 + np.uint64(seed)) & _M32)
+    x = x ^ (x >> _S16)
+    x = (x * _H3) & _M32
+    x = x ^ (x >> _S15)
+    x = (x * _H4) & _M32
+    x = x ^ (x >> _S16)
+    return np.float32(x >> _S8) * _INV24
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _move_between(a, b, width, lut):
+    """`moves_between` for two flat cells: the move index from ``a`` to ``b``, −1 if none."""
+    dx = b % width - a % width
+    dy = b // width - a // width
+    if abs(dx) > 2 or abs(dy) > 2:
+        return -1
+    return lut[(dy + 2) * 5 + dx + 2]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _exp_xla(x):
+    """float32 e^x exactly as XLA's CPU backend (jaxlib 0.10) computes it.
+
+    Only the hook path needs an exponential inside the step, and libm's expf differs from
+    XLA's in the last bit for about 1 % of arguments, which would change a few draws. XLA
+    emits Cephes' polynomial (``xla/backends/cpu/codegen/polynomial_approximations.cc``) and
+    LLVM contracts every multiply-add into an FMA; results below 2^-126 are flushed to zero
+    (XLA runs with FTZ). ``tests/test_walk_numba.py`` checks this against `jnp.exp`.
+    """
+    x = min(max(x, _F(-87.8)), _F(88.8))
+    n = np.float32(np.floor(_fma32(x, _F(1.44269504088896341), _F(0.5))))
+    n = min(max(n, _F(-127.0)), _F(127.0))
+    r = _fma32(-_F(0.693359375), n, x)
+    r = _fma32(-_F(-2.12194440e-4), n, r)
+    z = _fma32(r, _F(1.9875691500e-4), _F(1.3981999507e-3))
+    z = _fma32(z, r, _F(8.3334519073e-3))
+    z = _fma32(z, r, _F(4.1665795894e-2))
+    z = _fma32(z, r, _F(1.6666665459e-1))
+    z = _fma32(z, r, _F(5.0000001201e-1))
+    z = _fma32(z, r * r, r)
+    z = _F(1.0) + z
+    # 2^n from its biased exponent: 0.0 for n = -127.
+    e = z * _u2f(np.uint32((np.int32(n) + 127) << 23))
+    return e if not e < _TINY else _F(0.0)
+
+
+@intrinsic
+def _f2u(typingctx, x):
+    """Bit pattern of a float32 as uint32."""
+    sig = types.uint32(types.float32)
+
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.IntType(32))
+
+    return sig, codegen
+
+
+@intrinsic
+def _u2f(typingctx, x):
+    """float32 with the given uint32 bit pattern."""
+    sig = types.float32(types.uint32)
+
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.FloatType())
+
+    return sig, codegen
+
+
+# ---------------------------------------------------------------------------------------------
+# The walk.
+
+
+@njit(cache=True, nogil=True)
+def _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+              max_steps, width, lut, mode, has_hook, penalise, cells, moves, n_out, status_out, steps_out,
+              penalty, marks, seen, p, ok, is_goal):
+    """Walks ant ``a`` to its end; ``seen`` is the chunk's tabu, stamped with ``a + 1`` (never cleared)."""
+    K = nbr.shape[1]
+    L = max_steps
+    s0 = start[a]
+    g = goal[a]
+    r0 = row0[a]
+    c0 = cell0[a]
+    sd = seed[a]
+    loc = local[a]
+    stamp = a + 1
+    alerting = mode == _ALERT
+    pos = s0
+    prev = -1
+    n = 0
+    high = 0  # deepest path slot written: `cells` beyond it keep their zeros
+    status = WALKING
+    cells[a, 0] = s0
+    seen[s0] = stamp
+    t = 0
+    while t < L:
+        # Allowed moves: inside the map, not tabu, not a pseudo-obstacle of the run. Written
+        # without short-circuits: the branches would be unpredictable.
+        row = r0 + pos
+        if not has_hook:
+            # Weights and their running sums (`draw`'s: Σp left to right, 0 + p[0] is p[0] exactly).
+            acc = _F(0.0)
+            for k in range(K):
+                nb = nbr[pos, k]
+                safe = max(nb, 0)
+                o = (nb >= 0) & (seen[safe] != stamp)
+                if alerting:
+                    o = o & (not alert[c0 + safe])
+                w = table[row, k] + _TINY
+                acc = acc + (w if o else _F(0.0))
+                p[k] = acc
+        else:
+            for k in range(K):
+                nb = nbr[pos, k]
+                safe = max(nb, 0)
+                o = (nb >= 0) & (seen[safe] != stamp)
+                if alerting:
+                    o = o & (not alert[c0 + safe])
+                ok[k] = o
+            # Seed 002's hook: an adjacent goal wins (judged on the moves allowed so far), else
+            # on a right-turn cell the quarter turn right of the heading is forced when allowed.
+            any_goal = False
+            for k in range(K):
+                is_goal[k] = ok[k] and nbr[pos, k] == g
+                any_goal = any_goal or is_goal[k]
+            if any_goal:
+                for k in range(K):
+                    ok[k] = is_goal[k]
+            elif prev >= 0 and turn_rule[pos]:
+                right = right_turn[prev]
+                if ok[right]:
+                    for k in range(K):
+                        ok[k] = k == right
+            mx = _NEG_INF
+            for k in range(K):
+                v = hook_l[1 if k == prev else 0, row, k] if ok[k] else _NEG_INF
+                p[k] = v
+                mx = max(mx, v)
+            shift = mx if np.isfinite(mx) else _F(0.0)
+            acc = _F(0.0)
+            for k in range(K):
+                # An allowed move whose logit is -inf gets exp(-inf) = 0, then the floor.
+                acc = acc + (_exp_xla(p[k] - shift) + _TINY if ok[k] else _F(0.0))
+                p[k] = acc
+        # Inverse CDF with one uniform, as `draw`: k = number of the running sums of the first
+        # K - 1 weights at or below u·Σp.
+        total = p[K - 1]
+        threshold = _uniform(sd, t, loc) * total
+        k = 0
+        for j in range(K - 1):
+            k += p[j] <= threshold
+        t += 1  # the ant was walking during this step
+        if total > 0:
+            new = nbr[pos, k]
+            moves[a, n] = k  # the move between slots n and n + 1, as `walk` derives it
+            n += 1
+            cells[a, n] = new
+            high = max(high, n)
+            seen[new] = stamp
+            prev = k
+            pos = new
+            if new == g:
+                status = GOAL
+                break
+            continue
+        # Stuck: no allowed move.
+        if alerting:
+            # Seed 002's dead-end alert: only one open move (the way back, ignoring this ant's tabu).
+            open_moves = 0
+            for j in range(K):
+                nb = nbr[pos, j]
+                open_moves += (nb >= 0) & (not alert[c0 + max(nb, 0)])
+            if open_moves <= 1 and pos != s0 and pos != g:
+                marks[c0 + pos] = True
+        if mode == _DIE or n == 0:
+            status = DEAD_END
+            break
+        back = cells[a, n - 1]
+        if penalise:
+            penalty[(r0 + back) * K + _move_between(back, pos, width, lut)] += 1.0
+        if has_hook:
+            prev = _move_between(cells[a, n - 2], back, width, lut) if n >= 2 else -1
+        pos = back
+        n -= 1
+    if status == WALKING:
+        status = STEP_LIMIT
+    n_out[a] = n
+    status_out[a] = status
+    steps_out[a] = t
+    # `walk` derives every move from consecutive slots, stale ones included: slots up to n hold
+    # the path (moves recorded above); past it, a retreat may have left an older branch behind.
+    # The output buffers come uninitialised from XLA: `walk`'s zeros past the deepest slot.
+    for j in range(high + 1, L + 1):
+        cells[a, j] = 0
+    stale_end = min(high + 1, L)
+    for j in range(n, stale_end):
+        m = _move_between(cells[a, j], cells[a, j + 1], width, lut)
+        moves[a, j] = max(m, 0)
+    for j in range(max(n, stale_end), L):
+        moves[a, j] = 0
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _walk_all(nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+              max_steps, width, lut, mode, has_hook, penalise, n_chunks,
+              cells, moves, n_out, status_out, steps_out, penalty, marks):
+    """Walks every ant; chunk c takes ants c, c + n_chunks, ... (interleaved: ants of every run
+    and colony are spread over the chunks, which evens out their different walk lengths)."""
+    A = start.shape[0]
+    C, K = nbr.shape
+    marks[:] = 0
+    parts = np.zeros((n_chunks if penalise else 1, penalty.shape[0]), np.float32)
+    for c in prange(n_chunks):
+        seen = np.zeros(C, np.int32)
+        p = np.empty(K, np.float32)
+        ok = np.empty(K, np.bool_)
+        is_goal = np.empty(K, np.bool_)
+        part = parts[c] if penalise else parts[0]
+        for a in range(c, A, n_chunks):
+            _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+                      max_steps, width, lut, mode, has_hook, penalise, cells, moves, n_out, status_out, steps_out,
+                      part, marks, seen, p, ok, is_goal)
+    # Counts of +1.0 are exact in float32 (below 2^24), so the chunk order does not matter.
+    penalty[:] = 0.0
+    if penalise:
+        for c in range(n_chunks):
+            penalty += parts[c]
+
+
+@njit(cache=True, nogil=True)
+def _loop_counters(steps, max_steps, out):
+    """``out[:] = (loop_steps, slots)`` the JAX step loop reports for ants that walked ``steps [A]`` steps.
+
+    The loop runs until every ant has stopped; from `COMPACT_MIN_ANTS` ants on it continues with
+    A / `COMPACT_FACTOR` slots once no more than that many are walking. int32 (wrapping) like `walk`'s.
+    """
+    A = steps.shape[0]
+    loop = 0
+    for a in range(A):
+        loop = max(loop, np.int64(steps[a]))
+    if A >= COMPACT_MIN_ANTS:
+        small = A // COMPACT_FACTOR
+        hist = np.zeros(max_steps + 1, np.int64)
+        for a in range(A):
+            hist[steps[a]] += 1
+        t_full = max_steps
+        walking = A
+        for t in range(max_steps):
+            walking -= hist[t]  # ants with more than t steps
+            if walking <= small:
+                t_full = t
+                break
+        loop = max(loop, t_full)
+        slots = t_full * A + (loop - t_full) * small
+    else:
+        slots = loop * A
+    out[0] = np.int32(loop)
+    out[1] = np.int32(slots)
+
+
+# ---------------------------------------------------------------------------------------------
+# The XLA FFI handler: XLA calls it with its own buffers, so nothing is copied or allocated per
+# call and no Python runs (`jax.pure_callback` costs 0.2–2 ms per call on this 2-core CPU, more
+# than the whole walk of a small colony). The call frame is read with the offsets of XLA's FFI
+# C API (``xla/ffi/api/c_api.h``, API version 0.x, x86-64/aarch64 layout).
+
+
+def _pointer(nbtype):
+    """An intrinsic turning an int64 address into a ``CPointer(nbtype)`` (for `numba.carray`)."""
+
+    @intrinsic
+    def ptr(typingctx, addr):
+        sig = types.CPointer(nbtype)(types.int64)
+
+        def codegen(context, builder, signature, args):
+            return builder.inttoptr(args[0], context.get_value_type(types.CPointer(nbtype)))
+
+        return sig, codegen
+
+    return ptr
+
+
+_I64P, _I32P, _U32P, _F32P, _I8P, _U8P = (_pointer(t) for t in (types.int64, types.int32, types.uint32, types.float32,
+                                                                  types.int8, types.uint8))
+
+
+@intrinsic
+def _address(typingctx, p):
+    """int64 address of a void pointer."""
+    sig = types.int64(types.voidptr)
+
+    def codegen(context, builder, signature, args):
+        return builder.ptrtoint(args[0], ir.IntType(64))
+
+    return sig, codegen
+
+
+@intrinsic
+def _null(typingctx):
+    """The null void pointer (an FFI handler's "no error")."""
+    sig = types.voidptr()
+
+    def codegen(context, builder, signature, args):
+        return context.get_constant_null(types.voidptr)
+
+    return sig, codegen
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _i64(addr):
+    return numba.carray(_I64P(addr), (1,))[0]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _i32(addr):
+    return numba.carray(_I32P(addr), (1,))[0]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _buffer(lst, i):
+    """``(data address, dims address)`` of the i-th `XLA_FFI_Buffer*` of an args/rets list."""
+    b = _i64(lst + 8 * i)
+    return _i64(b + 24), _i64(b + 40)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _dim(dims, i):
+    return _i64(dims + 8 * i)
+
+
+def _handler(frame):
+    """``XLA_FFI_Error* handler(XLA_FFI_CallFrame*)`` for `walk`'s call; see `_ARGS` for the buffers."""
+    base = _address(frame)
+    ext = _i64(base + 8)
+    if ext != 0 and _i32(ext + 8) == 1:
+        # XLA asks for the handler's metadata (XLA_FFI_Metadata_Extension): FFI API version 0.1,
+        # no traits, stateless. Older minor versions are accepted by every newer XLA.
+        meta = _i64(ext + 24)
+        m64 = numba.carray(_I64P(meta), (6,))
+        m32 = numba.carray(_I32P(meta), (12,))
+        m64[1] = 24  # api_version.struct_size
+        m64[2] = 0  # api_version.extension_start
+        m32[6] = 0  # major
+        m32[7] = 1  # minor
+        m32[8] = 0  # traits
+        m64[5] = 0  # state_type_id: XLA_FFI_UNKNOWN_TYPE_ID
+        return _null()
+    if _i32(base + 32) != 3:  # only the EXECUTE stage has work
+        return _null()
+    args = _i64(base + 40 + 32)
+    rets = _i64(base + 80 + 32)
+    d, s = _buffer(args, 0)
+    C = _dim(s, 0)
+    K = _dim(s, 1)
+    nbr = numba.carray(_I32P(d), (C, K))
+    d, s = _buffer(args, 1)
+    table = numba.carray(_F32P(d), (_dim(s, 0), K))
+    d, s = _buffer(args, 2)
+    hook_l = numba.carray(_F32P(d), (2, _dim(s, 1), K))
+    d, s = _buffer(args, 3)
+    right_turn = numba.carray(_I32P(d), (K,))
+    d, s = _buffer(args, 4)
+    turn_rule = numba.carray(_U8P(d), (_dim(s, 0),))
+    d, s = _buffer(args, 5)
+    A = _dim(s, 1)
+    ints = numba.carray(_I32P(d), (5, A))
+    d, s = _buffer(args, 6)
+    seed = numba.carray(_U32P(d), (A,))
+    d, s = _buffer(args, 7)
+    lut = numba.carray(_I32P(d), (25,))
+    d, s = _buffer(args, 8)
+    alert = numba.carray(_U8P(d), (_dim(s, 0),))
+    d, s = _buffer(args, 9)
+    cfg = numba.carray(_I32P(d), (6,))
+    L = np.int64(cfg[0])
+    d, s = _buffer(rets, 0)
+    cells = numba.carray(_I32P(d), (A, L + 1))
+    d, s = _buffer(rets, 1)
+    moves = numba.carray(_I8P(d), (A, L))
+    d, s = _buffer(rets, 2)
+    per_ant = numba.carray(_I32P(d), (3, A))
+    d, s = _buffer(rets, 3)
+    counters = numba.carray(_I32P(d), (2,))
+    d, s = _buffer(rets, 4)
+    penalty = numba.carray(_F32P(d), (_dim(s, 0),))
+    d, s = _buffer(rets, 5)
+    marks = numba.carray(_U8P(d), (_dim(s, 0),))
+    _walk_all(nbr, table, hook_l, right_turn, turn_rule, ints[0], ints[1], ints[2], ints[3], seed, ints[4], alert,
+              L, np.int64(cfg[1]), lut, np.int64(cfg[2]), cfg[3] != 0, cfg[4] != 0, np.int64(cfg[5]),
+              cells, moves, per_ant[0], per_ant[1], per_ant[2], penalty, marks)
+    _loop_counters(per_ant[2], L, counters)
+    return _null()
+
+
+_TARGET = "jaxplan_aco_walk"
+_HANDLER = None  # the compiled cfunc, kept alive while XLA may call it
+
+
+def _register() -> None:
+    """Compiles (or loads from numba's cache) the handler and registers it with XLA, once."""
+    global _HANDLER
+    if _HANDLER is None:
+        # Start numba's thread pool first: loading the cached handler links the parallel kernel
+        # against the pool's launch functions, which are null until then.
+        numba.get_num_threads()
+        handler = numba.cfunc(types.voidptr(types.voidptr), cache=True, nopython=True)(_handler)
+        jax.ffi.register_ffi_target(_TARGET, jax.ffi.pycapsule(handler.ctypes), platform="cpu")
+        _HANDLER = handler
+
+
+def _n_chunks(A: int) -> int:
+    """Parallel chunks: numba's threads, but no more than the cores this process may use."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(numba.get_num_threads(), cores, A))
+
+
+def walk(
+    nbr: jnp.ndarray,
+    table: jnp.ndarray,
+    start: jnp.ndarray,
+    goal: jnp.ndarray,
+    row0: jnp.ndarray,
+    cell0: jnp.ndarray,
+    seed: jnp.ndarray,
+    local: jnp.ndarray,
+    alert: jnp.ndarray | None,
+    *,
+    max_steps: int,
+    width: int,
+    lut: jnp.ndarray,
+    dead_end: str,
+    penalty_size: int = 0,
+    hook: HookTables | None = None,
+) -> Ants:
+    """`jaxplan.aco._walk.walk` as one native call (XLA FFI, CPU): same arguments, same `Ants`, bit for bit.
+
+    ``table`` is not used when ``hook`` is given (the hook's logits are in `HookTables.logits`,
+    built by the colony's ``hook_logits`` rule). Works under `jit`, `lax.scan` and `vmap` (a
+    vmapped batch is walked element by element, each in parallel over its ants).
+    """
+    _register()
+    A = start.shape[0]
+    C, K = nbr.shape
+    L = max_steps
+    mode = _MODES[dead_end]
+    i32 = functools.partial(jnp.asarray, dtype=jnp.int32)
+    if hook is None:
+        hook_l, right_turn, turn_rule = jnp.zeros((2, 1, K), jnp.float32), jnp.zeros((K,), jnp.int32), jnp.zeros((1,), bool)
+    else:
+        hook_l, right_turn, turn_rule = hook.logits, hook.right_turn, hook.turn_rule
+        table = jnp.zeros((1, K), jnp.float32)  # unused
+    n_marks = alert.shape[0] if mode == _ALERT else 0
+    cfg = np.array([L, width, mode, hook is not None, penalty_size > 0, _n_chunks(A)], np.int32)
+    shapes = [
+        jax.ShapeDtypeStruct((A, L + 1), jnp.int32),  # cells
+        # Move indices (< 16) as int8: a quarter of the bytes; the conversion fuses into their consumers.
+        jax.ShapeDtypeStruct((A, L), jnp.int8),
+        jax.ShapeDtypeStruct((3, A), jnp.int32),  # n, status, ant_steps
+        jax.ShapeDtypeStruct((2,), jnp.int32),  # loop_steps, slots
+        jax.ShapeDtypeStruct((max(penalty_size, 1),), jnp.float32),
+        jax.ShapeDtypeStruct((max(n_marks, 1),), jnp.bool_),
+    ]
+    call = jax.ffi.ffi_call(_TARGET, shapes, vmap_method="sequential")
+    cells, moves, per_ant, counters, penalty, marks = call(
+        i32(nbr), jnp.asarray(table, jnp.float32), jnp.asarray(hook_l, jnp.float32), i32(right_turn),
+        jnp.asarray(turn_rule, bool), jnp.stack([i32(start), i32(goal), i32(row0), i32(cell0), i32(local)]),
+        jnp.asarray(seed, jnp.uint32), i32(lut), jnp.asarray(alert, bool) if n_marks else jnp.zeros((1,), bool),
+        jnp.asarray(cfg),
+    )
+    return Ants(cells=cells, moves=moves.astype(jnp.int32), n=per_ant[0], status=per_ant[1],
+                penalty=penalty if penalty_size else None, ant_steps=per_ant[2], loop_steps=counters[0],
+                marks=marks if n_marks else None, slots=counters[1])

@@ -1,0 +1,251 @@
+"""The numba walk backend: bit-identical to the JAX walk, for every preset, rule and batch shape."""
+
+from __future__ import annotations
+
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from numba import njit
+
+import jaxplan as jp
+from jaxplan.aco import COLONIES, hash_uniform
+from jaxplan.aco import _rules as R
+from jaxplan.aco import _walk_numba as WN
+from jaxplan.aco._colony import RunConfig, run_batch
+from jaxplan.aco._context import goal_tables, map_tables
+from jaxplan.aco._planners import _seed_keys, split_params
+from jaxplan.aco._walk import move_lut, walk
+from jaxplan.registry import resolve
+
+PLANNERS = sorted(COLONIES)
+SMALL = dict(ants=16, iterations=6)
+RESULT_FIELDS = ("paths", "n_cells", "length", "cost", "turns", "success", "converged", "history", "diversity",
+                 "successes")
+
+
+@pytest.fixture(scope="module")
+def room():
+    """A 16x12 map with walls and a dead-end pocket, and start/goal pairs across it."""
+    free = np.ones((12, 16), bool)
+    free[3, 2:13] = False
+    free[3:9, 12] = False
+    free[8, 5:12] = False
+    free[5:8, 5] = False
+    starts = np.array([[0, 0], [15, 11], [6, 6]])
+    goals = np.array([[14, 10], [1, 5], [0, 11]])
+    return jp.grid_from_array(free, resolution=0.5), starts, goals
+
+
+def _assert_same(a, b, fields=RESULT_FIELDS):
+    for f in fields:
+        np.testing.assert_array_equal(getattr(a, f), getattr(b, f), err_msg=f)
+
+
+@njit
+def _exp_many(x, out):
+    for i in range(x.size):
+        out[i] = WN._exp_xla(x[i])
+
+
+def test_exp_is_xlas_bit_for_bit():
+    """The hook's exponential against `jnp.exp` on 2^22 float32 in [-90, 0] (every one of them
+    was checked once: no difference), including the range XLA flushes to zero."""
+    rng = np.random.default_rng(0)
+    lo, hi = np.float32(-90.0).view(np.uint32), np.float32(-0.0).view(np.uint32)
+    x = np.concatenate([rng.integers(hi, lo, 1 << 22, dtype=np.uint32).view(np.float32),
+                        np.linspace(-88.0, -86.0, 4001, dtype=np.float32),
+                        np.array([0.0, -0.0, -np.inf, -1e-30, -87.8, -87.33655], np.float32)])
+    out = np.empty_like(x)
+    _exp_many(x, out)
+    np.testing.assert_array_equal(out.view(np.uint32), np.asarray(jax.jit(jnp.exp)(x)).view(np.uint32))
+
+
+@njit
+def _uniforms(seed, t, ant, out):
+    for i in range(out.size):
+        out[i] = WN._uniform(seed[i], t[i], ant[i])
+
+
+def test_uniforms_are_hash_uniform():
+    rng = np.random.default_rng(1)
+    n = 100_000
+    seed = rng.integers(0, 2**32, n, dtype=np.uint32)
+    t = rng.integers(0, 5000, n).astype(np.int32)
+    ant = rng.integers(0, 10**6, n).astype(np.int32)
+    out = np.empty(n, np.float32)
+    _uniforms(seed, t, ant, out)
+    np.testing.assert_array_equal(out, np.asarray(hash_uniform(jnp.asarray(seed), jnp.asarray(t), jnp.asarray(ant))))
+
+
+def _walk_inputs(grid, B: int, S: int, m: int, seed: int):
+    """Random pheromone-like tables for B runs x S colonies x m ants on ``grid``."""
+    tables = map_tables(grid, 8)
+    C, K = tables.index.shape
+    rng = np.random.default_rng(seed)
+    free = np.flatnonzero(np.asarray(grid.free).ravel())
+    cells = rng.choice(free, size=(B, 2), replace=False) if B * 2 <= free.size else rng.choice(free, size=(B, 2))
+    w = rng.random((B * S * C, K)).astype(np.float32) ** 4
+    w[rng.random(w.shape) < 0.1] = 0.0  # some zero weights: allowed moves drawn only through the floor
+    valid = np.tile(np.asarray(tables.valid), (B * S, 1))
+    table = np.where(valid, w, 0.0).astype(np.float32)
+    A = B * S * m
+    run_of = np.repeat(np.arange(B), S * m)
+    colony_of = np.tile(np.repeat(np.arange(S), m), B)
+    return dict(
+        tables=tables,
+        nbr=jnp.where(tables.valid, tables.index, -1), table=jnp.asarray(table),
+        start=jnp.asarray(cells[run_of, 0], jnp.int32), goal=jnp.asarray(cells[run_of, 1], jnp.int32),
+        row0=jnp.asarray((run_of * S + colony_of) * C, jnp.int32), cell0=jnp.asarray(run_of * C, jnp.int32),
+        seed=jnp.asarray(rng.integers(0, 2**32, B, dtype=np.uint32)[run_of]),
+        local=jnp.asarray(np.tile(np.arange(S * m), B), jnp.int32),
+        alert=jnp.asarray(rng.random(B * C) < 0.05), A=A, C=C, K=K,
+    )
+
+
+@pytest.mark.parametrize("dead_end, penalise", [("die", False), ("retreat", False), ("retreat", True), ("alert", False)])
+@pytest.mark.parametrize("ants", [24, 200])  # 2 runs x 2 colonies x ants: 200 gives 800 ants, compacted in JAX
+def test_walk_equals_jax_walk_field_by_field(dead_end, penalise, ants):
+    scene = jp.RandomMapGenerator(20, 18, 0.25)(3)
+    B, S = 2, 2
+    d = _walk_inputs(scene.grid, B, S, ants, seed=ants)
+    alert = d["alert"] if dead_end == "alert" else None
+    kw = dict(max_steps=120, width=scene.grid.width, lut=move_lut(d["tables"].offsets), dead_end=dead_end,
+              penalty_size=B * S * d["C"] * d["K"] if penalise else 0)
+    args = (d["nbr"], d["table"], d["start"], d["goal"], d["row0"], d["cell0"], d["seed"], d["local"], alert)
+    ref = jax.jit(functools.partial(walk, **kw))(*args)
+    out = jax.jit(functools.partial(WN.walk, **kw))(*args)
+    for field in ref._fields:
+        r, o = getattr(ref, field), getattr(out, field)
+        assert (r is None) == (o is None), field
+        if r is not None:
+            np.testing.assert_array_equal(np.asarray(o), np.asarray(r), err_msg=field)
+    status = np.asarray(ref.status)
+    assert len(np.unique(status)) >= 2, "the case should mix goal, dead-end and step-limit ants"
+    if dead_end == "alert":
+        assert np.asarray(ref.marks).any()
+    if penalise:
+        assert np.asarray(ref.penalty).sum() > 0
+
+
+@pytest.mark.parametrize("dead_end", ["die", "retreat", "alert"])
+def test_walk_with_opt_ant_hook_equals_jax_walk(dead_end):
+    """Seed 002's hook (heights, right-turn cells, goal priority, geodesic inf distances)."""
+    scene = jp.UrbanGenerator(right_turn_prob=0.8)(1)
+    grid = scene.grid
+    _, p = resolve("opt_ant", dict(vehicle_height=None, connectivity=8))
+    _, params, _, _ = split_params(grid, p)
+    tables = map_tables(grid, 8)
+    C, K = tables.index.shape
+    B, S, m = 2, 1, 300
+    rng = np.random.default_rng(7)
+    free = np.flatnonzero(np.asarray(grid.free).ravel())
+    goals = rng.choice(free, B)
+    h_cell = jnp.asarray(np.stack([
+        jp.search.distance_from(grid, (int(g) % grid.width, int(g) // grid.width), 8).ravel() for g in goals
+    ]), jnp.float32)  # inf where unreachable
+    tau = jnp.asarray(rng.uniform(10, 40, (B, S, C, K)), jnp.float32)
+    logits = jnp.where(tables.valid, params["alpha"] * jnp.log(tau), -jnp.inf)
+    A = B * S * m
+    run_of = np.repeat(np.arange(B), S * m)
+    starts = rng.choice(free, B)
+    args = (jnp.where(tables.valid, tables.index, -1), logits.reshape(B * S * C, K),
+            jnp.asarray(starts[run_of], jnp.int32), jnp.asarray(goals[run_of], jnp.int32),
+            jnp.asarray(run_of * S * C, jnp.int32), jnp.asarray(run_of * C, jnp.int32),
+            jnp.asarray(rng.integers(0, 2**32, B, dtype=np.uint32)[run_of]), jnp.asarray(np.tile(np.arange(m), B), jnp.int32),
+            jnp.asarray(rng.random(B * C) < 0.03) if dead_end == "alert" else None)
+    kw = dict(max_steps=150, width=grid.width, lut=move_lut(tables.offsets), dead_end=dead_end)
+    hook = functools.partial(R.hook_opt_ant, tables, params, h_cell.reshape(B * C))
+    ref = jax.jit(functools.partial(walk, **kw, hook=hook))(*args)
+    ht = WN.HookTables(R.hook_opt_ant_logits(tables, params, h_cell, logits), tables.right_turn, tables.turn_rule)
+    out = jax.jit(functools.partial(WN.walk, **kw, hook=ht))(*args)
+    for field in ("cells", "moves", "n", "status", "ant_steps", "loop_steps", "slots", "marks"):
+        r, o = getattr(ref, field), getattr(out, field)
+        if r is not None:
+            np.testing.assert_array_equal(np.asarray(o), np.asarray(r), err_msg=field)
+    assert (np.asarray(ref.status) == 1).mean() > 0.2
+
+
+def _both(grid, starts, goals, planner, seeds, **kw):
+    return [jp.plan_batch(grid, starts, goals, planner=planner, seeds=seeds, walk_backend=b, **kw) for b in ("jax", "numba")]
+
+
+@pytest.mark.parametrize("planner", PLANNERS)
+@pytest.mark.parametrize("dead_end", ["die", "retreat", "alert"])
+def test_every_preset_and_dead_end_rule_gives_identical_results(room, planner, dead_end):
+    grid, starts, goals = room
+    extra = {"vehicle_height": None} if planner == "opt_ant" else {}
+    if planner == "praco":
+        extra["colonies"] = 2
+        if dead_end != "retreat":
+            pytest.skip("praco's dead-corner penalty needs dead_end='retreat'")
+    a, b = _both(grid, starts, goals, planner, [0, 1], dead_end=dead_end, **SMALL, **extra)
+    _assert_same(a, b)
+    assert a.success.mean() >= 0.5
+
+
+@pytest.mark.parametrize("planner, scene, extra", [
+    ("opt_ant", jp.UrbanGenerator(right_turn_prob=0.6), dict(vehicle_height=None)),  # right-hand rule, heights
+    ("opt_ant", jp.MountainGenerator(), dict(connectivity=16)),  # 16 moves, tunnels vs vehicle height
+    ("iaco", jp.RandomMapGenerator(24, 24, 0.3), dict(heuristic="geodesic")),
+    ("risk_aco", jp.RandomMapGenerator(24, 24, 0.2), dict(ants=40)),
+    ("praco", jp.RandomMapGenerator(24, 24, 0.3), dict(colonies=3, ants=12)),
+])
+def test_presets_on_the_seed_maps_give_identical_results(planner, scene, extra):
+    s = scene(2)
+    kw = {**dict(ants=24, iterations=5), **extra}
+    a, b = _both(s.grid, [s.start], [s.goal], planner, [0, 3], **kw)
+    _assert_same(a, b)
+
+
+def test_numba_backend_same_seed_same_result_and_auto_picks_it(room):
+    grid, starts, goals = room
+    runs = [jp.plan_batch(grid, starts, goals, planner="iaco", seeds=[4], walk_backend=b, **SMALL)
+            for b in ("numba", "numba", "auto")]
+    _assert_same(runs[0], runs[1])
+    _assert_same(runs[0], runs[2])
+    assert WN.resolve_backend("auto") == ("numba" if jax.default_backend() == "cpu" else "jax")
+
+
+def test_unreachable_goal_fails_cleanly_without_nan_in_numba():
+    free = np.ones((6, 6), bool)
+    free[:, 3] = False
+    grid = jp.grid_from_array(free)
+    for planner in ("iaco", "opt_ant"):  # aco and praco: tests/test_aco.py (default backend "auto")
+        extra = {"vehicle_height": None} if planner == "opt_ant" else {}
+        r = jp.plan_batch(grid, [[0, 0]], [[5, 5]], planner=planner, seeds=[0, 1], walk_backend="numba", **SMALL,
+                          **extra)
+        assert not r.success.any() and np.isinf(r.length).all()
+        assert not np.isnan(r.history).any() and not np.isnan(r.diversity).any()
+        assert (r.successes == 0).all()
+
+
+def test_vmap_over_params_matches_per_element_runs(room):
+    """Tuning vmaps a run over parameter values: the callback then walks each element in turn."""
+    grid, starts, goals = room
+    _, p = resolve("iaco", dict(SMALL))
+    cfg, params, conn, vh = split_params(grid, p)
+    tables = map_tables(grid, conn, vh)
+    gt = goal_tables(grid, starts[:2], goals[:2], conn, vh)
+    keys = _seed_keys([0, 1])
+    betas = jnp.asarray([2.0, 5.0, 7.0], jnp.float32)
+    outs = {}
+    for backend in ("jax", "numba"):
+        c = RunConfig(**{**cfg.__dict__, "walk_backend": backend})
+        fn = jax.jit(jax.vmap(lambda b, c=c: run_batch(COLONIES["iaco"], c, tables, gt, {**params, "beta": b}, keys)))
+        outs[backend] = fn(betas)
+    for field in ("cells", "n", "cost", "history", "ant_steps", "loop_steps", "slots"):
+        np.testing.assert_array_equal(np.asarray(getattr(outs["numba"], field)), np.asarray(getattr(outs["jax"], field)))
+    c = RunConfig(**{**cfg.__dict__, "walk_backend": "numba"})
+    single = jax.jit(lambda b: run_batch(COLONIES["iaco"], c, tables, gt, {**params, "beta": b}, keys))(betas[1])
+    np.testing.assert_array_equal(np.asarray(single.cells), np.asarray(outs["numba"].cells[1]))
+
+
+def test_walk_backend_is_validated(room):
+    grid, starts, goals = room
+    with pytest.raises(ValueError, match="walk_backend must be one of"):
+        jp.plan(grid, starts[0], goals[0], planner="aco", walk_backend="cuda")
+    with pytest.raises(ValueError, match="walk_backend must be one of"):
+        RunConfig(colonies=1, ants=2, iterations=1, max_steps=4, width=4, walk_backend="gpu")
