@@ -33,12 +33,12 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import statistics
 import subprocess
 import sys
 import time
 
 import numpy as np
+from _timing import median_time
 
 
 # ---------------------------------------------------------------------------------------------
@@ -154,14 +154,6 @@ def scene(robots: int, seed: int = 0):
                                                             np.sin(th + rng.normal(0, 0.7, robots))], 1)
     return grid, states.astype(np.float32), goals.astype(np.float32)
 
-
-def median_time(fn, repeat: int) -> float:
-    ts = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t0)
-    return statistics.median(ts)
 
 
 def measure(robots: list[int], repeat: int, sharded: bool) -> dict:

@@ -27,6 +27,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra as scipy_dijkstra
 
 import jaxplan as jp
+from _timing import median_time
 from jaxplan.search import _kernels
 
 
@@ -38,14 +39,6 @@ def csgraph_of(grid: jp.GridMap) -> sp.csr_array:
     w = np.tile(step, grid.n_cells)[t.valid.ravel()]
     return sp.csr_array((w, (rows, cols)), shape=(grid.n_cells, grid.n_cells))
 
-
-def median_time(fn, repeat: int) -> float:
-    ts = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t0)
-    return statistics.median(ts)
 
 
 def bench_map(name: str, grid: jp.GridMap, starts: np.ndarray, goals: np.ndarray, optimal, n_queries: int, n_rows: int):

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import time
 
 import jax
@@ -36,6 +35,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import jaxplan as jp
+from _timing import median_time
 from jaxplan.metrics import _host as H
 from jaxplan.grid._collision import cached_collision_map
 from jaxplan.metrics._front import _core, _hausdorff_core, _pad, bucket
@@ -62,14 +62,6 @@ def random_walks(grid: jp.GridMap, count: int, length: int, seed: int) -> np.nda
         out[:, t] = cell
     return np.stack([out % W, out // W], axis=-1)
 
-
-def median_time(fn, repeat: int) -> float:
-    ts = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t0)
-    return statistics.median(ts)
 
 
 def numpy_metrics(path: np.ndarray, field: np.ndarray, res: float) -> tuple:
