@@ -1,6 +1,7 @@
 """ACO path quality against exact optima on MovingAI scenario rows.
 
 Run:  python benchmarks/bench_aco_quality.py [--rows 20] [--seeds 10] [--data-dir ../shared/benchmarks]
+                                             [--walk-backend auto|jax|numba]
 
 For warehouse-10-20-10-2-1, random-32-32-20 and room-64-64-8, takes up to ``--rows``
 scenario rows whose optimal length is at most 64 cells (spread evenly over the
@@ -45,6 +46,8 @@ def main() -> None:
     ap.add_argument("--data-dir", default=os.environ.get("JAXPLAN_DATA", root.parent / "shared" / "benchmarks"))
     ap.add_argument("--rows", type=int, default=20)
     ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--walk-backend", default="auto", choices=("auto", "jax", "numba"),
+                    help="how the ants walk (identical results; see jaxplan.aco._walk_numba)")
     args = ap.parse_args()
     d = Path(args.data_dir) / "movingai"
     print(f"{'planner':<10}{'overrides':<62}{'map':<26}{'runs':>6}{'success':>9}{'mean gap':>10}"
@@ -57,7 +60,8 @@ def main() -> None:
         rows = short[np.linspace(0, len(short) - 1, min(args.rows, len(short))).astype(int)]
         for name, over in SETTINGS:
             t0 = time.perf_counter()
-            r = jp.plan_batch(grid, scen.starts[rows], scen.goals[rows], planner=name, seeds=range(args.seeds), **over)
+            r = jp.plan_batch(grid, scen.starts[rows], scen.goals[rows], planner=name, seeds=range(args.seeds),
+                              walk_backend=args.walk_backend, **over)
             gap = r.length / scen.optimal[rows][:, None] - 1
             ok = r.success
             label = ", ".join(f"{k}={v}" for k, v in over.items()) or "defaults"

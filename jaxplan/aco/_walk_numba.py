@@ -147,17 +147,6 @@ def _exp_xla(x):
 
 
 @intrinsic
-def _f2u(typingctx, x):
-    """Bit pattern of a float32 as uint32."""
-    sig = types.uint32(types.float32)
-
-    def codegen(context, builder, signature, args):
-        return builder.bitcast(args[0], ir.IntType(32))
-
-    return sig, codegen
-
-
-@intrinsic
 def _u2f(typingctx, x):
     """float32 with the given uint32 bit pattern."""
     sig = types.float32(types.uint32)
