@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import jaxplan as jp
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -57,3 +59,17 @@ def scenario_pairs(folder: Path) -> list[tuple[Path, Path]]:
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(0)
+
+
+@pytest.fixture(scope="module")
+def room():
+    """A 16x12 map with walls and a dead-end pocket, and start/goal pairs across it."""
+    free = np.ones((12, 16), bool)
+    free[3, 2:13] = False
+    free[3:9, 12] = False
+    free[8, 5:12] = False
+    free[5:8, 5] = False  # pocket opening up
+    starts = np.array([[0, 0], [15, 11], [6, 6]])
+    goals = np.array([[14, 10], [1, 5], [0, 11]])
+    return jp.grid_from_array(free, resolution=0.5), starts, goals
+

@@ -26,18 +26,6 @@ RESULT_FIELDS = ("paths", "n_cells", "length", "cost", "turns", "success", "conv
                  "successes")
 
 
-@pytest.fixture(scope="module")
-def room():
-    """A 16x12 map with walls and a dead-end pocket, and start/goal pairs across it."""
-    free = np.ones((12, 16), bool)
-    free[3, 2:13] = False
-    free[3:9, 12] = False
-    free[8, 5:12] = False
-    free[5:8, 5] = False
-    starts = np.array([[0, 0], [15, 11], [6, 6]])
-    goals = np.array([[14, 10], [1, 5], [0, 11]])
-    return jp.grid_from_array(free, resolution=0.5), starts, goals
-
 
 def _assert_same(a, b, fields=RESULT_FIELDS):
     for f in fields:
