@@ -105,7 +105,10 @@ def test_chosen_rollout_keeps_d_safe_when_one_is_feasible(res):
     assert ok.sum() >= 20  # enough cases where something was feasible
     chosen = info.rollouts[rows[ok], info.chosen[ok]]  # [n, T, 3]
     exact = _brute_clearance(chosen[..., :2], free, res)
-    assert np.all(exact.min(axis=1) >= config.d_safe - 1e-4)
+    # A robot already inside d_safe may escape: its rollout must not get closer than it is now.
+    now = _brute_clearance(states[rows[ok], None, :2], free, res)[:, 0]
+    assert np.all(exact.min(axis=1) >= np.minimum(config.d_safe, now) - 1e-4)
+    assert np.any(now >= config.d_safe) and np.all(exact.min(axis=1)[now >= config.d_safe] >= config.d_safe - 1e-4)
     # The planner's own clearance of every rollout agrees with brute force (hybrid: exact below 1.5 cells).
     want = _brute_clearance(info.rollouts[:3, ..., :2], free, res).min(axis=-1)  # [3, S]
     got = info.clearance[:3]
@@ -287,12 +290,17 @@ def test_rectangle_footprint_sees_its_corners():
     state = np.array([2.4, 3.0, 0.0, 0.0, 0.0])
     disc = dwa_step(state, [1.0, 3.0], grid, config=DWAConfig(n_v=3, n_omega=5))[1]
     rect_robot = Unicycle(footprint=Rectangle(1.0, 0.4, 4))
-    rect = dwa_step(state, [1.0, 3.0], grid, config=DWAConfig(robot=rect_robot, n_v=3, n_omega=5, d_safe=0.32))[1]
+    cfg = DWAConfig(robot=rect_robot, n_v=3, n_omega=5, d_safe=0.32, escape=False)
+    rect = dwa_step(state, [1.0, 3.0], grid, config=cfg)[1]
     assert disc.feasible.any() and not disc.recovery
     assert disc.clearance.max() > 0.55
     # The rectangle's covering discs (radius 0.236 m) sit up to 0.375 m ahead: clearance ≈ 0.6 − 0.375.
     assert rect.clearance.max() < 0.6 - 0.375 + 0.005
     assert not rect.feasible.any() and rect.recovery
+    # With the escape rule the robot, already inside d_safe, may keep or gain clearance, never lose it.
+    esc = dwa_step(state, [1.0, 3.0], grid, config=cfg.replace(escape=True))[1]
+    assert esc.feasible.any() and not esc.recovery
+    assert esc.clearance[esc.chosen] >= 0.6 - 0.375 - 0.005
 
 
 def test_path_critic_pulls_towards_the_global_path():

@@ -57,6 +57,11 @@ class DWAConfig:
       unroll: rollout steps per iteration of the rollout loop (static): fewer iterations
         launch fewer kernels (a single robot's step is mostly launch overhead on a CPU)
         at the price of a longer compilation.
+      escape: when the robot is already closer than d_safe to an obstacle (a moving disc
+        came close, or it started there), a rollout is also feasible if it never gets
+        closer than the current clearance (less `ESCAPE_SLACK`), so the robot can move
+        away instead of rotating in place for ever (static; DESIGN §5's recovery still
+        applies when even that is impossible).
     """
 
     robot: Robot = Unicycle()
@@ -73,6 +78,7 @@ class DWAConfig:
     selection: str = dataclasses.field(default="argmax", metadata=dict(static=True))
     keep_rollouts: bool = dataclasses.field(default=True, metadata=dict(static=True))
     unroll: int = dataclasses.field(default=4, metadata=dict(static=True))
+    escape: bool = dataclasses.field(default=True, metadata=dict(static=True))
 
     @property
     def steps(self) -> int:

@@ -37,7 +37,7 @@ from jaxplan.dwa import _critics as C
 from jaxplan.dwa._clearance import ClearanceTable, DiscObstacles, disc_clearance, static_clearance
 from jaxplan.dwa._config import DWAConfig, DWAParams
 from jaxplan.dwa._fuzzy import fuzzy_evaluate
-from jaxplan.dwa._robot import curvature_limit
+from jaxplan.dwa._robot import Disc, curvature_limit, footprint_offsets
 from jaxplan.dwa._rollout import rollout
 from jaxplan.dwa._window import dynamic_window, sample_controls
 
@@ -45,6 +45,9 @@ __all__ = ["DWAInfo", "dwa_control", "dwa_control_batch", "evaluate", "trajector
 
 STUCK_SPEED = 0.001
 """PythonRobotics' ``robot_stuck_flag_cons`` (m/s)."""
+
+ESCAPE_SLACK = 1e-4
+"""Metres an escaping rollout may lose against the current clearance (float noise of a rollout parallel to a wall)."""
 
 
 class DWAInfo(NamedTuple):
@@ -121,6 +124,14 @@ def _recovery(config: DWAConfig, state: jnp.ndarray, subgoal: jnp.ndarray, windo
     return jnp.stack([v, jnp.clip(w, window.w_lo, window.w_hi)])
 
 
+def _current_clearance(clearance, state: jnp.ndarray, footprint) -> jnp.ndarray:
+    """Clearance (m) of the footprint at the current pose (time 0)."""
+    x, y, th = state[0:1], state[1:2], state[2]
+    offsets = (0.0,) if isinstance(footprint, Disc) else footprint_offsets(footprint)
+    c = [clearance(x + o * jnp.cos(th), y + o * jnp.sin(th), 0.0) for o in offsets]
+    return jnp.min(jnp.concatenate(c)) if len(c) > 1 else c[0][0]
+
+
 def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, state: jnp.ndarray,
                 subgoal: jnp.ndarray, obstacles: DiscObstacles | None = None,
                 path: jnp.ndarray | None = None) -> tuple[jnp.ndarray, DWAInfo]:
@@ -152,7 +163,10 @@ def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, sta
 
     ro = rollout(state, v, w, clearance, robot.footprint, steps, dt, keep=config.keep_rollouts,
                  unroll=config.unroll)
-    feasible = ro.clearance >= config.d_safe
+    threshold = config.d_safe
+    if config.escape:
+        threshold = jnp.minimum(threshold, _current_clearance(clearance, state, robot.footprint) - ESCAPE_SLACK)
+    feasible = ro.clearance >= threshold
     reach = jnp.maximum(jnp.abs(robot.v_min), robot.v_max) * (steps * dt)
     cr = C.critics(ro.end, ro.clearance, v, state, subgoal, robot, config.d_clip, config.path_clip, reach, path,
                    ro.end_dir)
