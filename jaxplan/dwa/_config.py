@@ -21,13 +21,16 @@ import numpy as np
 
 from jaxplan.dwa._robot import Robot, Unicycle
 
-__all__ = ["DWAConfig", "DWAParams", "EVALUATORS", "CLEARANCE_MODES", "SELECTIONS", "default_params"]
+__all__ = ["DWAConfig", "DWAParams", "EVALUATORS", "CLEARANCE_MODES", "SELECTIONS", "RECOVERIES", "default_params"]
 
 EVALUATORS = ("weighted", "fuzzy", "classic")
 """Rollout evaluators: seed 000's Eq. (7) weighted sum, seed 000's fuzzy evaluation, PythonRobotics' costs."""
 
 CLEARANCE_MODES = ("hybrid", "bilinear", "exact")
 """Static-obstacle clearance lookups (see `jaxplan.dwa._clearance`)."""
+
+RECOVERIES = ("rotate", "flee")
+"""What a step does when no sample is feasible."""
 
 SELECTIONS = ("argmax", "softmax")
 """How the control is chosen from the scored samples."""
@@ -62,6 +65,10 @@ class DWAConfig:
         closer than the current clearance (less `ESCAPE_SLACK`), so the robot can move
         away instead of rotating in place for ever (static; DESIGN §5's recovery still
         applies when even that is impossible).
+      recovery: what to do when no sample is feasible (static): ``"rotate"`` — DESIGN §5's
+        stop and rotate in place towards the sub-goal — or ``"flee"``: take the sample whose
+        rollout keeps the largest minimum clearance (against a moving disc heading for the
+        robot, standing still is often the worst choice; navigation episodes use this).
     """
 
     robot: Robot = Unicycle()
@@ -79,6 +86,7 @@ class DWAConfig:
     keep_rollouts: bool = dataclasses.field(default=True, metadata=dict(static=True))
     unroll: int = dataclasses.field(default=4, metadata=dict(static=True))
     escape: bool = dataclasses.field(default=True, metadata=dict(static=True))
+    recovery: str = dataclasses.field(default="rotate", metadata=dict(static=True))
 
     @property
     def steps(self) -> int:

@@ -16,7 +16,10 @@ Recovery (DESIGN §5): when no sample is feasible the robot brakes as hard as th
 window allows towards v = 0 and turns as fast as it allows towards the sub-goal's
 side (left when the sub-goal is dead ahead) — "stop and rotate in place"; an
 `Ackermann` robot cannot turn on the spot, so its yaw rate also follows the curvature
-limit and it simply stops. ``DWAInfo.recovery`` flags it.
+limit and it simply stops. ``DWAInfo.recovery`` flags it. With ``recovery="flee"`` the
+robot instead takes the sample whose rollout keeps the most clearance: a moving disc
+heading for a stopped robot hits it, and measured on the MovingAI warehouse with random
+walkers that was most of the collisions.
 
 The ``"classic"`` evaluator adds PythonRobotics' stuck-escape rule: when the chosen
 speed and the current speed are both below 0.001 m/s, turn (PythonRobotics commands
@@ -100,8 +103,8 @@ def evaluate(cr: C.Critics, v: jnp.ndarray, feasible: jnp.ndarray, config: DWACo
     if config.evaluator == "weighted":
         return C.weighted(cr, params, feasible, with_path)
     if config.evaluator == "fuzzy":
-        f = fuzzy_evaluate(cr.heading_error / math.pi, cr.velocity, cr.min_clearance, params, config.d_safe,
-                           config.d_clip)
+        f = fuzzy_evaluate(cr.heading_error / math.pi, window_speed(cr.velocity, feasible), cr.min_clearance, params,
+                           config.d_safe, config.d_clip)
         # Path and goal critics, if weighted, join the fuzzy rating as a weighted average.
         main = params.heading + params.velocity + params.clearance
         total = main + params.path + params.goal
@@ -109,6 +112,22 @@ def evaluate(cr: C.Critics, v: jnp.ndarray, feasible: jnp.ndarray, config: DWACo
     if config.evaluator == "classic":
         return C.classic(cr, params, v, config.robot)
     raise ValueError(f"unknown evaluator {config.evaluator!r}")
+
+
+def window_speed(velocity: jnp.ndarray, feasible: jnp.ndarray) -> jnp.ndarray:
+    """The fuzzy speed input ``[S]``: V rescaled to [0, 1] over the feasible samples (V itself if they all agree).
+
+    Seed 000 feeds a "normalised speed"; normalised over the window — as the weighted
+    evaluator normalises its critics over the samples — rather than by v_max. With
+    V = v/v_max a robot at rest sees only "slow" samples (its window reaches 0.1 m/s),
+    and the clearance it keeps by staying put outweighs the speed it would gain: measured
+    on the MovingAI warehouse, a fuzzy-DWA robot starting in an aisle never moved.
+    """
+    lo = jnp.min(jnp.where(feasible, velocity, jnp.inf))
+    hi = jnp.max(jnp.where(feasible, velocity, -jnp.inf))
+    span = hi - lo
+    wide = span > 1e-6
+    return jnp.where(wide, jnp.clip((velocity - lo) / jnp.where(wide, span, 1.0), 0.0, 1.0), velocity)
 
 
 def _recovery(config: DWAConfig, state: jnp.ndarray, subgoal: jnp.ndarray, window) -> jnp.ndarray:
@@ -190,7 +209,13 @@ def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, sta
         stuck = (jnp.abs(u[0]) < STUCK_SPEED) & (jnp.abs(state[3]) < STUCK_SPEED) & any_feasible
         u = jnp.where(stuck, jnp.stack([u[0], window.w_lo]), u)
 
-    u = jnp.where(any_feasible, u, _recovery(config, state, subgoal, window))
+    if config.recovery == "flee":
+        u_rec = u_samples[jnp.argmax(ro.clearance)]
+    elif config.recovery == "rotate":
+        u_rec = _recovery(config, state, subgoal, window)
+    else:
+        raise ValueError(f"unknown recovery {config.recovery!r}")
+    u = jnp.where(any_feasible, u, u_rec)
     info = DWAInfo(
         scores=scores, rollouts=ro.poses, feasible=feasible, chosen=jnp.where(any_feasible, chosen, -1),
         samples=u_samples, clearance=ro.clearance, window=jnp.stack(list(window)),

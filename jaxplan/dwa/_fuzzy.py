@@ -16,9 +16,12 @@ shoulder meeting at three breakpoints, so the three degrees of every input sum t
 input         terms                  breakpoints (membership 1 at)
 ============  =====================  ===========================================
 e = |Δ|/π     small, medium, large   0, 0.5, 1      (0°, 90°, 180° off the sub-goal)
-s = V         slow, medium, fast     0, 0.5, 1      (v_min, mid, v_max)
+s             slow, medium, fast     0, 0.5, 1      (slowest, mid, fastest feasible sample)
 c (m)         close, safe, far       d_safe, (d_safe + d_clip)/2, d_clip  (0.3, 0.65, 1.0 m)
 ============  =====================  ===========================================
+
+The speed input is V rescaled over the step's feasible samples (`jaxplan.dwa._core.window_speed`):
+with V = v/v_max a robot at rest sees only "slow" samples and never starts.
 
 **Rule base** (27 rules, every combination; AND is the product, so a rule fires with
 μ_e·μ_s·μ_c). A term has a level — heading small 1, medium ½, large 0; speed slow 0,

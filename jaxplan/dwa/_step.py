@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from jaxplan.dwa._clearance import ClearanceTable, DiscObstacles, clearance_table
-from jaxplan.dwa._config import CLEARANCE_MODES, EVALUATORS, SELECTIONS, DWAConfig, DWAParams, default_params
+from jaxplan.dwa._config import CLEARANCE_MODES, EVALUATORS, RECOVERIES, SELECTIONS, DWAConfig, DWAParams, default_params
 from jaxplan.dwa._core import DWAInfo, dwa_control, dwa_control_batch
 from jaxplan.dwa._fastmath import MAX_ROTOR_ANGLE
 from jaxplan.dwa._robot import Ackermann, Disc, Rectangle, Unicycle, footprint_radius
@@ -121,7 +121,8 @@ def validate_config(config: DWAConfig) -> DWAConfig:
     if float(r.omega_max) * dt > 2 * MAX_ROTOR_ANGLE:
         raise ValueError(f"{name}.omega_max · config.dt = {float(r.omega_max) * dt:.3g} rad: a sample may turn at most "
                          f"π rad per rollout step (shorten dt)")
-    for field, choices in (("evaluator", EVALUATORS), ("clearance", CLEARANCE_MODES), ("selection", SELECTIONS)):
+    for field, choices in (("evaluator", EVALUATORS), ("clearance", CLEARANCE_MODES), ("selection", SELECTIONS),
+                            ("recovery", RECOVERIES)):
         if getattr(config, field) not in choices:
             raise ValueError(f"config.{field} must be one of {choices}, got {getattr(config, field)!r}")
     if hashable:
