@@ -1,5 +1,14 @@
-"""Exact planners (A*, Dijkstra) and batched exact lengths."""
+"""Global planners on the grid: exact (A*, Dijkstra), key-node-guided A* and sampling (RRT*, MRBS-RRT*).
+
+Importing this package registers ``astar``, ``dijkstra``, ``astar_kng``, ``rrt_star`` and
+``mrbs_rrt`` with `jaxplan.registry`.
+"""
 
 from jaxplan.search._exact import SearchGraph, astar, dijkstra, distance_from, path_cost, search_graph, shortest_lengths
+from jaxplan.search._kng import astar_kng
+from jaxplan.search._sampling import mrbs_rrt, rrt_star
 
-__all__ = ["SearchGraph", "astar", "dijkstra", "distance_from", "path_cost", "search_graph", "shortest_lengths"]
+__all__ = [
+    "SearchGraph", "astar", "astar_kng", "dijkstra", "distance_from", "mrbs_rrt", "path_cost", "rrt_star",
+    "search_graph", "shortest_lengths",
+]
