@@ -45,6 +45,10 @@ from jaxplan.dwa import (
 )
 from jaxplan.metrics import EnergyModel, EpisodeTiming, path_metrics
 from jaxplan.smooth import Smoothed, smooth
+from jaxplan.nav import (
+    Episode, EpisodeBatch, MovingObstacles, NavConfig, crossing_traffic, head_on, moving_obstacles, navigate,
+    navigate_batch, navigate_multi, pipelines, random_obstacles,
+)
 from jaxplan.search import SearchGraph, astar, dijkstra, distance_from, search_graph, shortest_lengths
 
 try:
@@ -58,4 +62,6 @@ __all__ = [
     "dijkstra", "distance_from", "goal_distance_field", "grid_from_array", "load_map", "load_scenarios",
     "neighbour_table", "passable", "plan", "planners", "poisson_risk", "register_planner", "save_map",
     "search_graph", "shortest_lengths", "smooth", "Smoothed", "metrics", "path_metrics", "Ackermann", "Disc", "DiscObstacles", "DWAConfig", "DWAInfo", "DWAParams", "Rectangle", "Unicycle", "dwa_control", "dwa_control_batch", "dwa_step", "EnergyModel", "EpisodeTiming", "warehouse_seed003", "warehouse_seed004",
+    "Episode", "EpisodeBatch", "MovingObstacles", "NavConfig", "crossing_traffic", "head_on", "moving_obstacles",
+    "navigate", "navigate_batch", "navigate_multi", "pipelines", "random_obstacles",
 ]

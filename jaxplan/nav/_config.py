@@ -1,0 +1,101 @@
+"""`NavConfig`: how a two-level navigation episode runs (static switches and traced distances)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax
+
+from jaxplan.dwa._config import DWAConfig
+
+__all__ = ["NavConfig", "LOCAL_PLANNERS", "SUBGOAL_MODES"]
+
+LOCAL_PLANNERS = ("dwa", "follow")
+"""``"dwa"``: the DWA step; ``"follow"``: pure path following without obstacle avoidance (seed 000's
+"without DWA" ablation): turn towards the sub-goal, slow down with the heading error, within
+the robot's dynamic window."""
+
+SUBGOAL_MODES = ("key_nodes", "lookahead")
+"""``"key_nodes"``: aim at the current waypoint and switch to the next within ``switch_radius``
+(seeds 000/001); ``"lookahead"``: aim at the point ``lookahead`` metres further along the
+waypoint polyline than the robot's projection on it."""
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class NavConfig:
+    """A navigation episode's settings. Distances in metres, times in seconds.
+
+    Attributes:
+      dwa: the local planner's `DWAConfig` (robot, control period, d_safe, samples). Its
+        rollouts are never kept in an episode, and its evaluator is set from ``evaluator``.
+        Its recovery defaults to ``"flee"`` here (see `DWAConfig.recovery`).
+      local: ``"dwa"``, ``"follow"`` (static; see `LOCAL_PLANNERS`), or None: the pipeline's.
+      evaluator: the DWA evaluator (``"weighted"``, ``"fuzzy"``, ``"classic"``; static), or
+        None: the pipeline's (fuzzy for ``iaco_dwa``, weighted for the others).
+      subgoal: ``"key_nodes"`` or ``"lookahead"`` (static; see `SUBGOAL_MODES`).
+      switch_radius: a waypoint counts as passed within this distance (seed 001: 1 m).
+      lookahead: look-ahead distance along the path in ``"lookahead"`` mode.
+      goal_tolerance: the goal is reached within this distance of the goal cell's centre.
+      max_time: the longest episode (static: it sizes the trajectory buffers); a per-episode
+        time limit up to it is an input of the run.
+      chunk: control steps per iteration of the outer loop (static): the loop stops at the
+        first chunk boundary after every robot is done.
+      stop_on_collision: a colliding robot stops there (``reason = collision``); when False
+        it drives on and contacts are counted (seed 001's Table 3 counts collisions) (static).
+      replan: re-plan in the episode when the path ahead is blocked (static; see
+        `jaxplan.nav._replan`).
+      replan_period: at most one re-plan per robot per this many seconds (seed 000: 0.2 s).
+      block_distance: how far along the remaining path a disc is looked for.
+      block_horizon: a disc blocks the path if it comes near it within this many seconds,
+        predicted at constant velocity (sampled every 0.5 s).
+      block_margin: extra distance beyond the two radii within which a disc blocks the path
+        and within which cells around it are closed when re-planning.
+      replan_sweeps: bound on the distance field's relaxation sweeps (static).
+      replan_slots: robots of a batch that can re-plan in the same step (static); others wait
+        a step. The cost of a re-planning step is that of this many fields, whatever the batch.
+      replan_cells: longest re-planned path in moves (static).
+      path_critic: pass the waypoint polyline to the DWA path critic (static; its weight is
+        `DWAParams.path`).
+      follow_gain: yaw-rate gain (1/s) of the ``"follow"`` controller.
+      corner_speed: top speed (m/s) at a corner — a waypoint where the path turns by at
+        least ``corner_angle`` (rad). Approaching one, the local planner's top speed is
+        capped to sqrt(corner_speed² + 2·decel·d), d the distance left before the switch
+        radius, and stays at corner_speed until the robot is ``switch_radius`` past it.
+        The DWA looks 2 s ahead; at 1.2 m/s and 0.5 m/s² a robot needs 1.4 m to brake, so
+        without the cap it overshoots every turn into a 1 m aisle. ``inf`` disables it.
+      corner_angle: the smallest turn (rad) that makes a waypoint a corner (30°).
+    """
+
+    dwa: DWAConfig = DWAConfig(keep_rollouts=False, recovery="flee")
+    local: str | None = dataclasses.field(default=None, metadata=dict(static=True))
+    evaluator: str | None = dataclasses.field(default=None, metadata=dict(static=True))
+    subgoal: str = dataclasses.field(default="key_nodes", metadata=dict(static=True))
+    switch_radius: float = 1.0
+    lookahead: float = 1.5
+    goal_tolerance: float = 0.5
+    max_time: float = dataclasses.field(default=180.0, metadata=dict(static=True))
+    chunk: int = dataclasses.field(default=25, metadata=dict(static=True))
+    stop_on_collision: bool = dataclasses.field(default=True, metadata=dict(static=True))
+    replan: bool = dataclasses.field(default=False, metadata=dict(static=True))
+    replan_period: float = 0.2
+    block_distance: float = 3.0
+    block_horizon: float = dataclasses.field(default=2.0, metadata=dict(static=True))
+    block_margin: float = 0.1
+    replan_sweeps: int = dataclasses.field(default=512, metadata=dict(static=True))
+    replan_cells: int = dataclasses.field(default=256, metadata=dict(static=True))
+    replan_slots: int = dataclasses.field(default=2, metadata=dict(static=True))
+    path_critic: bool = dataclasses.field(default=False, metadata=dict(static=True))
+    follow_gain: float = 2.0
+    corner_speed: float = 0.3
+    corner_angle: float = math.radians(30.0)
+
+    @property
+    def steps(self) -> int:
+        """Control steps of the longest episode, a multiple of ``chunk``."""
+        n = math.ceil(self.max_time / self.dwa.period - 1e-9)
+        return math.ceil(n / self.chunk) * self.chunk
+
+    def replace(self, **changes) -> "NavConfig":
+        return dataclasses.replace(self, **changes)

@@ -1,0 +1,427 @@
+"""The navigation episode as one compiled program: sub-goals → local planner → motion → checks.
+
+`run_episodes` advances ``B`` independent episodes of ``N`` robots each (``N = 1`` for
+single-robot navigation; in multi-robot mode every robot treats the others as moving
+discs) by one control period per step:
+
+1. moving obstacles are placed on their routes at time ``t`` (`obstacle_state`);
+2. each robot's sub-goal is its current waypoint (switching to the next within the switch
+   radius) or a look-ahead point on its waypoint polyline;
+3. with re-planning on, a robot whose next metres of path are blocked by a disc re-plans
+   on the planning map with the cells around the discs closed (`jaxplan.nav._replan`);
+4. the local planner picks the control: the DWA step (`dwa_control`, obstacles = moving
+   discs predicted at constant velocity + the other robots) or pure path following;
+5. the robot moves along the exact arc (`advance`), and is checked for contact with the
+   map (clearance below its radius), a moving disc or another robot;
+6. a robot is done at the goal (within the tolerance), at its time limit, or — when the
+   config says so — at its first collision; a done robot stays where it is.
+
+Everything is explicitly batched over ``[B, N]`` (no ``vmap`` around the step), so the
+re-planning branch is a real `lax.cond` taken only on steps where some robot needs it.
+Steps run in chunks of `NavConfig.chunk` inside a `lax.while_loop` that stops once every
+robot of every episode is done; trajectories go to fixed-size buffers.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+from jax import lax
+
+from jaxplan.dwa._clearance import ClearanceTable, DiscObstacles, static_clearance
+from jaxplan.dwa._config import DWAParams
+from jaxplan.dwa._core import dwa_control
+from jaxplan.dwa._robot import Disc, advance, footprint_offsets, footprint_radius
+from jaxplan.dwa._window import dynamic_window
+from jaxplan.metrics._polyline import point_polyline_distance
+from jaxplan.nav._config import NavConfig
+from jaxplan.nav._obstacles import MovingObstacles, obstacle_state
+from jaxplan.nav._replan import descend, disc_cells, distance_field, path_blocked, turn_vertices
+
+__all__ = ["RUNNING", "GOAL", "COLLISION", "TIMEOUT", "REASONS", "EpisodeInputs", "EpisodeOutput", "run_episodes"]
+
+RUNNING, GOAL, COLLISION, TIMEOUT = 0, 1, 2, 3
+REASONS = ("running", "goal", "collision", "time limit")
+"""Why a robot stopped, indexed by the codes above."""
+
+_FAR = 1e6  # metres: where a disc that must not matter is put (finite: keeps gradients finite)
+
+
+class EpisodeInputs(NamedTuple):
+    """One call's episodes (a pytree; leading axes ``[B, N]`` = episodes, robots).
+
+    Attributes:
+      start: ``f32[B, N, 5]`` initial states (x, y, theta, v, omega).
+      goal: ``f32[B, N, 2]`` goal positions (m).
+      goal_cell: ``i32[B, N, 2]`` goal cells (for re-planning).
+      waypoints: ``f32[B, N, K, 2]`` waypoint polylines (m), ending at the goal; slots after
+        ``n_waypoints`` repeat the last.
+      n_waypoints: ``i32[B, N]`` (>= 1).
+      time_limit: ``f32[B, N]`` seconds (<= `NavConfig.max_time`).
+      obstacles: `MovingObstacles` with leaves ``[B, M, …]`` (``M`` may be 0).
+      active: ``bool[B, N]`` robots that run; the others stand still at their start from step 0
+        (an infeasible scenario), still present as discs for the rest.
+    """
+
+    start: jnp.ndarray
+    goal: jnp.ndarray
+    goal_cell: jnp.ndarray
+    waypoints: jnp.ndarray
+    n_waypoints: jnp.ndarray
+    time_limit: jnp.ndarray
+    obstacles: MovingObstacles
+    active: jnp.ndarray
+
+
+class EpisodeOutput(NamedTuple):
+    """What `run_episodes` returns (numpy after transfer). ``S`` = `NavConfig.steps`.
+
+    Attributes:
+      states: ``f32[B, S + 1, N, 5]`` state after each step (row 0 = start); rows after a
+        robot is done repeat its final state.
+      controls: ``f32[B, S, N, 2]`` the (v, omega) applied at each step (zero once done).
+      recovery: ``bool[B, S, N]`` the DWA found no feasible sample (recovery manoeuvre).
+      steps: ``i32[B, N]`` control steps the robot took (its episode time = steps · period).
+      reason: ``i32[B, N]`` `REASONS` code.
+      collisions: ``i32[B, N]`` contacts (runs of colliding steps) with map, discs or robots.
+      pair_collisions: ``i32[B, N, N]`` contacts between robots i and j (symmetric).
+      replans: ``i32[B, N]`` successful re-plans.
+      rmse: ``f32[B, N]`` RMS distance (m) of the positions after each step to the polyline
+        the robot was tracking at that step (from where it adopted it — the start or the
+        position of a re-plan — through its waypoints); NaN for a robot that did not move.
+      waypoints: ``f32[B, N, K, 2]`` and ``n_waypoints [B, N]``: the final waypoint lists.
+      executed: ``i32[B]`` control steps the loop ran (a multiple of the chunk).
+    """
+
+    states: jnp.ndarray
+    controls: jnp.ndarray
+    recovery: jnp.ndarray
+    steps: jnp.ndarray
+    reason: jnp.ndarray
+    collisions: jnp.ndarray
+    pair_collisions: jnp.ndarray
+    replans: jnp.ndarray
+    rmse: jnp.ndarray
+    waypoints: jnp.ndarray
+    n_waypoints: jnp.ndarray
+    executed: jnp.ndarray
+
+
+class _Carry(NamedTuple):
+    state: jnp.ndarray  # [B, N, 5]
+    waypoints: jnp.ndarray  # [B, N, K, 2]
+    n_wp: jnp.ndarray  # [B, N]
+    index: jnp.ndarray  # [B, N] current waypoint
+    done: jnp.ndarray  # [B, N]
+    reason: jnp.ndarray  # [B, N]
+    steps: jnp.ndarray  # [B, N]
+    hit: jnp.ndarray  # [B, N] in contact after the last step
+    pair_hit: jnp.ndarray  # [B, N, N]
+    collisions: jnp.ndarray  # [B, N]
+    pair_collisions: jnp.ndarray  # [B, N, N]
+    replans: jnp.ndarray  # [B, N]
+    last_replan: jnp.ndarray  # [B, N] step of the last re-plan attempt
+    origin: jnp.ndarray  # [B, N, 2] where the tracked polyline begins (start, or the position at a re-plan)
+    sq_error: jnp.ndarray  # [B, N] sum of squared distances to the tracked polyline
+    t: jnp.ndarray  # scalar step counter
+
+
+def _robot_discs(state: jnp.ndarray, robot) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """Covering discs of the footprints: centres ``[..., C, 2]`` (m) and their radius (m)."""
+    fp = robot.footprint
+    r = footprint_radius(fp)
+    if isinstance(fp, Disc):
+        return state[..., None, :2], r
+    off = jnp.asarray(footprint_offsets(fp))  # [C]
+    c, s = jnp.cos(state[..., 2:3]), jnp.sin(state[..., 2:3])
+    return jnp.stack([state[..., 0:1] + off * c, state[..., 1:2] + off * s], axis=-1), r
+
+
+def _subgoal_index(pos: jnp.ndarray, wp: jnp.ndarray, n: jnp.ndarray, index: jnp.ndarray, radius) -> jnp.ndarray:
+    """First waypoint from ``index`` on that is farther than ``radius`` (the last if none). ``pos [2]``."""
+    K = wp.shape[0]
+    j = jnp.arange(K)
+    far = jnp.sqrt(jnp.sum((wp - pos) ** 2, axis=-1)) >= radius
+    cand = (j >= index) & (j < n) & far
+    return jnp.where(jnp.any(cand), jnp.argmax(cand), n - 1).astype(jnp.int32)
+
+
+def _lookahead_point(pos: jnp.ndarray, wp: jnp.ndarray, n: jnp.ndarray, index: jnp.ndarray, ahead) -> tuple:
+    """``(point [2], segment index)``: ``ahead`` m past the projection of ``pos`` on segments from ``index`` on.
+
+    Segment ``j`` runs from waypoint ``j − 1`` to ``j`` (segment 0 is the point ``wp[0]``).
+    """
+    K = wp.shape[0]
+    j = jnp.arange(K)
+    a = jnp.concatenate([wp[:1], wp[:-1]])
+    ab = wp - a
+    seg = jnp.sqrt(jnp.sum(ab * ab, axis=-1))
+    valid = (j < n)
+    seg = jnp.where(valid, seg, 0.0)
+    cum = jnp.cumsum(seg)  # arc length at the end of segment j
+    u = jnp.clip(jnp.sum((pos - a) * ab, axis=-1) / jnp.maximum(seg * seg, 1e-12), 0.0, 1.0)
+    d = jnp.sqrt(jnp.sum((a + u[:, None] * ab - pos) ** 2, axis=-1))
+    d = jnp.where(valid & (j >= index), d, jnp.inf)
+    k = jnp.argmin(d).astype(jnp.int32)
+    s = cum[k] - seg[k] * (1.0 - u[k]) + ahead
+    m = jnp.clip(jnp.searchsorted(cum, s), 0, jnp.maximum(n - 1, 0))
+    frac = jnp.clip((s - (cum[m] - seg[m])) / jnp.maximum(seg[m], 1e-12), 0.0, 1.0)
+    point = jnp.where(s >= cum[jnp.maximum(n - 1, 0)], wp[jnp.maximum(n - 1, 0)], a[m] + frac * ab[m])
+    return point, k
+
+
+def _corner_cap(config: NavConfig, pos: jnp.ndarray, wp: jnp.ndarray, n: jnp.ndarray, index: jnp.ndarray,
+                decel) -> jnp.ndarray:
+    """Top speed (m/s) near corners (see `NavConfig.corner_speed`): ``pos [2]``, ``wp [K, 2]``."""
+    K = wp.shape[0]
+
+    def turn(i):  # turn angle at waypoint i: (i-1 or the robot) -> i -> i+1
+        prev = jnp.where(i > 0, wp[jnp.maximum(i - 1, 0)], pos)
+        a, b = wp[i] - prev, wp[jnp.minimum(i + 1, K - 1)] - wp[i]
+        cos = jnp.sum(a * b) / jnp.maximum(jnp.sqrt(jnp.sum(a * a) * jnp.sum(b * b)), 1e-9)
+        real = (i + 1 < n) & (jnp.sum(a * a) > 1e-12) & (jnp.sum(b * b) > 1e-12)
+        return real & (cos < jnp.cos(config.corner_angle))
+
+    v_c = config.corner_speed
+    d_next = jnp.sqrt(jnp.sum((wp[index] - pos) ** 2))
+    ahead = jnp.sqrt(v_c ** 2 + 2.0 * decel * jnp.maximum(d_next - config.switch_radius, 0.0))
+    prev = jnp.maximum(index - 1, 0)
+    d_prev = jnp.sqrt(jnp.sum((wp[prev] - pos) ** 2))
+    behind = jnp.sqrt(v_c ** 2 + 2.0 * decel * jnp.maximum(d_prev - config.switch_radius, 0.0))
+    cap = jnp.where(turn(index), ahead, jnp.inf)
+    return jnp.minimum(cap, jnp.where((index > 0) & turn(prev), behind, jnp.inf))
+
+
+def _follow(config: NavConfig, robot, state: jnp.ndarray, subgoal: jnp.ndarray) -> jnp.ndarray:
+    """Pure path following ``[2]``: turn towards the sub-goal, slow with the heading error, inside the window."""
+    win = dynamic_window(robot, state, config.dwa.period)
+    err = jnp.arctan2(subgoal[1] - state[1], subgoal[0] - state[0]) - state[2]
+    err = jnp.arctan2(jnp.sin(err), jnp.cos(err))
+    w = jnp.clip(config.follow_gain * err, win.w_lo, win.w_hi)
+    v = jnp.clip(robot.v_max * jnp.maximum(jnp.cos(err), 0.0) ** 2, win.v_lo, win.v_hi)
+    return jnp.stack([v, w])
+
+
+def _replan(config: NavConfig, free: jnp.ndarray, resolution, c: _Carry, inputs: EpisodeInputs,
+            need: jnp.ndarray, centres: jnp.ndarray, reach: jnp.ndarray) -> tuple[_Carry, jnp.ndarray]:
+    """Re-plans up to `NavConfig.replan_slots` of the robots flagged in ``need [B, N]``.
+
+    ``centres [B, N, D, 2]`` / ``reach [B, N, D]``: the discs whose nearby cells are closed.
+    Only the chosen robots' fields are computed (a gather into fixed slots), so the cost
+    does not grow with the batch; robots left over try again on the next step. Returns
+    the carry and ``bool[B, N]``: the robots that were attempted.
+    """
+    H, W = free.shape
+    B, N, K = c.waypoints.shape[:3]
+    Q = min(config.replan_slots, B * N)
+    flat_need = need.reshape(-1)
+    _, slot = lax.top_k(flat_need.astype(jnp.int32) * (B * N) - jnp.arange(B * N), Q)  # first Q needing robots
+    use = flat_need[slot]
+    take = lambda x: x.reshape((B * N,) + x.shape[2:])[slot]  # noqa: E731
+
+    def one(need1, state1, goal_cell, cen, rch):
+        closed = disc_cells((H, W), cen, jnp.where(need1, rch, 0.0), resolution, _SPAN)
+        cell = jnp.clip(jnp.floor(state1[:2] / resolution).astype(jnp.int32), 0, jnp.asarray([W - 1, H - 1]))
+        plan_free = free & ~closed
+        plan_free = plan_free.at[cell[1], cell[0]].set(free[cell[1], cell[0]])  # the robot's own cell stays open
+        field = distance_field(plan_free, goal_cell, need1, config.replan_sweeps, until=cell)
+        cells, n = descend(field, plan_free, cell, config.replan_cells)
+        pts, m = turn_vertices(cells, jnp.maximum(n, 1), K)
+        return (pts + 0.5) * resolution, m, need1 & (n > 1)
+
+    pts, m, ok = jax.vmap(one)(use, take(c.state), take(inputs.goal_cell), take(centres), take(reach))
+    goal = take(inputs.goal)
+    # The last waypoint is the goal itself.
+    pts = jnp.where(jnp.arange(K)[None, :, None] >= m[:, None, None] - 1, goal[:, None, :], pts)
+
+    def put(x, new, mask):
+        flat = x.reshape((B * N,) + x.shape[2:])
+        upd = jnp.where(mask.reshape((Q,) + (1,) * (flat.ndim - 1)), new, flat[slot])
+        return flat.at[slot].set(upd).reshape(x.shape)
+
+    attempted = jnp.zeros(B * N, bool).at[slot].set(use).reshape(B, N)
+    c = c._replace(
+        waypoints=put(c.waypoints, pts, ok), n_wp=put(c.n_wp, m, ok), index=put(c.index, jnp.zeros_like(m), ok),
+        replans=put(c.replans, take(c.replans) + 1, ok), origin=put(c.origin, take(c.state)[:, :2], ok),
+    )
+    return c, attempted
+
+
+_SPAN = 3
+"""Cells around a blocking disc's cell that re-planning examines (reach up to 3.5 cells)."""
+
+
+def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: DWAParams,
+          inputs: EpisodeInputs, c: _Carry):
+    dwa = config.dwa
+    robot = dwa.robot
+    period = dwa.period
+    res = table.resolution
+    B, N = c.state.shape[:2]
+    t = c.t.astype(jnp.float32) * period
+
+    # Moving obstacles now, and the robots as discs for each other.
+    obs = inputs.obstacles
+    M = obs.radii.shape[-1]
+    opos, ovel = jax.vmap(obstacle_state, in_axes=(0, None))(obs, t)  # [B, M, 2]
+    rc, rr = _robot_discs(c.state, robot)  # [B, N, C, 2]
+    C = rc.shape[2]
+    rvel = c.state[..., 3:4] * jnp.stack([jnp.cos(c.state[..., 2]), jnp.sin(c.state[..., 2])], axis=-1)  # [B, N, 2]
+    # Discs seen by robot i: the M obstacles, then every robot's C covering discs (its own moved far away).
+    others = jnp.broadcast_to(rc.reshape(B, 1, N * C, 2), (B, N, N * C, 2))
+    own = jnp.repeat(jnp.eye(N, dtype=bool), C, axis=1)[None, :, :, None]  # [1, N, N*C, 1]
+    others = jnp.where(own, _FAR + jnp.arange(N * C, dtype=jnp.float32)[None, None, :, None] * 10.0, others)
+    ovel_r = jnp.broadcast_to(jnp.repeat(rvel, C, axis=1).reshape(B, 1, N * C, 2), (B, N, N * C, 2))
+    ovel_r = jnp.where(own, 0.0, ovel_r)
+    pos_all = jnp.concatenate([jnp.broadcast_to(opos[:, None], (B, N, M, 2)), others], axis=2)  # [B, N, D, 2]
+    vel_all = jnp.concatenate([jnp.broadcast_to(ovel[:, None], (B, N, M, 2)), ovel_r], axis=2)
+    rad_all = jnp.concatenate([jnp.broadcast_to(obs.radii[:, None], (B, N, M)),
+                               jnp.where(own[..., 0], 0.0, rr) * jnp.ones((B, N, N * C))], axis=2)
+
+    # Sub-goals.
+    pos = c.state[..., :2]
+    index = jax.vmap(jax.vmap(_subgoal_index, in_axes=(0, 0, 0, 0, None)), in_axes=(0, 0, 0, 0, None))(
+        pos, c.waypoints, c.n_wp, c.index, config.switch_radius)
+    c = c._replace(index=index)
+
+    if config.replan and (M > 0 or N > 1):
+        reach = rad_all + rr + config.block_margin
+        # Each disc at its predicted positions over the next block_horizon seconds.
+        ts = jnp.arange(int(config.block_horizon / 0.5) + 1, dtype=jnp.float32) * 0.5  # [P]
+        future = pos_all[:, :, :, None, :] + vel_all[:, :, :, None, :] * ts[:, None]  # [B, N, D, P, 2]
+        P = ts.shape[0]
+        blocked = jax.vmap(jax.vmap(path_blocked, in_axes=(0, 0, 0, 0, 0, 0, None)),
+                           in_axes=(0, 0, 0, 0, 0, 0, None))(
+            pos, c.waypoints, c.n_wp, c.index, future.reshape(B, N, -1, 2), jnp.repeat(reach, P, axis=-1),
+            config.block_distance)
+        due = (c.t - c.last_replan).astype(jnp.float32) * period >= config.replan_period - 1e-6
+        need = blocked & due & ~c.done
+        c, tried = lax.cond(jnp.any(need), lambda cc: _replan(config, free, res, cc, inputs, need, pos_all, reach),
+                            lambda cc: (cc, jnp.zeros_like(need)), c)
+        c = c._replace(last_replan=jnp.where(tried, c.t, c.last_replan))
+
+    if config.subgoal == "key_nodes":
+        sub = jnp.take_along_axis(c.waypoints, c.index[..., None, None], axis=2)[:, :, 0]
+    else:
+        sub, seg = jax.vmap(jax.vmap(_lookahead_point, in_axes=(0, 0, 0, 0, None)), in_axes=(0, 0, 0, 0, None))(
+            pos, c.waypoints, c.n_wp, c.index, config.lookahead)
+        c = c._replace(index=seg)
+
+    # Local planner, its top speed capped near corners.
+    flat = lambda x: x.reshape((B * N,) + x.shape[2:])  # noqa: E731
+    cap = jax.vmap(lambda p_, w_, n_, i_: _corner_cap(config, p_, w_, n_, i_, robot.decel))(
+        flat(pos), flat(c.waypoints), flat(c.n_wp), flat(c.index))
+    v_top = jnp.minimum(robot.v_max, jnp.maximum(cap, config.corner_speed))
+    if config.local == "dwa":
+        discs = DiscObstacles(flat(pos_all), flat(vel_all), flat(rad_all))
+
+        def control(state, subgoal, d, wp, vmax):
+            cfg = dataclasses.replace(dwa, robot=dataclasses.replace(robot, v_max=vmax))
+            return dwa_control(table, cfg, params, state, subgoal, d, wp if config.path_critic else None)
+
+        u, info = jax.vmap(control)(flat(c.state), flat(sub), discs, flat(c.waypoints), v_top)
+        recovery = info.recovery.reshape(B, N)
+    else:
+        u = jax.vmap(lambda s, g, vmax: _follow(config, dataclasses.replace(robot, v_max=vmax), s, g))(
+            flat(c.state), flat(sub), v_top)
+        recovery = jnp.zeros((B, N), bool)
+    u = u.reshape(B, N, 2)
+    u = jnp.where(c.done[..., None], 0.0, u)
+    recovery = recovery & ~c.done
+
+    new = advance(c.state, u, period)
+    new = jnp.where(c.done[..., None], c.state.at[..., 3:].set(0.0), new)
+
+    # Contacts after the move (at t + period).
+    t1 = t + period
+    opos1, _ = jax.vmap(obstacle_state, in_axes=(0, None))(obs, t1)
+    nc, _ = _robot_discs(new, robot)  # [B, N, C, 2]
+    clear = static_clearance(table, nc[..., 0], nc[..., 1], "hybrid")  # [B, N, C]
+    hit_map = jnp.any(clear < rr, axis=-1)
+    if M > 0:
+        gap = jnp.sqrt(jnp.sum((nc[:, :, :, None, :] - opos1[:, None, None, :, :]) ** 2, axis=-1))  # [B, N, C, M]
+        hit_obs = jnp.any(gap < rr + obs.radii[:, None, None, :], axis=(2, 3))
+    else:
+        hit_obs = jnp.zeros((B, N), bool)
+    if N > 1:
+        d = jnp.sqrt(jnp.sum((nc[:, :, None, :, None, :] - nc[:, None, :, None, :, :]) ** 2, axis=-1))
+        pair = jnp.any(d < 2 * rr, axis=(3, 4)) & ~jnp.eye(N, dtype=bool)  # [B, N, N]
+    else:
+        pair = jnp.zeros((B, N, N), bool)
+    hit = hit_map | hit_obs | jnp.any(pair, axis=-1)
+    active = ~c.done
+    onset = hit & ~c.hit & active
+    pair_onset = pair & ~c.pair_hit & (active[:, :, None] | active[:, None, :])
+
+    steps = c.steps + active.astype(jnp.int32)
+    # Tracking error: distance to the polyline being tracked (origin, then the waypoints).
+    poly = jnp.concatenate([c.origin[:, :, None, :], c.waypoints], axis=2)
+    err = point_polyline_distance(new[:, :, None, :2], poly, c.n_wp + 1)[..., 0]
+    sq_error = c.sq_error + jnp.where(active, err * err, 0.0)
+    at_goal = jnp.sqrt(jnp.sum((new[..., :2] - inputs.goal) ** 2, axis=-1)) <= config.goal_tolerance
+    timeout = steps.astype(jnp.float32) * period >= inputs.time_limit - 1e-6
+    crash = hit & config.stop_on_collision
+    reason = jnp.where(at_goal, GOAL, jnp.where(crash, COLLISION, jnp.where(timeout, TIMEOUT, RUNNING)))
+    reason = jnp.where(c.done, c.reason, reason)
+    done = c.done | (reason != RUNNING)
+    c = c._replace(
+        state=new, done=done, reason=reason, steps=steps, hit=hit, pair_hit=pair,
+        collisions=c.collisions + onset.astype(jnp.int32),
+        pair_collisions=c.pair_collisions + pair_onset.astype(jnp.int32), sq_error=sq_error, t=c.t + 1,
+    )
+    return c, (new, u, recovery)
+
+
+def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp.ndarray, params: DWAParams,
+                 inputs: EpisodeInputs) -> EpisodeOutput:
+    """Runs ``B`` episodes of ``N`` robots (pure; jit with ``config`` and ``steps`` static).
+
+    Args:
+      config: `NavConfig`.
+      steps: ``S``, the buffer length in control steps (static, a multiple of ``config.chunk``).
+      table: the map's `ClearanceTable` (collision and DWA clearance).
+      free: ``bool[H, W]`` the planning map (inflated) used when re-planning.
+      params: `DWAParams`.
+      inputs: `EpisodeInputs`.
+    """
+    B, N = inputs.start.shape[:2]
+    chunk = config.chunk
+    zeros = jnp.zeros((B, N), jnp.int32)
+    carry = _Carry(
+        state=inputs.start, waypoints=inputs.waypoints, n_wp=inputs.n_waypoints, index=zeros, done=~inputs.active,
+        reason=zeros, steps=zeros, hit=jnp.zeros((B, N), bool), pair_hit=jnp.zeros((B, N, N), bool),
+        collisions=zeros, pair_collisions=jnp.zeros((B, N, N), jnp.int32), replans=zeros,
+        last_replan=zeros - 10**6, origin=inputs.start[..., :2], sq_error=jnp.zeros((B, N), inputs.start.dtype),
+        t=jnp.asarray(0, jnp.int32),
+    )
+    states = jnp.broadcast_to(inputs.start[None], (steps + 1, B, N, 5))
+    controls = jnp.zeros((steps, B, N, 2), inputs.start.dtype)
+    recov = jnp.zeros((steps, B, N), bool)
+
+    def body(loop):
+        c, st, ct, rc, k = loop
+        c, (s, u, r) = lax.scan(lambda cc, _: _step(config, table, free, params, inputs, cc), c, None, length=chunk)
+        st = lax.dynamic_update_slice(st, s, (k * chunk + 1, 0, 0, 0))
+        ct = lax.dynamic_update_slice(ct, u, (k * chunk, 0, 0, 0))
+        rc = lax.dynamic_update_slice(rc, r, (k * chunk, 0, 0))
+        return c, st, ct, rc, k + 1
+
+    def cond(loop):
+        c, _, _, _, k = loop
+        return (k * chunk < steps) & ~jnp.all(c.done)
+
+    c, states, controls, recov, k = lax.while_loop(cond, body, (carry, states, controls, recov, jnp.asarray(0)))
+    # Rows the loop never reached, or reached after a robot was done, hold its final state.
+    rows = jnp.arange(steps + 1)[:, None, None]
+    states = jnp.where((rows <= c.steps[None])[..., None], states, c.state[None])
+    sw = lambda x: jnp.swapaxes(x, 0, 1)  # noqa: E731  [S, B, ...] -> [B, S, ...]
+    return EpisodeOutput(
+        states=sw(states), controls=sw(controls), recovery=sw(recov), steps=c.steps, reason=c.reason,
+        collisions=c.collisions, pair_collisions=c.pair_collisions, replans=c.replans,
+        rmse=jnp.sqrt(c.sq_error / jnp.where(c.steps > 0, c.steps, jnp.nan)), waypoints=c.waypoints,
+        n_waypoints=c.n_wp, executed=jnp.broadcast_to(k * chunk, (B,)),
+    )

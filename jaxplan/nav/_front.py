@@ -1,0 +1,581 @@
+"""`navigate`, `navigate_batch`, `navigate_multi`: two-level navigation from the host.
+
+The steps of every episode (DESIGN §5):
+
+1. **Planning map.** The map inflated for the robot: a free cell whose centre is closer
+   than d_safe to a blocked square is closed for planning, so the global path fits the
+   footprint. A scenario whose start or goal is closed, or whose goal the inflated map
+   does not connect to the start, is *infeasible* for this robot: it is not run, and is
+   reported with that reason (benchmarks count it apart). At 1.0 m per cell every free
+   cell centre keeps 0.5 m, so nothing is closed for the seed-000 robot (0.3 m); at
+   seed 000's 0.5 m per cell a one-cell aisle keeps only 0.25 m, narrower than the
+   robot's own radius plus nothing — which is why the MovingAI maps run at 1.0 m.
+2. **Global plan** with the pipeline's planner on the planning map (`plan_batch`: every
+   scenario × seed in one compiled call for the ACO planners).
+3. **Waypoints**: the pipeline's smoothers (`jaxplan.smooth`, clearance d_safe) reduce
+   the path; the start is dropped, the goal is the last waypoint.
+4. **Episode**: `jaxplan.nav._episode.run_episodes`, one compiled call for the batch.
+5. **Metrics** (DESIGN §6) from the trajectories: success (goal within tolerance, no
+   collision, within the time limit), collisions (contacts), time, RMSE to the polyline
+   being tracked (after a re-plan, the new one), max curvature of the executed motion (|ω|/v over steps moving at least
+   `CURVATURE_MIN_SPEED`; turning on the spot has no finite curvature), energy proxy
+   (`jaxplan.metrics.EnergyModel`), planning and per-step times.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from typing import Any, Callable, Mapping, NamedTuple, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from numpy.typing import ArrayLike
+
+from jaxplan.dwa._config import DWAConfig, DWAParams
+from jaxplan.dwa._step import table_of, validate_config, validate_params
+from jaxplan.grid._fields import clearance_field
+from jaxplan.grid._gridmap import GridMap
+from jaxplan.metrics._episode import EnergyModel, energy
+from jaxplan.nav._config import LOCAL_PLANNERS, SUBGOAL_MODES, NavConfig
+from jaxplan.nav._episode import GOAL, REASONS, EpisodeInputs, run_episodes
+from jaxplan.nav._obstacles import MovingObstacles, no_obstacles, obstacle_state, stack_obstacles, trajectories
+from jaxplan.nav._pipelines import Pipeline, get_pipeline
+from jaxplan.search._exact import shortest_lengths
+
+__all__ = ["Episode", "EpisodeBatch", "navigate", "navigate_batch", "navigate_multi", "planning_grid",
+           "CURVATURE_MIN_SPEED", "INFEASIBLE_START", "INFEASIBLE_GOAL", "UNREACHABLE", "PLAN_FAILED"]
+
+CURVATURE_MIN_SPEED = 0.1
+"""m/s: steps slower than this do not enter the executed max curvature (|ω|/v blows up at v → 0)."""
+
+INFEASIBLE_START = "infeasible: start closer than d_safe to an obstacle"
+INFEASIBLE_GOAL = "infeasible: goal closer than d_safe to an obstacle"
+UNREACHABLE = "infeasible: goal not reachable for the inflated footprint"
+PLAN_FAILED = "global planner found no path"
+_NOT_RUN = (INFEASIBLE_START, INFEASIBLE_GOAL, UNREACHABLE, PLAN_FAILED)
+
+_RUN = jax.jit(run_episodes, static_argnums=(0, 1))
+
+
+def planning_grid(grid: GridMap, d_safe: float) -> GridMap:
+    """``grid`` with every free cell whose centre is closer than ``d_safe`` (m) to a blocked square closed."""
+    field = clearance_field(grid)
+    free = np.asarray(grid.free) & (field >= d_safe - 1e-9)
+    return dataclasses.replace(grid, free=free) if dataclasses.is_dataclass(grid) else grid._replace(free=free)
+
+
+class Episode(NamedTuple):
+    """One robot's navigation episode (numpy; DESIGN §3).
+
+    Attributes:
+      trajectory: ``f32[T + 1, 3]`` poses (x, y, theta) in m, rad, from the start; ``T``
+        control steps were taken.
+      controls: ``f32[T, 2]`` (v, omega) applied at each step (seed 002's velocity traces).
+      times: ``f32[T + 1]`` seconds of the trajectory samples.
+      success: goal reached within tolerance, without collision, within the time limit.
+      reason: ``"goal"``, ``"collision"``, ``"time limit"`` or why it was not run (infeasible).
+      collisions: contacts with the map, moving discs or other robots.
+      time_s: simulated time until the robot stopped (s).
+      metrics: the DESIGN §6 episode metrics (see `EpisodeBatch.METRICS`).
+      plan: global path ``f64[L, 2]`` in cell coordinates (empty if the planner failed).
+      waypoints: ``f32[K, 2]`` the waypoints tracked at first (m); ``final_waypoints`` after re-plans.
+      obstacles: the `MovingObstacles` of the episode; ``obstacle_positions f32[T + 1, M, 2]``.
+    """
+
+    trajectory: np.ndarray
+    controls: np.ndarray
+    times: np.ndarray
+    success: bool
+    reason: str
+    collisions: int
+    time_s: float
+    metrics: dict
+    plan: np.ndarray
+    waypoints: np.ndarray
+    final_waypoints: np.ndarray
+    obstacles: MovingObstacles
+    obstacle_positions: np.ndarray
+
+
+class EpisodeBatch(NamedTuple):
+    """Episodes of a batched call, leading axes ``[E scenarios, R seeds, N robots]`` (numpy).
+
+    Attributes:
+      states: ``f32[E, R, N, S + 1, 5]``; ``steps [E, R, N]`` valid control steps each.
+      controls: ``f32[E, R, N, S, 2]``; ``recovery bool[E, R, N, S]``.
+      reason: ``object[E, R, N]`` strings; ``feasible bool[E, R, N]`` (infeasible episodes
+        were not run); ``success``, ``collisions``, ``pair_collisions [E, R, N, N]``,
+        ``time_s`` (simulated), ``rmse``, ``max_curvature``, ``energy``, ``path_length``
+        (executed, m), ``recoveries``, ``replans``: ``[E, R, N]``.
+      plans: ``f64[E, R, N, P, 2]`` global paths in cell coordinates (grid paths, or a sampling
+        planner's any-angle polyline), −1 padded, with ``n_plan``.
+      waypoints: ``f32[E, R, N, K, 2]`` (m) with ``n_waypoints``; ``final_waypoints`` /
+        ``n_final_waypoints`` after re-plans.
+      obstacles: `MovingObstacles` with leaves ``[E, R, M, …]``.
+      plan_time_s: global planning wall time per episode (s, compilation excluded).
+      step_time_s: wall time per control step of one robot (s): the episode call's time
+        over the robot-steps it ran (compilation excluded).
+      run_time_s, compile_s: the episode call's wall time and its compile time.
+      period: control period (s); pipeline: the pipeline's name; resolution: m per cell.
+    """
+
+    states: np.ndarray
+    steps: np.ndarray
+    controls: np.ndarray
+    recovery: np.ndarray
+    reason: np.ndarray
+    feasible: np.ndarray
+    success: np.ndarray
+    collisions: np.ndarray
+    pair_collisions: np.ndarray
+    time_s: np.ndarray
+    rmse: np.ndarray
+    max_curvature: np.ndarray
+    energy: np.ndarray
+    path_length: np.ndarray
+    recoveries: np.ndarray
+    replans: np.ndarray
+    plans: np.ndarray
+    n_plan: np.ndarray
+    waypoints: np.ndarray
+    n_waypoints: np.ndarray
+    final_waypoints: np.ndarray
+    n_final_waypoints: np.ndarray
+    obstacles: MovingObstacles
+    plan_time_s: float
+    step_time_s: float
+    run_time_s: float
+    compile_s: float
+    period: float
+    pipeline: str
+    resolution: float
+
+    METRICS = ("success", "collisions", "time_s", "rmse", "max_curvature", "energy", "path_length", "recoveries",
+               "replans")
+
+    def episode(self, e: int = 0, r: int = 0, i: int = 0) -> Episode:
+        """Scenario ``e``, seed ``r``, robot ``i`` as an `Episode`."""
+        T = int(self.steps[e, r, i])
+        st = self.states[e, r, i, : T + 1]
+        times = np.arange(T + 1, dtype=np.float32) * self.period
+        obs = jax.tree_util.tree_map(lambda x: np.asarray(x[e, r]), self.obstacles)
+        opos = np.asarray(trajectories(obs, times)) if obs.radii.shape[-1] else np.zeros((T + 1, 0, 2), np.float32)
+        m = {k: getattr(self, k)[e, r, i].item() for k in self.METRICS}
+        m["plan_time_s"], m["step_time_s"] = self.plan_time_s, self.step_time_s
+        return Episode(
+            trajectory=st[:, :3], controls=self.controls[e, r, i, :T], times=times,
+            success=bool(self.success[e, r, i]), reason=str(self.reason[e, r, i]),
+            collisions=int(self.collisions[e, r, i]), time_s=float(self.time_s[e, r, i]), metrics=m,
+            plan=self.plans[e, r, i, : self.n_plan[e, r, i]],
+            waypoints=self.waypoints[e, r, i, : self.n_waypoints[e, r, i]],
+            final_waypoints=self.final_waypoints[e, r, i, : self.n_final_waypoints[e, r, i]],
+            obstacles=obs, obstacle_positions=opos,
+        )
+
+    def summary(self, where: np.ndarray | None = None) -> dict[str, tuple[float, float]]:
+        """Mean and sd over seeds of each metric's per-seed mean over the feasible episodes (and ``where``).
+
+        Success is a rate in [0, 1]; every other metric is averaged over the episodes it
+        applies to (time over successful ones, the rest over all run ones).
+        """
+        mask = self.feasible if where is None else self.feasible & where
+        out = {"episodes": (float(mask.sum()), 0.0), "infeasible": (float((~self.feasible).sum()), 0.0)}
+        for k in self.METRICS:
+            v = getattr(self, k).astype(float)
+            m = mask & self.success if k == "time_s" else mask
+            per_seed = [np.mean(v[:, r][m[:, r]]) if m[:, r].any() else np.nan for r in range(v.shape[1])]
+            per_seed = np.asarray(per_seed)
+            ok = np.isfinite(per_seed)
+            out[k] = (float(np.mean(per_seed[ok])) if ok.any() else math.nan,
+                      float(np.std(per_seed[ok])) if ok.any() else math.nan)
+        return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Validation
+
+
+def _cells(name: str, a: ArrayLike, grid: GridMap, shape: tuple) -> np.ndarray:
+    arr = np.asarray(a)
+    if arr.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
+    if not np.all(np.isfinite(arr.astype(float))) or not np.all(arr.astype(float) == np.round(arr.astype(float))):
+        raise ValueError(f"{name} must be integer cells (x, y), got {arr.tolist()!r}")
+    arr = arr.astype(np.int64)
+    H, W = grid.shape
+    out = (arr[..., 0] < 0) | (arr[..., 0] >= W) | (arr[..., 1] < 0) | (arr[..., 1] >= H)
+    if np.any(out):
+        bad = arr[out][0]
+        raise ValueError(f"{name} cell {tuple(bad.tolist())} is outside the {W}x{H} map")
+    free = np.asarray(grid.free)
+    blocked = ~free[arr[..., 1], arr[..., 0]]
+    if np.any(blocked):
+        bad = arr[blocked][0]
+        raise ValueError(f"{name} cell {tuple(bad.tolist())} is on a blocked cell")
+    return arr
+
+
+def _config(config: NavConfig | None, pipeline: Pipeline, local_planner: str | None) -> NavConfig:
+    cfg = NavConfig() if config is None else config
+    if not isinstance(cfg, NavConfig):
+        raise ValueError(f"config must be a NavConfig, got {type(cfg).__name__}")
+    local = local_planner or cfg.local or pipeline.local
+    if local not in LOCAL_PLANNERS:
+        raise ValueError(f"unknown local planner {local!r}; choose from {LOCAL_PLANNERS}")
+    if cfg.subgoal not in SUBGOAL_MODES:
+        raise ValueError(f"unknown sub-goal mode {cfg.subgoal!r}; choose from {SUBGOAL_MODES}")
+    evaluator = cfg.evaluator or pipeline.evaluator
+    dwa = cfg.dwa.replace(evaluator=evaluator)
+    dwa = validate_config(dwa.replace(keep_rollouts=False))
+    for f in ("switch_radius", "lookahead", "goal_tolerance", "max_time", "replan_period", "block_distance",
+              "block_margin", "follow_gain"):
+        v = getattr(cfg, f)
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+            raise ValueError(f"NavConfig.{f} must be a finite number >= 0, got {v!r}")
+    if cfg.goal_tolerance <= 0 or cfg.max_time <= 0:
+        raise ValueError("NavConfig.goal_tolerance and max_time must be > 0")
+    for f in ("chunk", "replan_sweeps", "replan_cells", "replan_slots"):
+        if not isinstance(getattr(cfg, f), int) or getattr(cfg, f) < 1:
+            raise ValueError(f"NavConfig.{f} must be a positive integer, got {getattr(cfg, f)!r}")
+    return cfg.replace(dwa=dwa, local=local, evaluator=evaluator)
+
+
+def _obstacle_sets(obstacles: Any, E: int, R: int, seeds: list[int]) -> list[list[MovingObstacles]]:
+    """``[E][R]`` obstacle sets from None, one set, an ``[E][R]`` nested list, or ``f(e, seed)``."""
+    if obstacles is None:
+        return [[no_obstacles(0) for _ in range(R)] for _ in range(E)]
+    if isinstance(obstacles, MovingObstacles):
+        return [[obstacles for _ in range(R)] for _ in range(E)]
+    if callable(obstacles):
+        return [[obstacles(e, s) for s in seeds] for e in range(E)]
+    sets = list(obstacles)
+    if len(sets) != E or any(len(list(row)) != R for row in sets):
+        raise ValueError(f"obstacles must be one MovingObstacles, a callable f(scenario, seed), or an [{E}][{R}] "
+                         "nested list")
+    return [list(row) for row in sets]
+
+
+def _check_obstacle_starts(obs: MovingObstacles, start_xy: np.ndarray, radius: float, where: str) -> None:
+    pos, _ = obstacle_state(obs, 0.0)
+    pos, rad = np.asarray(pos), np.asarray(obs.radii)
+    for i, p in enumerate(start_xy):
+        gap = np.hypot(*(pos - p).T) - rad - radius
+        if np.any(gap < 0):
+            j = int(np.argmin(gap))
+            raise ValueError(f"{where}: moving obstacle {j} starts inside robot {i} (centres "
+                             f"{np.round(pos[j], 3).tolist()} and {np.round(p, 3).tolist()} m, radii "
+                             f"{float(rad[j]):g} + {radius:g} m)")
+
+
+# ---------------------------------------------------------------------------------------------
+# The run
+
+_SEEDLESS = ("astar", "dijkstra", "astar_kng")  # deterministic planners: one plan per scenario serves every seed
+
+
+def _global_plans(plan_grid: GridMap, starts: np.ndarray, goals: np.ndarray, ok: np.ndarray, pipe: Pipeline,
+                  seeds: list[int], overrides: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray, float]:
+    """Plans ``f64[S, R, P, 2]`` (cell coordinates, −1 padded), valid points ``[S, R]`` (0: failed) and the
+    planning wall time (s, compilation excluded) for the ``ok`` rows of ``starts``/``goals [S, 2]``.
+
+    The ACO planners run every scenario × seed in one compiled call (`plan_batch`); the
+    others are called per scenario (and per seed unless deterministic), and an any-angle
+    planner's exact polyline (``info["points"]``) is used rather than its rasterised cells.
+    """
+    from jaxplan.aco._planners import COLONIES, plan_batch  # late: the ACO package imports the registry
+    from jaxplan.registry import plan
+
+    S, R = len(starts), len(seeds)
+    params = {**pipe.planner_overrides, **overrides}
+    idx = np.nonzero(ok)[0]
+    if idx.size == 0:
+        return np.full((S, R, 2, 2), -1.0), np.zeros((S, R), np.int64), 0.0
+    if pipe.global_planner in COLONIES:
+        br = plan_batch(plan_grid, starts[idx], goals[idx], planner=pipe.global_planner, seeds=seeds, **params)
+        plans = np.full((S, R) + br.paths.shape[2:], -1.0)
+        plans[idx] = br.paths
+        n = np.zeros((S, R), np.int64)
+        n[idx] = np.where(br.success, br.n_cells, 0)
+        return plans, n, float(br.time_s)
+    results: dict[tuple[int, int], Any] = {}
+    t0 = time.perf_counter()
+    for i in idx:  # per-scenario host planners (A*, RRT*): nothing to batch
+        for r, seed in enumerate(seeds):
+            if pipe.global_planner in _SEEDLESS and r > 0:
+                results[i, r] = results[i, 0]
+                continue
+            res = plan(plan_grid, starts[i], goals[i], planner=pipe.global_planner, seed=seed, **params)
+            pts = res.info.get("points", res.path) if res.success else np.zeros((0, 2))
+            results[i, r] = np.asarray(pts, np.float64)
+    elapsed = time.perf_counter() - t0
+    P = max(2, max(len(p) for p in results.values()))
+    plans = np.full((S, R, P, 2), -1.0)
+    n = np.zeros((S, R), np.int64)
+    for (i, r), pts in results.items():
+        plans[i, r, : len(pts)] = pts
+        n[i, r] = len(pts)
+    return plans, n, elapsed
+
+
+
+def _bucket(n: int, lo: int = 8) -> int:
+    return max(lo, 1 << max(0, int(n - 1).bit_length()))
+
+
+def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | None, global_planner: str | None,
+         local_planner: str | None, seeds: Sequence[int], obstacles: Any, config: NavConfig | None,
+         params: DWAParams | Mapping[str, float] | None, time_limit: float | None,
+         overrides: Mapping[str, Any]) -> EpisodeBatch:
+    from jaxplan.smooth import smooth
+
+    if not isinstance(grid, GridMap):
+        raise ValueError(f"grid must be a GridMap, got {type(grid).__name__}")
+    if pipeline is not None and global_planner is not None:
+        raise ValueError("give either a pipeline or a global_planner, not both")
+    if pipeline is not None:
+        pipe = get_pipeline(pipeline)
+    else:
+        gp = "iaco" if global_planner is None else global_planner
+        pipe = Pipeline(f"{gp}+{local_planner or 'dwa'}", gp, {}, ("key_nodes",), local_planner or "dwa",
+                        "weighted", "custom")
+    cfg = _config(config, pipe, local_planner)
+    robot = cfg.dwa.robot
+    d_safe = float(cfg.dwa.d_safe)
+    seeds = [int(s) for s in seeds]
+    if not seeds or any(s < 0 for s in seeds):
+        raise ValueError(f"seeds must be a non-empty list of integers >= 0, got {seeds!r}")
+    E, N = starts.shape[:2]
+    R = len(seeds)
+    starts = _cells("start", starts, grid, (E, N, 2))
+    goals = _cells("goal", goals, grid, (E, N, 2))
+    if np.any(np.all(starts == goals, axis=-1)):
+        raise ValueError("a start equals its goal: there is nothing to navigate")
+    if time_limit is not None and not (math.isfinite(time_limit) and 0 < time_limit <= cfg.max_time):
+        raise ValueError(f"time_limit must be in (0, max_time = {cfg.max_time}] s, got {time_limit!r}")
+    p = validate_params(params, cfg.dwa.evaluator)
+    res = float(grid.resolution)
+    from jaxplan.dwa._robot import footprint_radius
+
+    radius = float(footprint_radius(robot.footprint))
+
+    # 1. Planning map and feasibility.
+    plan_grid = planning_grid(grid, d_safe)
+    pf = np.asarray(plan_grid.free)
+    s_flat, g_flat = starts.reshape(-1, 2), goals.reshape(-1, 2)
+    reason0 = np.full(E * N, "", object)
+    reason0[~pf[s_flat[:, 1], s_flat[:, 0]]] = INFEASIBLE_START
+    reason0[(reason0 == "") & ~pf[g_flat[:, 1], g_flat[:, 0]]] = INFEASIBLE_GOAL
+    ok = reason0 == ""
+    if ok.any():
+        lens = shortest_lengths(plan_grid, s_flat[ok], g_flat[ok])
+        r = reason0[ok]
+        r[~np.isfinite(lens)] = UNREACHABLE
+        reason0[ok] = r
+    ok = reason0 == ""
+
+    # 2. Global plans on the planning map, in cell coordinates.
+    plans, n_plan, plan_time = _global_plans(plan_grid, s_flat, g_flat, ok, pipe, seeds, overrides)
+    reason = np.repeat(reason0[:, None], R, axis=1)  # [E*N, R]
+    reason[(reason == "") & (n_plan < 2)] = PLAN_FAILED
+    run = reason == ""
+
+    # 3. Waypoints (m), the start dropped; a robot that does not run has its start as its only waypoint.
+    start_xy = ((s_flat + 0.5) * res).astype(np.float32)
+    goal_xy = ((g_flat + 0.5) * res).astype(np.float32)
+    K = 1
+    wp_m = np.broadcast_to(start_xy[:, None, None, :], (E * N, R, K, 2)).copy()
+    n_wp = np.ones((E * N, R), np.int64)
+    if run.any():
+        sm = smooth(plans[run].astype(np.float32), grid, pipe.waypoints, n=n_plan[run], radius=d_safe)
+        pts, n = np.asarray(sm.points, np.float64), np.asarray(sm.n)
+        K = _bucket(int(n.max()) - 1)
+        idx = np.minimum(np.arange(K)[None, :] + 1, (n - 1)[:, None])  # slots after the goal repeat it
+        wp = np.take_along_axis(pts, idx[..., None], axis=1)
+        wp_m = np.broadcast_to(start_xy[:, None, None, :], (E * N, R, K, 2)).copy()
+        wp_m[run] = ((wp + 0.5) * res).astype(np.float32)
+        n_wp[run] = n - 1
+    first = wp_m[:, :, 0]  # [E*N, R, 2]
+    heading = np.arctan2(first[..., 1] - start_xy[:, None, 1], first[..., 0] - start_xy[:, None, 0])
+    state0 = np.zeros((E * N, R, 5), np.float32)
+    state0[..., 0:2] = start_xy[:, None]
+    state0[..., 2] = heading
+    poly_len = np.sum(np.hypot(*np.diff(np.concatenate([start_xy[:, None, None, :].repeat(R, 1), wp_m], axis=2),
+                                        axis=2).transpose(3, 0, 1, 2)), axis=-1)
+    limit = np.minimum(cfg.max_time, 60.0 + 3.0 * poly_len / float(robot.v_max)) if time_limit is None else \
+        np.full((E * N, R), time_limit)
+
+    # 4. Obstacles per episode [E][R]; none may start inside a robot.
+    sets = _obstacle_sets(obstacles, E, R, seeds)
+    for e in range(E):
+        for r in range(R):
+            o = sets[e][r]
+            if not isinstance(o, MovingObstacles):
+                raise ValueError(f"obstacles for scenario {e}, seed {seeds[r]} must be MovingObstacles")
+            if o.count:
+                _check_obstacle_starts(o, start_xy.reshape(E, N, 2)[e], radius, f"scenario {e}, seed {seeds[r]}")
+    obs = stack_obstacles([sets[e][r] for e in range(E) for r in range(R)])  # [E*R, M, ...]
+
+    # [E*N, R, ...] -> episodes B = E*R of N robots.
+    def to_b(x):
+        x = np.asarray(x)
+        return x.reshape((E, N, R) + x.shape[2:]).swapaxes(1, 2).reshape((E * R, N) + x.shape[2:])
+
+    active = to_b(run)
+    inputs = EpisodeInputs(
+        start=jnp.asarray(to_b(state0)), goal=jnp.asarray(to_b(np.broadcast_to(goal_xy[:, None], (E * N, R, 2)))),
+        goal_cell=jnp.asarray(to_b(np.broadcast_to(g_flat[:, None], (E * N, R, 2))).astype(np.int32)),
+        waypoints=jnp.asarray(to_b(wp_m)), n_waypoints=jnp.asarray(to_b(n_wp).astype(np.int32)),
+        time_limit=jnp.asarray(to_b(limit).astype(np.float32)), obstacles=obs, active=jnp.asarray(active),
+    )
+    steps = cfg.steps
+    table = table_of(grid)
+    free_j = jnp.asarray(pf)
+    t0 = time.perf_counter()
+    compiled = _RUN.lower(cfg, steps, table, free_j, p, inputs).compile()
+    compile_s = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    out = jax.block_until_ready(compiled(table, free_j, p, inputs))
+    run_s = time.perf_counter() - t0
+    out = jax.tree_util.tree_map(np.asarray, out)
+
+    # 5. Metrics. Back to [E, R, N, ...].
+    def back(x):
+        x = np.asarray(x)
+        return x.reshape((E, R, N) + x.shape[2:])
+
+    states = back(out.states.swapaxes(1, 2))  # [B, N, S+1, 5] -> [E, R, N, S+1, 5]
+    controls = back(out.controls.swapaxes(1, 2))
+    recovery = back(out.recovery.swapaxes(1, 2))
+    n_steps = back(out.steps)
+    code = back(out.reason)
+    active_e = back(active)
+    reason_txt = np.where(active_e, np.asarray(REASONS, object)[code], back(to_b(reason)))
+    period = float(cfg.dwa.period)
+    coll = back(out.collisions)
+    success = active_e & (code == GOAL) & (coll == 0)
+    t_s = n_steps * period
+    pos = states[..., :2]
+    valid_n = n_steps + 1
+    rm = back(out.rmse)
+    v, w = controls[..., 0], controls[..., 1]
+    live = np.arange(controls.shape[-2]) < n_steps[..., None]
+    fast = live & (np.abs(v) >= CURVATURE_MIN_SPEED)
+    kappa = np.max(np.where(fast, np.abs(w) / np.maximum(np.abs(v), CURVATURE_MIN_SPEED), 0.0), axis=-1)
+    vs = np.concatenate([states[..., :1, 3], v], axis=-1)  # velocity samples at 0, P, 2P, ...
+    ws = np.concatenate([states[..., :1, 4], w], axis=-1)
+    en = np.asarray(energy(jnp.asarray(vs), jnp.asarray(ws), period, EnergyModel(), jnp.asarray(valid_n)))
+    seg = np.hypot(*np.diff(pos, axis=-2).transpose(4, 0, 1, 2, 3))
+    length = np.sum(np.where(live, seg, 0.0), axis=-1)
+    robot_steps = max(int(np.sum(n_steps)), 1)
+    nan = np.where(active_e, 1.0, np.nan)
+    return EpisodeBatch(
+        states=states, steps=n_steps, controls=controls, recovery=recovery, reason=reason_txt,
+        feasible=back(to_b(~np.isin(reason, (INFEASIBLE_START, INFEASIBLE_GOAL, UNREACHABLE)))),
+        success=success, collisions=coll, pair_collisions=back(out.pair_collisions), time_s=t_s * nan,
+        rmse=rm * nan, max_curvature=kappa * nan, energy=en * nan, path_length=length * nan,
+        recoveries=np.sum(recovery & live, axis=-1), replans=back(out.replans),
+        plans=back(to_b(plans)), n_plan=back(to_b(n_plan)), waypoints=back(to_b(wp_m)),
+        n_waypoints=back(to_b(n_wp)), final_waypoints=back(out.waypoints), n_final_waypoints=back(out.n_waypoints),
+        obstacles=jax.tree_util.tree_map(lambda x: np.asarray(x).reshape((E, R) + x.shape[1:]), obs),
+        plan_time_s=plan_time / max(E * R * N, 1), step_time_s=run_s / robot_steps, run_time_s=run_s,
+        compile_s=compile_s, period=period, pipeline=pipe.name, resolution=res,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Fronts
+
+
+def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: str | None = None,
+             local_planner: str | None = None, seed: int = 0, obstacles: MovingObstacles | None = None, *,
+             pipeline: str | None = None, config: NavConfig | None = None,
+             params: DWAParams | Mapping[str, float] | None = None, time_limit: float | None = None,
+             **overrides: Any) -> Episode:
+    """One two-level navigation episode (DESIGN §3).
+
+    Args:
+      grid: the map.
+      start, goal: cells ``(x, y)``.
+      global_planner: a registry planner (default ``"iaco"``), tracked through key nodes by a
+        weighted DWA — or give ``pipeline`` (e.g. ``"iaco_dwa"``) for a seed's system.
+      local_planner: ``"dwa"`` (default) or ``"follow"``.
+      seed: the global planner's seed.
+      obstacles: `MovingObstacles` (e.g. `jaxplan.random_obstacles`).
+      config: `NavConfig` (robot, DWA settings, tolerances, re-planning). Re-planning is on
+        by default when there are moving obstacles.
+      params: DWA critic weights (`DWAParams` or a dict of overrides).
+      time_limit: seconds (default: 60 s + 3 × the waypoint polyline's length at v_max, capped
+        at ``config.max_time``).
+      **overrides: the global planner's parameters (as for `jaxplan.plan`).
+
+    Raises:
+      ValueError: start/goal outside the map or blocked, start == goal, a moving obstacle
+        starting inside the robot, unknown names, bad numbers. An infeasible or
+        unreachable goal is an `Episode` with ``success=False`` and the reason.
+    """
+    cfg = _default_replan(config, obstacles is not None and getattr(obstacles, "count", 0) > 0)
+    b = _run(grid, np.asarray(start)[None, None], np.asarray(goal)[None, None], pipeline, global_planner,
+             local_planner, [seed], obstacles, cfg, params, time_limit, overrides)
+    return b.episode(0, 0, 0)
+
+
+def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline: str | None = "iaco_dwa",
+                   seeds: Sequence[int] = range(1), obstacles: Any = None, *, global_planner: str | None = None,
+                   local_planner: str | None = None, config: NavConfig | None = None,
+                   params: DWAParams | Mapping[str, float] | None = None, time_limit: float | None = None,
+                   **overrides: Any) -> EpisodeBatch:
+    """Scenarios × seeds single-robot episodes in one compiled global-planning call and one episode call.
+
+    Args:
+      starts, goals: ``int[E, 2]`` cells.
+      pipeline: a named pipeline (`jaxplan.nav.pipelines()`), or None with ``global_planner``.
+      seeds: R seeds (global planner's seed; obstacle callables receive it too).
+      obstacles: None, one `MovingObstacles` for all, an ``[E][R]`` nested list, or a callable
+        ``f(scenario_index, seed) -> MovingObstacles``.
+      Others as in `navigate`.
+
+    Returns:
+      `EpisodeBatch` with axes ``[E, R, 1]``.
+    """
+    s, g = np.asarray(starts), np.asarray(goals)
+    if s.ndim != 2 or s.shape[-1] != 2 or g.shape != s.shape:
+        raise ValueError(f"starts and goals must both be [E, 2] cells, got {s.shape} and {g.shape}")
+    if pipeline is not None and global_planner is not None:
+        pipeline = None
+    cfg = _default_replan(config, obstacles is not None)
+    return _run(grid, s[:, None], g[:, None], pipeline, global_planner, local_planner, list(seeds), obstacles, cfg,
+                params, time_limit, overrides)
+
+
+def navigate_multi(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline: str | None = "iaco_dwa",
+                   seeds: Sequence[int] = range(1), obstacles: Any = None, *, global_planner: str | None = None,
+                   local_planner: str | None = None, config: NavConfig | None = None,
+                   params: DWAParams | Mapping[str, float] | None = None, time_limit: float | None = None,
+                   **overrides: Any) -> EpisodeBatch:
+    """Multi-robot episodes: ``starts, goals int[N, 2]`` (one team) or ``[E, N, 2]`` (E teams).
+
+    Each robot plans its own global path and runs its own DWA, treating the other robots
+    (at their current positions and velocities) and the moving obstacles as moving discs;
+    robots that arrive stay where they are. Collisions are counted per robot and per pair
+    (``pair_collisions``). Re-planning is on by default. Returns axes ``[E, R, N]``.
+    """
+    s, g = np.asarray(starts), np.asarray(goals)
+    if s.ndim == 2:
+        s, g = s[None], g[None]
+    if s.ndim != 3 or s.shape[-1] != 2 or g.shape != s.shape:
+        raise ValueError(f"starts and goals must both be [N, 2] or [E, N, 2] cells, got {s.shape} and {g.shape}")
+    if pipeline is not None and global_planner is not None:
+        pipeline = None
+    cfg = _default_replan(config, True)
+    return _run(grid, s, g, pipeline, global_planner, local_planner, list(seeds), obstacles, cfg, params,
+                time_limit, overrides)
+
+
+def _default_replan(config: NavConfig | None, dynamic: bool) -> NavConfig | None:
+    """Re-planning defaults to on with moving obstacles or other robots (when no config is given)."""
+    if config is None and dynamic:
+        return NavConfig(replan=True)
+    return config

@@ -1,0 +1,214 @@
+"""In-episode global re-planning: an exact grid distance field, its descent, and the trigger.
+
+A navigation episode is one compiled program, so re-planning around an obstacle that
+blocks the global path has to run inside it. The global planners of the seeds (an ACO
+colony per re-plan) would cost far more than the control step; the in-episode planner
+is the exact one instead: a goal distance field over the planning map (8-connected,
+no corner cutting, octile step costs — the same graph as `jaxplan.astar`) with the
+cells near the blocking discs closed, followed downhill from the robot's cell, and
+reduced to the vertices where the move direction changes (every run between two such
+vertices is a straight line of free cells, so it needs no line-of-sight check).
+
+The field is a Jacobi relaxation (`lax.while_loop`, a few sweeps per iteration) that
+stops when nothing changes. A robot that does not re-plan this step never enters the
+loop: under ``vmap`` the loop runs while *any* member needs it and costs nothing on
+steps where none does.
+
+All functions are pure and shape-static; cells are ``(x, y)``, arrays ``[H, W]`` are
+indexed ``[y, x]``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax.numpy as jnp
+from jax import lax
+
+__all__ = ["MOVES", "distance_field", "descend", "turn_vertices", "path_blocked", "disc_cells"]
+
+MOVES = ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1))
+"""The 8 grid moves ``(dx, dy)``: four straight, then four diagonal."""
+
+_COST = jnp.asarray([1.0] * 4 + [math.sqrt(2.0)] * 4, jnp.float32)
+_SWEEPS_PER_ITERATION = 4  # the convergence test costs about as much as a sweep
+
+
+def _allowed(free: jnp.ndarray) -> jnp.ndarray:
+    """``bool[8, H, W]``: move k from each cell stays on free cells and cuts no corner."""
+    H, W = free.shape
+    p = jnp.pad(free, 1, constant_values=False)
+    at = lambda dx, dy: p[1 + dy:1 + dy + H, 1 + dx:1 + dx + W]  # noqa: E731  at(dx, dy)[y, x] = free[y+dy, x+dx]
+    out = []
+    for dx, dy in MOVES:
+        ok = free & at(dx, dy)
+        if dx and dy:
+            ok = ok & at(dx, 0) & at(0, dy)
+        out.append(ok)
+    return jnp.stack(out)
+
+
+def distance_field(free: jnp.ndarray, goal: jnp.ndarray, active: jnp.ndarray, max_sweeps: int,
+                   until: jnp.ndarray | None = None) -> jnp.ndarray:
+    """Exact 8-connected distance (cells) from every cell to ``goal`` over ``free`` cells.
+
+    Args:
+      free: ``bool[H, W]`` cells a path may use.
+      goal: ``i32[2]`` goal cell (x, y).
+      active: ``bool`` scalar; an inactive call does no sweep (the field is 0 at the goal, inf elsewhere).
+      max_sweeps: static bound on the sweeps (a shortest path of more moves than this is
+        reported as unreachable).
+      until: optional ``i32[2]`` cell: stop as soon as its distance is final. After k
+        sweeps every path of at most k moves has been seen, and a path of more moves is
+        longer than k (each move costs >= 1), so a distance <= k is final — the loop
+        then costs about as many sweeps as the path has moves, not the map's diameter.
+
+    Returns:
+      ``f32[H, W]``: +inf for blocked and unreachable cells (and, with ``until``, for cells
+      not yet settled when it stopped: only ``until``'s value is then guaranteed).
+    """
+    H, W = free.shape
+    inf = jnp.float32(jnp.inf)
+    at_goal = (jnp.arange(W)[None, :] == goal[0]) & (jnp.arange(H)[:, None] == goal[1]) & free
+    d0 = jnp.where(at_goal, 0.0, inf).astype(jnp.float32)
+
+    def sweep(d, allowed):
+        p = jnp.pad(d, 1, constant_values=inf)
+        best = d
+        for k, (dx, dy) in enumerate(MOVES):
+            best = jnp.minimum(best, jnp.where(allowed[k], p[1 + dy:1 + dy + H, 1 + dx:1 + dx + W] + _COST[k], inf))
+        return best
+
+    def settled(d, i):
+        if until is None:
+            return jnp.asarray(False)
+        return d[until[1], until[0]] <= i.astype(jnp.float32)
+
+    def cond(c):
+        d, changed, i = c
+        return active & changed & (i < max_sweeps) & ~settled(d, i)
+
+    def body(c):
+        d, _, i = c
+        # Built inside the loop: a call with ``active`` False must cost nothing.
+        allowed = _allowed(free)
+        new = d
+        for _ in range(_SWEEPS_PER_ITERATION):
+            new = sweep(new, allowed)
+        return new, jnp.any(new != d), i + _SWEEPS_PER_ITERATION
+
+    d, _, _ = lax.while_loop(cond, body, (d0, jnp.asarray(True), jnp.asarray(0)))
+    return d
+
+
+def descend(field: jnp.ndarray, free: jnp.ndarray, start: jnp.ndarray, length: int) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """Follows ``field`` downhill from ``start``: a shortest path of at most ``length`` moves.
+
+    Returns:
+      ``(cells i32[length + 1, 2], n i32)``: the path from ``start`` (slots after the goal
+      repeat it) and its number of cells; ``n = 0`` when ``start`` is unreachable.
+    """
+    H, W = free.shape
+    moves = jnp.asarray(MOVES, jnp.int32)
+
+    def is_free(c):  # [..., 2] cells; outside the map is blocked
+        ok = (c[..., 0] >= 0) & (c[..., 0] < W) & (c[..., 1] >= 0) & (c[..., 1] < H)
+        return ok & free[jnp.clip(c[..., 1], 0, H - 1), jnp.clip(c[..., 0], 0, W - 1)]
+
+    def step(c, _):
+        cell, done = c
+        x, y = cell[0], cell[1]
+        nb = cell[None, :] + moves  # [8, 2]
+        side_x = cell[None, :] + moves * jnp.asarray([1, 0])  # the orthogonal cells a diagonal passes
+        side_y = cell[None, :] + moves * jnp.asarray([0, 1])
+        ok = is_free(nb) & is_free(side_x) & is_free(side_y)
+        val = field[jnp.clip(nb[:, 1], 0, H - 1), jnp.clip(nb[:, 0], 0, W - 1)] + _COST
+        val = jnp.where(ok, val, jnp.inf)
+        k = jnp.argmin(val)
+        stop = done | (field[y, x] <= 0.0) | ~jnp.isfinite(val[k])
+        nxt = jnp.where(stop, cell, nb[k])
+        return (nxt, stop), nxt
+
+    start = start.astype(jnp.int32)
+    _, cells = lax.scan(step, (start, jnp.asarray(False)), None, length=length)
+    cells = jnp.concatenate([start[None], cells])
+    moved = jnp.any(cells[1:] != cells[:-1], axis=-1)
+    n = 1 + jnp.sum(moved, dtype=jnp.int32)
+    reachable = jnp.isfinite(field[start[1], start[0]])
+    return cells, jnp.where(reachable, n, 0)
+
+
+def turn_vertices(cells: jnp.ndarray, n: jnp.ndarray, size: int) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """The cells of a grid path after which the move direction changes, and its last cell.
+
+    Args:
+      cells: ``i32[L, 2]`` path with ``n`` valid cells (``n >= 1``).
+      size: static number of output slots.
+
+    Returns:
+      ``(points f32[size, 2], m i32)``: the turn cells in order, ending with the path's last
+      cell (the start itself is not included); slots after ``m`` repeat the last. A path
+      with more turns than ``size`` keeps its first ``size − 1`` turns and the last cell.
+    """
+    L = cells.shape[0]
+    idx = jnp.arange(L)
+    d = cells[1:] - cells[:-1]  # [L-1, 2] move into cell i+1
+    turn = jnp.concatenate([jnp.any(d[1:] != d[:-1], axis=-1), jnp.zeros(1, bool)])  # cell i+1 is a turn
+    keep = jnp.concatenate([jnp.zeros(1, bool), turn]) & (idx < n - 1)
+    keep = keep | (idx == n - 1) & (n > 1)
+    rank = jnp.cumsum(keep) - 1
+    last = cells[jnp.maximum(n - 1, 0)]
+    m = jnp.minimum(jnp.sum(keep, dtype=jnp.int32), size)
+    slot = jnp.where(keep & (rank < size - 1), rank, size)  # overflow and dropped rows go to a dump slot
+    out = jnp.zeros((size + 1, 2), jnp.float32).at[slot].set(cells.astype(jnp.float32))[:size]
+    out = jnp.where(jnp.arange(size)[:, None] >= m - 1, last.astype(jnp.float32), out)
+    return out, m
+
+
+def path_blocked(position: jnp.ndarray, waypoints: jnp.ndarray, n: jnp.ndarray, index: jnp.ndarray,
+                 centres: jnp.ndarray, reach: jnp.ndarray, distance: jnp.ndarray) -> jnp.ndarray:
+    """Whether a disc sits on the next ``distance`` metres of the remaining path.
+
+    Args:
+      position: ``[2]`` robot position (m); the remaining path runs from it through
+        ``waypoints[index:n]`` (``[K, 2]`` m).
+      centres: ``[D, 2]`` disc centres (m); ``reach [D]``: the distance (m) from a centre
+        within which the path counts as blocked (disc radius + robot radius + margin).
+      distance: look-ahead along the path (m).
+    """
+    K = waypoints.shape[0]
+    j = jnp.arange(K)
+    live = (j >= index) & (j < n)
+    a = jnp.concatenate([position[None], waypoints[:-1]])  # segment j ends at waypoint j
+    a = jnp.where((j == index)[:, None], position[None], a)
+    b = waypoints
+    seg = jnp.sqrt(jnp.sum((b - a) ** 2, axis=-1))
+    start_arc = jnp.cumsum(jnp.where(live, seg, 0.0)) - jnp.where(live, seg, 0.0)
+    live = live & (start_arc < distance)
+    ab = b - a
+    t = jnp.sum((centres[:, None, :] - a[None]) * ab[None], axis=-1) / jnp.maximum(jnp.sum(ab * ab, axis=-1), 1e-12)
+    p = a[None] + jnp.clip(t, 0.0, 1.0)[..., None] * ab[None]  # [D, K, 2]
+    d = jnp.sqrt(jnp.sum((centres[:, None, :] - p) ** 2, axis=-1))
+    return jnp.any(live[None] & (d < reach[:, None]))
+
+
+def disc_cells(shape: tuple[int, int], centres: jnp.ndarray, reach: jnp.ndarray, resolution, span: int) -> jnp.ndarray:
+    """``bool[H, W]``: cells whose square comes closer than ``reach [D]`` (m) to a disc centre ``[D, 2]`` (m).
+
+    Only the ``(2·span + 1)²`` cells around each centre are tested (``span`` static, cells):
+    the cost does not grow with the map. A reach beyond ``span + 0.5`` cells is cut there.
+    """
+    H, W = shape
+    off = jnp.arange(-span, span + 1)
+    c = jnp.floor(centres / resolution).astype(jnp.int32)  # [D, 2] cell of each centre
+    cx = c[:, 0:1, None] + off[None, None, :]  # [D, 1, w]
+    cy = c[:, 1:2, None] + off[None, :, None]  # [D, w, 1]
+    half = 0.5 * resolution
+    gx = jnp.maximum(jnp.abs((cx + 0.5) * resolution - centres[:, 0, None, None]) - half, 0.0)
+    gy = jnp.maximum(jnp.abs((cy + 0.5) * resolution - centres[:, 1, None, None]) - half, 0.0)
+    hit = gx ** 2 + gy ** 2 < (reach ** 2)[:, None, None]  # [D, w, w]
+    cx, cy = jnp.broadcast_to(cx, hit.shape), jnp.broadcast_to(cy, hit.shape)
+    inside = hit & (cx >= 0) & (cx < W) & (cy >= 0) & (cy < H)
+    flat = jnp.where(inside, cy * W + cx, H * W)  # misses go to a dump slot
+    out = jnp.zeros(H * W + 1, bool).at[flat.reshape(-1)].set(True)
+    return out[: H * W].reshape(H, W)

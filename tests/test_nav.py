@@ -1,0 +1,214 @@
+"""Two-level navigation: episodes, re-planning, moving obstacles, multi-robot, bad input."""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxplan as jp
+from jaxplan.nav import NavConfig
+from jaxplan.nav._front import INFEASIBLE_START, UNREACHABLE
+from jaxplan.nav._replan import descend, distance_field, path_blocked, turn_vertices
+
+_field = jax.jit(distance_field, static_argnums=3)
+_descend = jax.jit(descend, static_argnums=3)
+_turns = jax.jit(turn_vertices, static_argnums=2)
+
+ROBOT_R = 0.25
+
+
+def _room() -> jp.GridMap:
+    """16 x 24 cells at 1 m: two shelf rows with a gap, a closed box (unreachable inside)."""
+    free = np.ones((16, 24), bool)
+    free[0, :] = free[-1, :] = False
+    free[:, 0] = free[:, -1] = False
+    free[5, 3:10] = False
+    free[5, 12:20] = False
+    free[10, 4:21] = False
+    free[12:15, 20:23] = False  # a box: cell (21, 13) is sealed off
+    free[13, 21] = True
+    free[12, 21] = False
+    return jp.grid_from_array(free, resolution=1.0)
+
+
+def _brute_clearance(points_m: np.ndarray, free: np.ndarray, res: float) -> np.ndarray:
+    """Exact distance (m) from world points to the nearest blocked square (outside counts)."""
+    pad = 2
+    ys, xs = np.nonzero(~np.pad(free, pad, constant_values=False))
+    sq = np.stack([xs - pad, ys - pad], 1).astype(np.float64)
+    p = np.asarray(points_m, np.float64).reshape(-1, 2) / res - 0.5
+    d = np.maximum(np.abs(p[:, None, :] - sq[None]) - 0.5, 0.0)
+    return np.min(np.hypot(d[..., 0], d[..., 1]), axis=1).reshape(np.shape(points_m)[:-1]) * res
+
+
+STARTS = np.array([[2, 2], [2, 13], [22, 2], [3, 8]])
+GOALS = np.array([[21, 8], [22, 2], [3, 13], [21, 3]])
+
+
+@pytest.fixture(scope="module")
+def room():
+    return _room()
+
+
+@pytest.fixture(scope="module")
+def static_batch(room):
+    return jp.navigate_batch(room, STARTS, GOALS, pipeline="astar_kng_dwa", seeds=[0, 1])
+
+
+def test_static_episodes_reach_the_goal_without_collision(room, static_batch):
+    b = static_batch
+    assert b.states.shape[:3] == (4, 2, 1)
+    assert np.all(b.success), b.reason
+    assert np.all(b.collisions == 0)
+    cfg = NavConfig()
+    r = cfg.dwa.robot
+    for e in range(4):
+        ep = b.episode(e, 0)
+        np.testing.assert_allclose(ep.trajectory[0, :2], (STARTS[e] + 0.5) * room.resolution)
+        assert np.hypot(*(ep.trajectory[-1, :2] - (GOALS[e] + 0.5))) <= cfg.goal_tolerance + 1e-6
+        assert ep.time_s == pytest.approx(len(ep.controls) * cfg.dwa.period)
+        # Never closer to a wall than the robot's radius (exact clearance of every visited pose).
+        assert _brute_clearance(ep.trajectory[:, :2], np.asarray(room.free), 1.0).min() >= ROBOT_R
+        # Controls respect the limits and the accelerations of the dynamic window.
+        v, w = ep.controls[:, 0], ep.controls[:, 1]
+        assert np.all((v >= r.v_min - 1e-6) & (v <= r.v_max + 1e-6)) and np.all(np.abs(w) <= r.omega_max + 1e-6)
+        prev = np.concatenate([[0.0], v[:-1]])
+        assert np.all(np.abs(v - prev) <= r.accel * cfg.dwa.period + 1e-5)
+        # The poses follow the controls (exact arcs): consecutive positions are at most v·P apart.
+        step = np.hypot(*np.diff(ep.trajectory[:, :2], axis=0).T)
+        assert np.all(step <= v * cfg.dwa.period + 1e-4)
+        assert ep.metrics["rmse"] < 0.5 and ep.metrics["energy"] > 0
+        assert ep.metrics["path_length"] == pytest.approx(step.sum(), rel=1e-4)
+
+
+def test_same_seed_same_episode(room, static_batch):
+    again = jp.navigate_batch(room, STARTS, GOALS, pipeline="astar_kng_dwa", seeds=[0, 1])
+    np.testing.assert_array_equal(again.states, static_batch.states)
+    np.testing.assert_array_equal(again.controls, static_batch.controls)
+
+
+def test_navigate_matches_the_batch(room, static_batch):
+    ep = jp.navigate(room, STARTS[1], GOALS[1], pipeline="astar_kng_dwa")
+    want = static_batch.episode(1, 0)
+    assert ep.success and ep.reason == "goal"
+    np.testing.assert_allclose(ep.trajectory, want.trajectory, atol=1e-4)
+
+
+def test_infeasible_and_unreachable_are_results_not_errors(room):
+    # At 0.5 m per cell a one-cell aisle leaves 0.25 m to the walls: below d_safe (0.3 m).
+    free = np.ones((8, 12), bool)
+    free[0, :] = free[-1, :] = free[:, 0] = free[:, -1] = False
+    free[3, 1:10] = False
+    free[5, 1:10] = False  # row 4 is a one-cell aisle between rows 3 and 5
+    narrow = jp.grid_from_array(free, resolution=0.5)
+    ep = jp.navigate(narrow, (2, 4), (10, 6), global_planner="astar")
+    assert not ep.success and ep.reason == INFEASIBLE_START and len(ep.controls) == 0
+    box = jp.navigate(room, (2, 2), (21, 13), global_planner="astar")
+    assert not box.success and box.reason == UNREACHABLE
+    assert np.all(np.isfinite(box.trajectory))
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(start=(0, 0), goal=(5, 7)), "blocked"),
+    (dict(start=(2, 2), goal=(2, 2)), "start equals"),
+    (dict(start=(2, 2), goal=(99, 2)), "outside"),
+    (dict(start=(2, 2), goal=(5, 7), pipeline="nope"), "unknown pipeline"),
+    (dict(start=(2, 2), goal=(5, 7), local_planner="teleport"), "unknown local planner"),
+    (dict(start=(2, 2), goal=(5, 7), time_limit=-1.0), "time_limit"),
+    (dict(start=(2, 2), goal=(5, 7), config=NavConfig(goal_tolerance=float("nan"))), "goal_tolerance"),
+    (dict(start=(2, 2), goal=(5, 7), params={"heading": -1.0}), "heading"),
+])
+def test_bad_input_is_a_clear_error(room, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        jp.navigate(room, kwargs.pop("start"), kwargs.pop("goal"), **kwargs)
+
+
+def test_obstacle_starting_inside_the_robot_is_an_error(room):
+    obs = jp.moving_obstacles([[[2.6, 2.5], [8.0, 2.5]]], speeds=1.0, radii=0.25)
+    with pytest.raises(ValueError, match="starts inside robot"):
+        jp.navigate(room, (2, 2), (21, 8), global_planner="astar", obstacles=obs)
+
+
+def test_replans_around_a_disc_parked_on_the_path(room):
+    # The way from (11, 8) to (11, 2) is through the 2 m gap at x = 10..11 in row 5; a disc fills it.
+    parked = jp.moving_obstacles([[[11.0, 5.5]]], speeds=0.0, radii=0.6)
+    ep = jp.navigate(room, (11, 8), (11, 2), global_planner="astar", obstacles=parked)
+    assert ep.success and ep.collisions == 0, ep.reason
+    assert ep.metrics["replans"] >= 1
+    pos = ep.trajectory[:, :2]
+    gap = np.hypot(*(pos - [11.0, 5.5]).T).min()
+    assert gap >= 0.6 + ROBOT_R
+    # It went round a shelf end instead (x < 3 or x > 20 when crossing row 5).
+    crossing = pos[np.abs(pos[:, 1] - 5.5) < 0.5]
+    assert len(crossing) and np.all((crossing[:, 0] < 3.0) | (crossing[:, 0] > 20.0))
+
+
+def test_avoids_a_head_on_disc_in_the_open():
+    free = np.ones((12, 30), bool)
+    free[0, :] = free[-1, :] = free[:, 0] = free[:, -1] = False
+    grid = jp.grid_from_array(free, resolution=1.0)
+    route = np.array([[3.5, 6.5], [26.5, 6.5]])
+    obs = jp.head_on(route, speed=0.8, radius=0.3)
+    ep = jp.navigate(grid, (3, 6), (26, 6), global_planner="astar", obstacles=obs)
+    assert ep.success and ep.collisions == 0, ep.reason
+    d = np.hypot(*(ep.trajectory[:, None, :2] - ep.obstacle_positions).transpose(2, 0, 1)).min()
+    assert d >= 0.3 + ROBOT_R
+    assert np.abs(ep.trajectory[:, 1] - 6.5).max() > 0.3  # it stepped aside
+
+
+def test_two_robots_cross_without_touching():
+    free = np.ones((14, 14), bool)
+    free[0, :] = free[-1, :] = free[:, 0] = free[:, -1] = False
+    grid = jp.grid_from_array(free, resolution=1.0)
+    b = jp.navigate_multi(grid, [[2, 7], [7, 2]], [[12, 7], [7, 12]], global_planner="astar")
+    assert b.states.shape[2] == 2
+    assert np.all(b.success), b.reason
+    assert np.all(b.pair_collisions == 0)
+    a, c = b.states[0, 0, 0, :, :2], b.states[0, 0, 1, :, :2]
+    assert np.hypot(*(a - c).T).min() >= 2 * ROBOT_R
+
+
+def test_follow_ablation_runs_without_dwa(room):
+    ep = jp.navigate(room, STARTS[1], GOALS[1], global_planner="astar", local_planner="follow")
+    assert ep.reason in ("goal", "collision", "time limit")
+    assert ep.metrics["recoveries"] == 0
+
+
+# --- in-episode re-planning pieces ---------------------------------------------------------
+
+
+def test_distance_field_and_descent_are_exact(room):
+    free = jnp.asarray(room.free)
+    rng = np.random.default_rng(0)
+    cells = np.argwhere(np.asarray(room.free))[:, ::-1]
+    for _ in range(6):
+        s, g = cells[rng.integers(len(cells), size=2)]
+        want = jp.shortest_lengths(room, s[None], g[None])[0]
+        d = _field(free, jnp.asarray(g), jnp.asarray(True), 512)
+        got = float(d[s[1], s[0]])
+        assert (math.isinf(want) and math.isinf(got)) or got == pytest.approx(want, abs=1e-4)
+        early = _field(free, jnp.asarray(g), jnp.asarray(True), 512, jnp.asarray(s))
+        assert float(early[s[1], s[0]]) == pytest.approx(got, abs=1e-4) or math.isinf(want)
+        if math.isfinite(want):
+            path, n = _descend(d, free, jnp.asarray(s), 128)
+            path = np.asarray(path)[: int(n)]
+            moves = np.diff(path, axis=0)
+            assert np.all(np.abs(moves).max(axis=1) == 1) and np.all(np.asarray(room.free)[path[:, 1], path[:, 0]])
+            assert np.sum(np.where(np.all(moves != 0, axis=1), math.sqrt(2), 1.0)) == pytest.approx(want, abs=1e-4)
+            pts, m = _turns(jnp.asarray(np.pad(path, ((0, 129 - len(path)), (0, 0)), mode='edge')), n, 16)
+            assert np.all(np.asarray(pts)[int(m) - 1] == path[-1])
+    inactive = _field(free, jnp.asarray([2, 2]), jnp.asarray(False), 512)
+    assert np.sum(np.isfinite(np.asarray(inactive))) == 1 and float(inactive[2, 2]) == 0.0  # no sweep ran
+
+
+def test_path_blocked_sees_discs_near_the_next_metres():
+    wp = jnp.asarray([[5.0, 0.0], [5.0, 5.0], [5.0, 5.0]])
+    pos = jnp.asarray([0.0, 0.0])
+    on = path_blocked(pos, wp, 2, 0, jnp.asarray([[2.0, 0.2]]), jnp.asarray([0.5]), 3.0)
+    far = path_blocked(pos, wp, 2, 0, jnp.asarray([[5.0, 4.0]]), jnp.asarray([0.5]), 3.0)
+    beyond = path_blocked(pos, wp, 2, 0, jnp.asarray([[5.0, 4.0]]), jnp.asarray([0.5]), 20.0)
+    assert bool(on) and not bool(far) and bool(beyond)
