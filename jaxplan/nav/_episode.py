@@ -193,6 +193,9 @@ def _corner_cap(config: NavConfig, pos: jnp.ndarray, wp: jnp.ndarray, n: jnp.nda
     d_prev = jnp.sqrt(jnp.sum((wp[prev] - pos) ** 2))
     behind = jnp.sqrt(v_c ** 2 + 2.0 * decel * jnp.maximum(d_prev - config.switch_radius, 0.0))
     cap = jnp.where(turn(index), ahead, jnp.inf)
+    # The goal is a corner too: arrive slowly enough to stop within the tolerance instead of orbiting it.
+    d_goal = jnp.sqrt(jnp.sum((wp[jnp.maximum(n - 1, 0)] - pos) ** 2))
+    cap = jnp.minimum(cap, jnp.sqrt(v_c ** 2 + 2.0 * decel * jnp.maximum(d_goal - config.goal_tolerance, 0.0)))
     return jnp.minimum(cap, jnp.where((index > 0) & turn(prev), behind, jnp.inf))
 
 
@@ -271,16 +274,20 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
     rc, rr = _robot_discs(c.state, robot)  # [B, N, C, 2]
     C = rc.shape[2]
     rvel = c.state[..., 3:4] * jnp.stack([jnp.cos(c.state[..., 2]), jnp.sin(c.state[..., 2])], axis=-1)  # [B, N, 2]
-    # Discs seen by robot i: the M obstacles, then every robot's C covering discs (its own moved far away).
-    others = jnp.broadcast_to(rc.reshape(B, 1, N * C, 2), (B, N, N * C, 2))
-    own = jnp.repeat(jnp.eye(N, dtype=bool), C, axis=1)[None, :, :, None]  # [1, N, N*C, 1]
-    others = jnp.where(own, _FAR + jnp.arange(N * C, dtype=jnp.float32)[None, None, :, None] * 10.0, others)
-    ovel_r = jnp.broadcast_to(jnp.repeat(rvel, C, axis=1).reshape(B, 1, N * C, 2), (B, N, N * C, 2))
-    ovel_r = jnp.where(own, 0.0, ovel_r)
-    pos_all = jnp.concatenate([jnp.broadcast_to(opos[:, None], (B, N, M, 2)), others], axis=2)  # [B, N, D, 2]
-    vel_all = jnp.concatenate([jnp.broadcast_to(ovel[:, None], (B, N, M, 2)), ovel_r], axis=2)
-    rad_all = jnp.concatenate([jnp.broadcast_to(obs.radii[:, None], (B, N, M)),
-                               jnp.where(own[..., 0], 0.0, rr) * jnp.ones((B, N, N * C))], axis=2)
+    # Discs seen by robot i: the M obstacles, then (with N > 1) every robot's C covering discs, its own
+    # moved far away. A lone robot sees only the obstacles (no disc at all on a static map).
+    pos_all = jnp.broadcast_to(opos[:, None], (B, N, M, 2))  # [B, N, D, 2]
+    vel_all = jnp.broadcast_to(ovel[:, None], (B, N, M, 2))
+    rad_all = jnp.broadcast_to(obs.radii[:, None], (B, N, M))
+    if N > 1:
+        others = jnp.broadcast_to(rc.reshape(B, 1, N * C, 2), (B, N, N * C, 2))
+        own = jnp.repeat(jnp.eye(N, dtype=bool), C, axis=1)[None, :, :, None]  # [1, N, N*C, 1]
+        others = jnp.where(own, _FAR + jnp.arange(N * C, dtype=jnp.float32)[None, None, :, None] * 10.0, others)
+        ovel_r = jnp.broadcast_to(jnp.repeat(rvel, C, axis=1).reshape(B, 1, N * C, 2), (B, N, N * C, 2))
+        ovel_r = jnp.where(own, 0.0, ovel_r)
+        pos_all = jnp.concatenate([pos_all, others], axis=2)
+        vel_all = jnp.concatenate([vel_all, ovel_r], axis=2)
+        rad_all = jnp.concatenate([rad_all, jnp.where(own[..., 0], 0.0, rr) * jnp.ones((B, N, N * C))], axis=2)
 
     # Sub-goals.
     pos = c.state[..., :2]

@@ -186,7 +186,9 @@ class EpisodeBatch(NamedTuple):
         for k in self.METRICS:
             v = getattr(self, k).astype(float)
             m = mask & self.success if k == "time_s" else mask
-            per_seed = [np.mean(v[:, r][m[:, r]]) if m[:, r].any() else np.nan for r in range(v.shape[1])]
+            # Episodes that did not run (the global planner failed) have no executed metrics.
+            per_seed = [np.nanmean(v[:, r][m[:, r]]) if np.isfinite(v[:, r][m[:, r]]).any() else np.nan
+                        for r in range(v.shape[1])]
             per_seed = np.asarray(per_seed)
             ok = np.isfinite(per_seed)
             out[k] = (float(np.mean(per_seed[ok])) if ok.any() else math.nan,

@@ -1,0 +1,270 @@
+"""Two-level navigation: success, collisions and costs of the seeds' pipelines, multi-robot, speed.
+
+Run:  python benchmarks/bench_nav.py [--data-dir ../shared/benchmarks] [--rows 50] [--seeds 5]
+                                     [--sections maps,pipelines,multi,speed] [--quick]
+
+Robot: seed 000's (unicycle, 1.2 m/s, 2 rad/s, 0.5 m/s², radius 0.25 m, d_safe 0.3 m, control
+period 0.2 s, DWA 20 x 40 samples over 2 s) on the MovingAI maps at 1.0 m per cell: at
+seed 000's 0.5 m per cell their one-cell aisles and doors would be 0.5 m wide, which leaves
+0.25 m on each side of the robot's centre — below its own 0.3 m safety distance.
+
+Scenarios: rows of each map's scenario file with optimal length <= 80 cells, ``--rows`` of
+them spread evenly over the file, each with ``--seeds`` seeds (the global planner's seed
+and the obstacles'). A scenario whose start or goal the footprint inflated to d_safe cannot
+use, or whose goal it cannot reach, is infeasible: not run, counted apart.
+
+Sections:
+  maps       `iaco_dwa` on every map: static, and with 5 random walkers (discs of 0.25 m at
+             1.0 m/s bouncing along random routes; they do not avoid the robot). Targets:
+             static success >= 99 % of the feasible episodes with zero collisions; moving
+             success >= 97 %.
+  pipelines  every pipeline and ablation (`jaxplan.nav.pipelines()`) on the warehouse map,
+             static and moving.
+  multi      seed 001's Table 3 set-up: teams of 5 robots on the warehouse map with 5
+             random walkers at 1.0 and 1.5 m/s; contacts are counted, not stopped at.
+  speed      1,000 static `iaco_dwa` episodes on the warehouse map in one batched call
+             (global planning included), and one episode's control steps against real
+             time (target >= 1,000x), with XLA's default threads and pinned to one core.
+
+Every figure is mean ± sd over seeds of the per-seed mean over episodes (success as a
+rate; time over the successful episodes). Infeasible episodes are excluded and counted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+MAPS = ("warehouse-10-20-10-2-1", "random-32-32-20", "random-64-64-20", "room-64-64-8", "maze-32-32-2", "brc202d")
+WAREHOUSE = "warehouse-10-20-10-2-1"
+
+
+def data_dir(arg: str | None) -> Path:
+    d = Path(arg or os.environ.get("JAXPLAN_DATA", Path(__file__).resolve().parents[2] / "shared" / "benchmarks"))
+    return d / "movingai" if (d / "movingai").is_dir() else d
+
+
+def load(d: Path, name: str):
+    import jaxplan as jp
+
+    grid = jp.load_map(d / f"{name}.map", resolution=1.0)
+    scen_file = d / f"{name}.map.scen"
+    if not scen_file.exists():
+        scen_file = d / f"{name}-random-1.scen"
+    return grid, jp.load_scenarios(scen_file)
+
+
+def rows(scen, n: int, max_len: float = 80.0) -> np.ndarray:
+    ok = np.nonzero(scen.optimal <= max_len)[0]
+    return ok[np.unique(np.linspace(0, len(ok) - 1, min(n, len(ok))).round().astype(int))]
+
+
+def walkers(grid, starts, goals, n: int, speed: float):
+    """``f(scenario, seed)``: ``n`` random walkers keeping clear of that scenario's starts and goals."""
+    import jaxplan as jp
+
+    def make(e: int, seed: int):
+        avoid = (np.concatenate([np.atleast_2d(starts[e]), np.atleast_2d(goals[e])]) + 0.5) * grid.resolution
+        return jp.random_obstacles(grid, n=n, speed=speed, radius=0.25, seed=10_000 * seed + e, avoid=avoid)
+
+    return make
+
+
+def fmt(mean: float, sd: float, digits: int = 2, pct: bool = False) -> str:
+    if not np.isfinite(mean):
+        return "—"
+    if pct:
+        return f"{100 * mean:.1f} ± {100 * sd:.1f}"
+    return f"{mean:.{digits}f} ± {sd:.{digits}f}"
+
+
+HEADER = (f"{'':<28}{'runs':>6}{'infeas':>7} | {'success %':>13}{'collisions':>13}{'time s':>14}{'rmse m':>13}"
+          f"{'max κ 1/m':>13}{'energy J':>15}{'replans':>11}{'wall s':>8}")
+
+
+def row(label: str, b, wall: float) -> str:
+    s = b.summary()
+    return (f"{label:<28}{int(s['episodes'][0]):>6}{int(s['infeasible'][0]):>7} | {fmt(*s['success'], pct=True):>13}"
+            f"{fmt(*s['collisions']):>13}{fmt(*s['time_s'], 1):>14}{fmt(*s['rmse']):>13}"
+            f"{fmt(*s['max_curvature']):>13}{fmt(*s['energy'], 0):>15}{fmt(*s['replans'], 1):>11}{wall:>8.0f}")
+
+
+def run(grid, starts, goals, pipeline: str, seeds, obstacles=None):
+    import jaxplan as jp
+
+    t0 = time.perf_counter()
+    b = jp.navigate_batch(grid, starts, goals, pipeline=pipeline, seeds=seeds, obstacles=obstacles)
+    return b, time.perf_counter() - t0
+
+
+def section_maps(d: Path, args) -> None:
+    print("\n== iaco_dwa on the MovingAI maps (1.0 m per cell) ==")
+    print(HEADER)
+    seeds = list(range(args.seeds))
+    for name in args.maps:
+        grid, scen = load(d, name)
+        sel = rows(scen, args.rows)
+        S, G = scen.starts[sel], scen.goals[sel]
+        for label, obs in (("static", None), ("5 walkers at 1.0 m/s", walkers(grid, S, G, 5, 1.0))):
+            b, wall = run(grid, S, G, "iaco_dwa", seeds, obs)
+            print(row(f"{name[:16]} {label[:11]}", b, wall), flush=True)
+            if args.verbose:
+                bad = ~b.success & b.feasible
+                print("   failures:", {r: int(np.sum(b.reason[bad] == r)) for r in np.unique(b.reason[bad])})
+
+
+def section_pipelines(d: Path, args) -> None:
+    import jaxplan as jp
+
+    print(f"\n== every pipeline and ablation on {WAREHOUSE} ==")
+    grid, scen = load(d, WAREHOUSE)
+    sel = rows(scen, args.rows)
+    S, G = scen.starts[sel], scen.goals[sel]
+    seeds = list(range(args.seeds))
+    for label, obs in (("static", None), ("5 walkers at 1.0 m/s", walkers(grid, S, G, 5, 1.0))):
+        print(f"-- {label}")
+        print(HEADER)
+        for name in args.pipelines or list(jp.pipelines()):
+            b, wall = run(grid, S, G, name, seeds, obs)
+            print(row(name, b, wall), flush=True)
+
+
+def section_multi(d: Path, args) -> None:
+    import jaxplan as jp
+    from jaxplan.nav import NavConfig
+
+    print(f"\n== multi-robot (seed 001 Table 3): teams of 5 robots on {WAREHOUSE}, 5 random walkers ==")
+    grid, scen = load(d, WAREHOUSE)
+    sel = rows(scen, 10_000)
+    rng = np.random.default_rng(0)
+    teams = []
+    while len(teams) < args.teams:  # 5 rows with pairwise distinct starts and goals
+        pick = scen.starts[rng.choice(sel, 5, replace=False)], scen.goals[rng.choice(sel, 5, replace=False)]
+        cells = np.concatenate(pick)
+        if len(np.unique(cells, axis=0)) == 10:
+            teams.append(pick)
+    S = np.stack([t[0] for t in teams])
+    G = np.stack([t[1] for t in teams])
+    seeds = list(range(args.seeds))
+    cfg = NavConfig(replan=True, stop_on_collision=False)
+    print(f"{'obstacle speed':<16}{'teams':>6} | {'robot contacts':>15}{'robot-robot':>13}{'max κ 1/m':>13}"
+          f"{'time s':>13}{'energy J':>15}{'success %':>13}{'wall s':>8}")
+    for speed in (1.0, 1.5):
+        obs = walkers(grid, S.reshape(len(teams), -1, 2), G.reshape(len(teams), -1, 2), 5, speed)
+        t0 = time.perf_counter()
+        b = jp.navigate_multi(grid, S, G, pipeline="iaco_dwa", seeds=seeds, obstacles=obs, config=cfg)
+        wall = time.perf_counter() - t0
+        run_ = b.feasible.all(axis=2)  # [E, R] teams whose robots all ran
+        per_seed = lambda x: np.array([np.mean(x[:, r][run_[:, r]]) for r in range(len(seeds))])  # noqa: E731
+        contacts = per_seed(b.collisions.sum(axis=2))
+        pairs = per_seed(np.triu(b.pair_collisions, 1).sum(axis=(2, 3)))
+        kappa = per_seed(np.nanmax(b.max_curvature, axis=2))
+        t = per_seed(np.nanmean(np.where(b.success, b.time_s, np.nan), axis=2))
+        en = per_seed(np.nansum(b.energy, axis=2))
+        succ = per_seed(b.success.mean(axis=2))
+        m = lambda x, k=2: fmt(float(np.nanmean(x)), float(np.nanstd(x)), k)  # noqa: E731
+        print(f"{speed:<16.1f}{int(run_.sum()):>6} | {m(contacts):>15}{m(pairs):>13}{m(kappa):>13}{m(t, 1):>13}"
+              f"{m(en, 0):>15}{fmt(float(np.mean(succ)), float(np.std(succ)), pct=True):>13}{wall:>8.0f}", flush=True)
+    print("   robot contacts: per team, summed over its robots (a robot-robot contact counts for both);"
+          " κ: the team's largest; time: mean over arrived robots; energy: team total (EnergyModel proxy, J).")
+
+
+def measure_speed(d: Path, episodes: int) -> dict:
+    import jax
+
+    import jaxplan as jp
+    from jaxplan.nav import _front as F
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from _timing import median_time
+
+    grid, scen = load(d, WAREHOUSE)
+    ok = np.nonzero(scen.optimal <= 80)[0]
+    sel = ok[np.arange(episodes) % len(ok)]
+    out: dict = {}
+    t0 = time.perf_counter()
+    b = jp.navigate_batch(grid, scen.starts[sel], scen.goals[sel], pipeline="iaco_dwa", seeds=[0])
+    out["batch_wall"] = time.perf_counter() - t0
+    out.update(episodes=episodes, plan_s=b.plan_time_s * episodes, run_s=b.run_time_s, compile_s=b.compile_s,
+               success=float(b.success.mean()), robot_steps=int(b.steps.sum()), loop_steps=int(b.steps.max()))
+    # One episode: the compiled episode call alone, median of repeats.
+    captured = {}
+    real = F._RUN
+
+    class Spy:
+        def lower(self, *a):
+            captured["a"] = a
+            return real.lower(*a)
+
+    F._RUN = Spy()
+    one = jp.navigate_batch(grid, scen.starts[sel[:1]], scen.goals[sel[:1]], pipeline="iaco_dwa", seeds=[0])
+    F._RUN = real
+    a = captured["a"]
+    compiled = real.lower(*a).compile()
+    call = lambda: jax.block_until_ready(compiled(*a[2:]))  # noqa: E731
+    call()
+    t = median_time(call, 9)
+    steps = int(one.steps.sum())
+    out.update(single_s=t, single_steps=steps, single_sim_s=steps * one.period)
+    return out
+
+
+def section_speed(d: Path, args) -> None:
+    print(f"\n== speed: {args.episodes} static iaco_dwa episodes on {WAREHOUSE} in one call ==")
+    for label, prefix in (("XLA default threads", []), ("pinned to 1 core", ["taskset", "-c", "0"])):
+        cmd = prefix + [sys.executable, __file__, "--child-speed", str(args.episodes), "--data-dir", str(d)]
+        res = subprocess.run(cmd, capture_output=True, text=True)
+        if res.returncode != 0:
+            print(f"{label}: failed\n{res.stderr[-2000:]}")
+            continue
+        r = json.loads(res.stdout.strip().splitlines()[-1])
+        total = r["plan_s"] + r["run_s"]
+        print(f"{label}: {r['episodes']} episodes, success {100 * r['success']:.1f} %: global planning "
+              f"{r['plan_s']:.1f} s + episodes {r['run_s']:.1f} s = {1e3 * total / r['episodes']:.1f} ms per episode "
+              f"(compile {r['compile_s']:.1f} s, call with compilation {r['batch_wall']:.0f} s; "
+              f"{r['robot_steps']} robot-steps, loop ran {r['loop_steps']} steps)")
+        print(f"   one episode: {r['single_steps']} control steps ({r['single_sim_s']:.1f} s simulated) in "
+              f"{1e3 * r['single_s']:.1f} ms = {1e3 * r['single_s'] / r['single_steps']:.3f} ms per step, "
+              f"{r['single_sim_s'] / r['single_s']:.0f}x real time (target >= 1000x)", flush=True)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--data-dir", default=None, help="folder with movingai/ (default ../shared/benchmarks or $JAXPLAN_DATA)")
+    ap.add_argument("--rows", type=int, default=50)
+    ap.add_argument("--seeds", type=int, default=5)
+    ap.add_argument("--teams", type=int, default=10)
+    ap.add_argument("--episodes", type=int, default=1000)
+    ap.add_argument("--maps", default=",".join(MAPS))
+    ap.add_argument("--pipelines", default="", help="comma-separated (default: all)")
+    ap.add_argument("--sections", default="maps,pipelines,multi,speed")
+    ap.add_argument("--quick", action="store_true", help="5 rows, 2 seeds, 2 teams, 100 episodes, two maps")
+    ap.add_argument("--verbose", action="store_true", help="print failure reasons")
+    ap.add_argument("--child-speed", type=int, default=0, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    d = data_dir(args.data_dir)
+    if args.child_speed:
+        print(json.dumps(measure_speed(d, args.child_speed)))
+        return
+    if args.quick:
+        args.rows, args.seeds, args.teams, args.episodes = 5, 2, 2, 100
+        args.maps = f"{WAREHOUSE},random-32-32-20"
+    args.maps = [m for m in args.maps.split(",") if m]
+    args.pipelines = [p for p in args.pipelines.split(",") if p]
+    import jax
+
+    print(f"jax {jax.__version__} on {jax.devices()[0].platform}, {os.cpu_count()} cores; maps from {d}")
+    print(f"{args.rows} rows (optimal <= 80 cells) x {args.seeds} seeds per map")
+    for s in args.sections.split(","):
+        {"maps": section_maps, "pipelines": section_pipelines, "multi": section_multi, "speed": section_speed}[s](d, args)
+
+
+if __name__ == "__main__":
+    main()
