@@ -7,8 +7,9 @@ discs) by one control period per step:
 1. moving obstacles are placed on their routes at time ``t`` (`obstacle_state`);
 2. each robot's sub-goal is its current waypoint (switching to the next within the switch
    radius) or a look-ahead point on its waypoint polyline;
-3. with re-planning on, a robot whose next metres of path are blocked by a disc re-plans
-   on the planning map with the cells around the discs closed (`jaxplan.nav._replan`);
+3. with re-planning on, a robot whose next metres of path are blocked by a disc, or which
+   has drifted more than `NavConfig.replan_deviation` off its path, re-plans from where it
+   is on the planning map with the cells around the discs closed (`jaxplan.nav._replan`);
 4. the local planner picks the control: the DWA step (`dwa_control`, obstacles = moving
    discs predicted at constant velocity + the other robots) or pure path following;
 5. the robot moves along the exact arc (`advance`), and is checked for contact with the
@@ -127,6 +128,7 @@ class _Carry(NamedTuple):
     last_replan: jnp.ndarray  # [B, N] step of the last re-plan attempt
     origin: jnp.ndarray  # [B, N, 2] where the tracked polyline begins (start, or the position at a re-plan)
     sq_error: jnp.ndarray  # [B, N] sum of squared distances to the tracked polyline
+    error: jnp.ndarray  # [B, N] distance to the tracked polyline after the last step
     t: jnp.ndarray  # scalar step counter
 
 
@@ -250,6 +252,7 @@ def _replan(config: NavConfig, free: jnp.ndarray, resolution, c: _Carry, inputs:
     c = c._replace(
         waypoints=put(c.waypoints, pts, ok), n_wp=put(c.n_wp, m, ok), index=put(c.index, jnp.zeros_like(m), ok),
         replans=put(c.replans, take(c.replans) + 1, ok), origin=put(c.origin, take(c.state)[:, :2], ok),
+        error=put(c.error, jnp.zeros_like(m, c.error.dtype), ok),
     )
     return c, attempted
 
@@ -295,18 +298,22 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
         pos, c.waypoints, c.n_wp, c.index, config.switch_radius)
     c = c._replace(index=index)
 
-    if config.replan and (M > 0 or N > 1):
+    if config.replan:
         reach = rad_all + rr + config.block_margin
-        # Each disc at its predicted positions over the next block_horizon seconds.
-        ts = jnp.arange(int(config.block_horizon / 0.5) + 1, dtype=jnp.float32) * 0.5  # [P]
-        future = pos_all[:, :, :, None, :] + vel_all[:, :, :, None, :] * ts[:, None]  # [B, N, D, P, 2]
-        P = ts.shape[0]
-        blocked = jax.vmap(jax.vmap(path_blocked, in_axes=(0, 0, 0, 0, 0, 0, None)),
-                           in_axes=(0, 0, 0, 0, 0, 0, None))(
-            pos, c.waypoints, c.n_wp, c.index, future.reshape(B, N, -1, 2), jnp.repeat(reach, P, axis=-1),
-            config.block_distance)
+        lost = c.error > config.replan_deviation  # drifted off the path (e.g. overshot an aisle)
+        if M > 0 or N > 1:
+            # Each disc at its predicted positions over the next block_horizon seconds.
+            ts = jnp.arange(int(config.block_horizon / 0.5) + 1, dtype=jnp.float32) * 0.5  # [P]
+            future = pos_all[:, :, :, None, :] + vel_all[:, :, :, None, :] * ts[:, None]  # [B, N, D, P, 2]
+            P = ts.shape[0]
+            blocked = jax.vmap(jax.vmap(path_blocked, in_axes=(0, 0, 0, 0, 0, 0, None)),
+                               in_axes=(0, 0, 0, 0, 0, 0, None))(
+                pos, c.waypoints, c.n_wp, c.index, future.reshape(B, N, -1, 2), jnp.repeat(reach, P, axis=-1),
+                config.block_distance)
+        else:
+            blocked = jnp.zeros((B, N), bool)
         due = (c.t - c.last_replan).astype(jnp.float32) * period >= config.replan_period - 1e-6
-        need = blocked & due & ~c.done
+        need = (blocked | lost) & due & ~c.done
         c, tried = lax.cond(jnp.any(need), lambda cc: _replan(config, free, res, cc, inputs, need, pos_all, reach),
                             lambda cc: (cc, jnp.zeros_like(need)), c)
         c = c._replace(last_replan=jnp.where(tried, c.t, c.last_replan))
@@ -378,7 +385,8 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
     c = c._replace(
         state=new, done=done, reason=reason, steps=steps, hit=hit, pair_hit=pair,
         collisions=c.collisions + onset.astype(jnp.int32),
-        pair_collisions=c.pair_collisions + pair_onset.astype(jnp.int32), sq_error=sq_error, t=c.t + 1,
+        pair_collisions=c.pair_collisions + pair_onset.astype(jnp.int32), sq_error=sq_error, error=err,
+        t=c.t + 1,
     )
     return c, (new, u, recovery)
 
@@ -403,6 +411,7 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
         reason=zeros, steps=zeros, hit=jnp.zeros((B, N), bool), pair_hit=jnp.zeros((B, N, N), bool),
         collisions=zeros, pair_collisions=jnp.zeros((B, N, N), jnp.int32), replans=zeros,
         last_replan=zeros - 10**6, origin=inputs.start[..., :2], sq_error=jnp.zeros((B, N), inputs.start.dtype),
+        error=jnp.zeros((B, N), inputs.start.dtype),
         t=jnp.asarray(0, jnp.int32),
     )
     states = jnp.broadcast_to(inputs.start[None], (steps + 1, B, N, 5))

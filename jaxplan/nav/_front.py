@@ -232,7 +232,8 @@ def _config(config: NavConfig | None, pipeline: Pipeline, local_planner: str | N
     evaluator = cfg.evaluator or pipeline.evaluator
     dwa = cfg.dwa.replace(evaluator=evaluator)
     dwa = validate_config(dwa.replace(keep_rollouts=False))
-    for f in ("switch_radius", "lookahead", "goal_tolerance", "max_time", "replan_period", "block_distance",
+    for f in ("switch_radius", "lookahead", "goal_tolerance", "max_time", "replan_period", "replan_deviation",
+              "block_distance",
               "block_margin", "follow_gain"):
         v = getattr(cfg, f)
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
@@ -506,8 +507,7 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: s
       local_planner: ``"dwa"`` (default) or ``"follow"``.
       seed: the global planner's seed.
       obstacles: `MovingObstacles` (e.g. `jaxplan.random_obstacles`).
-      config: `NavConfig` (robot, DWA settings, tolerances, re-planning). Re-planning is on
-        by default when there are moving obstacles.
+      config: `NavConfig` (robot, DWA settings, tolerances, re-planning).
       params: DWA critic weights (`DWAParams` or a dict of overrides).
       time_limit: seconds (default: 60 s + 3 × the waypoint polyline's length at v_max, capped
         at ``config.max_time``).
@@ -518,7 +518,7 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: s
         starting inside the robot, unknown names, bad numbers. An infeasible or
         unreachable goal is an `Episode` with ``success=False`` and the reason.
     """
-    cfg = _default_replan(config, obstacles is not None and getattr(obstacles, "count", 0) > 0)
+    cfg = config
     b = _run(grid, np.asarray(start)[None, None], np.asarray(goal)[None, None], pipeline, global_planner,
              local_planner, [seed], obstacles, cfg, params, time_limit, overrides)
     return b.episode(0, 0, 0)
@@ -547,7 +547,7 @@ def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline:
         raise ValueError(f"starts and goals must both be [E, 2] cells, got {s.shape} and {g.shape}")
     if pipeline is not None and global_planner is not None:
         pipeline = None
-    cfg = _default_replan(config, obstacles is not None)
+    cfg = config
     return _run(grid, s[:, None], g[:, None], pipeline, global_planner, local_planner, list(seeds), obstacles, cfg,
                 params, time_limit, overrides)
 
@@ -562,7 +562,7 @@ def navigate_multi(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline:
     Each robot plans its own global path and runs its own DWA, treating the other robots
     (at their current positions and velocities) and the moving obstacles as moving discs;
     robots that arrive stay where they are. Collisions are counted per robot and per pair
-    (``pair_collisions``). Re-planning is on by default. Returns axes ``[E, R, N]``.
+    (``pair_collisions``). Returns axes ``[E, R, N]``.
     """
     s, g = np.asarray(starts), np.asarray(goals)
     if s.ndim == 2:
@@ -571,13 +571,6 @@ def navigate_multi(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline:
         raise ValueError(f"starts and goals must both be [N, 2] or [E, N, 2] cells, got {s.shape} and {g.shape}")
     if pipeline is not None and global_planner is not None:
         pipeline = None
-    cfg = _default_replan(config, True)
+    cfg = config
     return _run(grid, s, g, pipeline, global_planner, local_planner, list(seeds), obstacles, cfg, params,
                 time_limit, overrides)
-
-
-def _default_replan(config: NavConfig | None, dynamic: bool) -> NavConfig | None:
-    """Re-planning defaults to on with moving obstacles or other robots (when no config is given)."""
-    if config is None and dynamic:
-        return NavConfig(replan=True)
-    return config
