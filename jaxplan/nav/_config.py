@@ -55,9 +55,11 @@ class NavConfig:
         the cross aisles it would need (it cannot turn into a 1 m aisle at speed); measured
         on the warehouse, one of 50 short rows then drove to the map's far end.
       replan_period: at most one re-plan per robot per this many seconds (seed 000: 0.2 s).
-      block_distance: how far along the remaining path a disc is looked for.
+      block_distance: how far along the remaining path a disc is looked for (6 m: a walker
+        closing head-on in a 1 m aisle must be seen while the robot can still turn round).
       block_horizon: a disc blocks the path if it comes near it within this many seconds,
-        predicted at constant velocity (sampled every 0.5 s).
+        predicted at constant velocity (sampled every 0.5 s); re-planning closes the cells
+        around those predicted positions too.
       block_margin: extra distance beyond the two radii within which a disc blocks the path
         and within which cells around it are closed when re-planning.
       replan_sweeps: bound on the distance field's relaxation sweeps (static).
@@ -92,8 +94,8 @@ class NavConfig:
     replan: bool = dataclasses.field(default=True, metadata=dict(static=True))
     replan_deviation: float = 1.0
     replan_period: float = 0.2
-    block_distance: float = 3.0
-    block_horizon: float = dataclasses.field(default=2.0, metadata=dict(static=True))
+    block_distance: float = 6.0
+    block_horizon: float = dataclasses.field(default=3.0, metadata=dict(static=True))
     block_margin: float = 0.1
     replan_sweeps: int = dataclasses.field(default=512, metadata=dict(static=True))
     replan_cells: int = dataclasses.field(default=256, metadata=dict(static=True))

@@ -312,9 +312,11 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
                 config.block_distance)
         else:
             blocked = jnp.zeros((B, N), bool)
+            future, P = pos_all[:, :, :, None, :], 1
         due = (c.t - c.last_replan).astype(jnp.float32) * period >= config.replan_period - 1e-6
         need = (blocked | lost) & due & ~c.done
-        c, tried = lax.cond(jnp.any(need), lambda cc: _replan(config, free, res, cc, inputs, need, pos_all, reach),
+        closing = future.reshape(B, N, -1, 2), jnp.repeat(reach, P, axis=-1)
+        c, tried = lax.cond(jnp.any(need), lambda cc: _replan(config, free, res, cc, inputs, need, *closing),
                             lambda cc: (cc, jnp.zeros_like(need)), c)
         c = c._replace(last_replan=jnp.where(tried, c.t, c.last_replan))
 

@@ -261,8 +261,11 @@ def _obstacle_sets(obstacles: Any, E: int, R: int, seeds: list[int]) -> list[lis
     return [list(row) for row in sets]
 
 
+_STATE = jax.jit(obstacle_state)  # one compiled call per obstacle-set shape, not an op-by-op dispatch
+
+
 def _check_obstacle_starts(obs: MovingObstacles, start_xy: np.ndarray, radius: float, where: str) -> None:
-    pos, _ = obstacle_state(obs, 0.0)
+    pos, _ = _STATE(obs, 0.0)
     pos, rad = np.asarray(pos), np.asarray(obs.radii)
     for i, p in enumerate(start_xy):
         gap = np.hypot(*(pos - p).T) - rad - radius
