@@ -1,4 +1,4 @@
-"""Command line: ``jaxplan demo | plan``.
+"""Command line: ``jaxplan demo | plan | run``.
 
 Subcommands for experiments, tuning, figures and benchmarks join as they are built.
 """
@@ -86,6 +86,25 @@ def cmd_plan(args: argparse.Namespace) -> int:
     return 0 if res.success else 1
 
 
+def cmd_run(args: argparse.Namespace) -> int:
+    """``jaxplan run CONFIG``: validate the whole config, then run (or resume) it; exit 2 listing every problem."""
+    from jaxplan.experiments.config import ConfigError
+    from jaxplan.experiments.runner import RunFolderError, run_experiment
+
+    try:
+        run_dir = run_experiment(args.config, args.out, quick=args.quick, data_dir=args.data_dir,
+                                 progress=not args.no_progress, chunk=args.chunk)
+    except ConfigError as e:
+        print(f"jaxplan: error: invalid config {e}", file=sys.stderr)
+        return 2
+    except RunFolderError as e:
+        print(f"jaxplan: error: {e}", file=sys.stderr)
+        return 2
+    print((run_dir / "summary.md").read_text())
+    print(f"wrote {run_dir}/ (trials.csv, summary.csv, summary.md, report.md)")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="jaxplan", description="Grid path planning for warehouse robots, in JAX.")
     sub = p.add_subparsers(dest="command", required=True)
@@ -101,6 +120,16 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--connectivity", type=int, default=8, choices=(4, 8, 16))
     q.add_argument("--resolution", type=float, default=1.0, help="metres per cell")
     q.set_defaults(func=cmd_plan)
+    r = sub.add_parser("run", help="run (or resume) the experiment of a TOML config; writes OUT/NAME/")
+    r.add_argument("config", help="experiment config (TOML; schema: jaxplan.experiments.config)")
+    r.add_argument("--quick", action="store_true", help="apply the config's [experiment.quick] changes (a smoke run, "
+                                                        "written to OUT/NAME-quick/)")
+    r.add_argument("--out", default="runs", help="parent folder of the run folder (default: runs)")
+    r.add_argument("--data-dir", default=None, help="folder that map paths are relative to (default: $JAXPLAN_DATA "
+                                                    "or ../shared/benchmarks)")
+    r.add_argument("--chunk", type=int, default=None, help="scenarios per compiled call (default: the config's)")
+    r.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
+    r.set_defaults(func=cmd_run)
     return p
 
 

@@ -1,0 +1,171 @@
+"""Markdown for a run: the summary tables (summary.md) and the one-page report (report.md).
+
+Pure functions from an `Analysis` (and the config, work plan and meta) to text. The
+paper's numbers sit in their own columns headed "paper", never in ours.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+from jaxplan.experiments.config import METRICS, ExperimentConfig
+from jaxplan.experiments.stats import PER_CHUNK, PER_SEED, Analysis, SummaryRow
+
+if TYPE_CHECKING:  # pragma: no cover
+    from jaxplan.experiments.runner import Prepared
+
+__all__ = ["summary_markdown", "report_markdown", "fmt"]
+
+
+def fmt(x: float | None, digits: int = 4) -> str:
+    """A number for a table: 4 significant digits, ``–`` for missing."""
+    if x is None or (isinstance(x, float) and math.isnan(x)):
+        return "–"
+    if isinstance(x, float) and math.isinf(x):
+        return "∞" if x > 0 else "−∞"
+    return f"{x:.{digits}g}"
+
+
+def _pm(mean: float, sd: float) -> str:
+    return fmt(mean) if (sd is None or math.isnan(sd)) and not math.isnan(mean) else f"{fmt(mean)} ± {fmt(sd)}"
+
+
+def _table(head: list[str], rows: list[list[str]], text: int = 1) -> str:
+    """A Markdown table; the first ``text`` columns left-aligned, numbers right-aligned."""
+    align = ["---"] * text + ["---:"] * (len(head) - text)
+    lines = ["| " + " | ".join(head) + " |", "| " + " | ".join(align) + " |"]
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def _label(metric: str) -> str:
+    u = METRICS[metric].unit
+    return f"{metric} ({u})" if u else metric
+
+
+def _map_table(a: Analysis, cfg: ExperimentConfig, map_: str) -> str:
+    rows_by = {(r.planner, r.metric): r for r in a.summary if r.map == map_}
+    metrics = [m for m in cfg.metrics if any((pc.label, m) in rows_by for pc in cfg.planners)]
+    with_paper = {m for m in metrics if any(r.paper_mean is not None for (p, mm), r in rows_by.items() if mm == m)}
+    head = ["planner"]
+    for m in metrics:
+        head.append(_label(m))
+        if m in with_paper:
+            head.append(f"paper: {m}")
+    body = []
+    for pc in cfg.planners:
+        row = [pc.label]
+        for m in metrics:
+            r: SummaryRow | None = rows_by.get((pc.label, m))
+            row.append("n/a" if r is None else _pm(r.mean, r.sd))
+            if m in with_paper:
+                row.append("" if r is None or r.paper_mean is None else _pm(r.paper_mean, r.paper_sd if r.paper_sd
+                                                                            is not None else math.nan))
+        body.append(row)
+    return _table(head, body)
+
+
+def _tests_markdown(a: Analysis, cfg: ExperimentConfig) -> str:
+    if not a.tests:
+        return ""
+    alpha = cfg.stats.alpha
+    out = [f"### Significance (per-seed means as samples; * marks p < {alpha:g})", ""]
+    anova = [t for t in a.tests if t.test == "anova"]
+    if anova:
+        out += ["One-way ANOVA across planners:", "",
+                _table(["map", "metric", "F", "p", "groups"], text=2, rows=
+                       [[t.map, t.metric, fmt(t.statistic), fmt(t.p_value, 3) + (" *" if t.p_value < alpha else ""),
+                         str(t.n_b)] for t in anova]), ""]
+    pairs = [t for t in a.tests if t.test == "welch_t"]
+    if pairs:
+        adj = "Holm-adjusted p" if cfg.stats.correction == "holm" else "p (unadjusted)"
+        out += ["Pairwise Welch t-tests:", "",
+                _table(["map", "metric", "A", "B", "t", "p", adj], text=4, rows=
+                       [[t.map, t.metric, t.planner_a, t.planner_b, fmt(t.statistic), fmt(t.p_value, 3),
+                         fmt(t.p_adjusted, 3) + (" *" if t.p_adjusted < alpha else "")] for t in pairs]), ""]
+    return "\n".join(out)
+
+
+def summary_markdown(a: Analysis, cfg: ExperimentConfig) -> str:
+    """summary.md: per map, planners × metrics as mean ± sd; the paper's values in "paper:" columns; tests."""
+    R = len(a.seeds)
+    out = [f"# {cfg.name}: summary", "",
+           f"Each cell: {PER_SEED}, over {R} seed{'s' if R != 1 else ''}; wall-clock times: {PER_CHUNK}. "
+           "Columns headed \"paper:\" are the numbers the paper reports"
+           + (f" ({cfg.paper_source})" if cfg.paper_source else "") + ", not ours.", ""]
+    for mp in cfg.maps:
+        out += [f"## {mp.name}", "", _map_table(a, cfg, mp.name), ""]
+        bad = {p: n for (m, p), n in a.infeasible.items() if m == mp.name and n}
+        if bad:
+            out += ["Infeasible navigation trials left out (the robot does not fit): "
+                    + ", ".join(f"{p} {n}" for p, n in bad.items()), ""]
+    tests = _tests_markdown(a, cfg)
+    if tests:
+        out += [tests]
+    return "\n".join(out).rstrip() + "\n"
+
+
+def _overrides(d) -> str:
+    return ", ".join(f"{k}={v}" for k, v in d.items()) or "defaults"
+
+
+def report_markdown(a: Analysis, cfg: ExperimentConfig, prep: "Prepared", meta: dict[str, Any]) -> str:
+    """report.md: what ran (versions, maps, scenarios, planners, seeds), how it is summarised, the tables."""
+    R = len(cfg.seeds)
+    seeds = f"{R} ({cfg.seeds[0]}..{cfg.seeds[-1]})" if list(cfg.seeds) == list(
+        range(cfg.seeds[0], cfg.seeds[0] + R)) else f"{R} ({', '.join(map(str, cfg.seeds))})"
+    out = [f"# Experiment {cfg.name}" + (" (quick)" if cfg.is_quick else ""), ""]
+    if cfg.description:
+        out += [cfg.description, ""]
+    out += ["## Run", "",
+            f"- jaxplan {meta.get('jaxplan_version')} (git {meta.get('git_revision') or 'unknown'}), "
+            f"jax {meta.get('jax_version')}, numpy {meta.get('numpy_version')}, scipy {meta.get('scipy_version')}, "
+            f"Python {meta.get('python')}",
+            f"- devices: {', '.join(meta.get('devices', []))}",
+            f"- started {meta.get('started')}; sessions: {len(meta.get('sessions', []))} "
+            "(more than one: the run was resumed from its checkpoints)",
+            f"- seeds: {seeds}; chunk: {cfg.chunk} scenarios per compiled call; trials: {prep.trials}", "",
+            "## Setup", "", "Maps and scenarios:", ""]
+    for mw in prep.maps:
+        s = mw.spec
+        src = (f"{s.path.name}" if s.path is not None else f"generator {s.generator}({_overrides(s.params)}), "
+                                                             f"seed {s.seed}")
+        sc = s.scenarios
+        how = {"scen": f"rows of {s.scen.name if s.scen else '?'} ({sc.spread})", "random":
+               f"random connected pairs (seed {sc.seed}, >= {sc.min_distance:g} m apart)",
+               "scene": "the generator's start and goal"}[sc.source]
+        H, W = mw.grid.shape
+        out.append(f"- **{s.name}**: {src}, {W}x{H} cells at {s.resolution:g} m; {len(mw.starts)} scenarios: {how}")
+    out += ["", "Planners:", ""]
+    for pc in cfg.planners:
+        extra = ""
+        if pc.kind == "navigate":
+            parts = [f"{k}: {_overrides(getattr(pc, k))}" for k in ("nav", "dwa", "robot", "params")
+                     if getattr(pc, k)]
+            if pc.obstacles is not None and pc.obstacles.n:
+                o = pc.obstacles
+                parts.append(f"{o.n} moving discs ({o.speed:g} m/s, r {o.radius:g} m)")
+            extra = ("; " + "; ".join(parts)) if parts else ""
+        out.append(f"- **{pc.label}**: {pc.kind} `{pc.name}` ({_overrides(pc.overrides)}){extra}")
+    out += ["", "## How to read the tables", "",
+            f"For each map, planner and metric, the trials of one seed (one per scenario) are averaged first; "
+            f"the table gives the mean and the sample standard deviation (ddof=1) of these {R} per-seed means — "
+            "the spread to expect from new seeds on the same scenarios. A metric is averaged over the trials "
+            "where it is defined: a failed plan has no length (see `success`), infeasible navigation trials "
+            "(the inflated footprint does not fit) are left out, arrival time counts successful trials only. "
+            "Wall-clock times are measured per batched call and divided by its trials (mean ± sd over chunks); "
+            "they are in timings.csv, not in trials.csv, which is reproducible byte for byte.", ""]
+    body = summary_markdown(a, cfg)
+    out += [body[body.index("\n## "):].lstrip("\n")]  # the tables, without summary.md's title and preamble
+    if cfg.figures:
+        out += ["## Figures (configured; drawn by `jaxplan figures`)", ""]
+        out += [f"- {f.name}: {f.kind} ({_overrides(f.params)})" for f in cfg.figures]
+        out += [""]
+    out += ["## Files", "",
+            "- `trials.csv`: one row per (map, planner, scenario, seed)",
+            "- `summary.csv`, `summary.md`: the tables above; `significance.csv`: the tests",
+            "- `timings.csv`: compile and run time per chunk",
+            "- `checkpoints/`: manifest, per-chunk rows and arrays (orbax: convergence histories, paths, "
+            "trajectories; `jaxplan.experiments.runner.load_chunk_arrays`)", ""]
+    return "\n".join(out)

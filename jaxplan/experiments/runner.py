@@ -1,0 +1,673 @@
+"""`run_experiment`: a config's trials as batched, checkpointed, resumable work.
+
+Work plan. Maps are loaded (or generated) and their scenarios chosen first; then the
+trials are cut into *chunks*: one chunk is one map × one planner × up to ``chunk``
+consecutive scenarios × every seed, and runs as ONE compiled call (`jaxplan.plan_batch`
+or `jaxplan.navigate_batch`, seeds on the second batch axis — never a Python loop over
+seeds). Chunks run in a fixed order (map, planner, scenarios), so the trials file has
+rows ordered by (map, planner, scenario, seed). The last chunk of a (map, planner) is
+padded to the full chunk size with copies of its last scenario (rows dropped after the
+call): every chunk then has the same shapes and the program compiles once.
+
+Run folder ``OUT/NAME/`` (``OUT/NAME-quick/`` with ``quick=True``, so a smoke run never
+mixes with the real one)::
+
+    config.toml          the config file, verbatim
+    meta.json            versions (jaxplan, jax, numpy, scipy, python), git revision, devices, session start times
+    trials.csv           one row per (map, planner, scenario, seed); deterministic (see below)
+    timings.csv          wall-clock times per chunk (compile and run); NOT reproducible, hence apart
+    summary.csv/.md      mean ± sd per map × planner × metric, the paper's numbers in `paper_*` columns
+    significance.csv     ANOVA and pairwise Welch t-tests, if the config asks
+    report.md            the whole run in one page
+    checkpoints/manifest.json       the commit log of finished chunks
+    checkpoints/chunks/ID.csv       each finished chunk's rows
+    checkpoints/arrays/ID/          each chunk's arrays (orbax): convergence histories, paths, trajectories
+
+Checkpoints and resume. A finished chunk is committed in three steps: its rows are
+written to ``chunks/ID.csv`` (temporary file, fsync, `os.replace`), its arrays saved
+with orbax, and only then is its entry added to ``manifest.json`` (again written to a
+temporary file and renamed). The manifest is the single commit point: a process killed
+at any instant (SIGKILL included) leaves at worst a chunk that is not in the manifest,
+which the next run recomputes and overwrites. Restarting with the same config skips
+every chunk in the manifest; ``trials.csv`` is the header plus the chunk files in chunk
+order, so it comes out byte-identical to an uninterrupted run's. The manifest holds a
+fingerprint of everything that shapes the trials (seeds, chunk size, maps and their
+files' SHA-256, scenarios, planners, metrics): a folder written by a different
+experiment is refused rather than silently mixed. Each manifest entry records the
+session (1 for the first invocation, 2 for the first restart, …) that computed it.
+
+Reproducibility. Floats are written with Python's ``repr`` (shortest round-trip text),
+integers as integers, and undefined values (a failed plan's length, an infeasible
+episode's metrics) as ``nan``; wall-clock times never enter trials.csv.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import datetime as _dt
+import hashlib
+import io
+import json
+import math
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Iterator, Mapping, Sequence
+
+import numpy as np
+
+from jaxplan.experiments.config import (
+    METRICS, ConfigError, ExperimentConfig, MapSpec, PlannerConfig, apply_quick, load_config, nav_config,
+)
+
+__all__ = ["run_experiment", "prepare", "Prepared", "MapWork", "Unit", "trial_columns", "read_manifest",
+           "load_chunk_arrays", "RunFolderError", "ID_COLUMNS"]
+
+ID_COLUMNS = ("map", "planner", "kind", "scenario", "scen_row", "start_x", "start_y", "goal_x", "goal_y", "optimal",
+              "seed")
+"""The identifying columns of trials.csv, before the metric columns (``optimal``: exact octile optimum, m;
+``scenario``: index among the map's chosen scenarios; ``scen_row``: row in the .scen file, −1 if generated)."""
+
+MANIFEST_VERSION = 1
+
+
+class RunFolderError(ValueError):
+    """The run folder holds a different experiment (or a damaged manifest)."""
+
+
+# ---------------------------------------------------------------------------------------------
+# The work plan
+
+
+@dataclass(frozen=True)
+class MapWork:
+    """A loaded map and its chosen scenarios.
+
+    Attributes:
+      spec: the config entry.
+      grid: the `GridMap`.
+      starts, goals: ``int64[S, 2]`` cells.
+      optimal: ``f64[S]`` exact 8-connected octile optimum (m).
+      rows: ``int64[S]`` row of each scenario in the .scen file (−1 when generated).
+      digest: SHA-256 of the map (and scenario) file bytes, or of the generated grid.
+    """
+
+    spec: MapSpec
+    grid: Any
+    starts: np.ndarray
+    goals: np.ndarray
+    optimal: np.ndarray
+    rows: np.ndarray
+    digest: str
+
+
+@dataclass(frozen=True)
+class Unit:
+    """One chunk: map ``m`` × planner ``p`` × scenarios ``lo:hi`` × every seed (``uid`` sorts in run order)."""
+
+    index: int
+    uid: str
+    m: int
+    p: int
+    lo: int
+    hi: int
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """The resolved config, its loaded maps and the chunks in run order."""
+
+    config: ExperimentConfig
+    maps: tuple[MapWork, ...]
+    units: tuple[Unit, ...]
+
+    @property
+    def trials(self) -> int:
+        return sum((u.hi - u.lo) * len(self.config.seeds) for u in self.units)
+
+
+def _sha(*chunks: bytes) -> str:
+    h = hashlib.sha256()
+    for c in chunks:
+        h.update(c)
+    return h.hexdigest()
+
+
+def _load_map(spec: MapSpec):
+    """(grid, default start, default goal, digest) of a map entry."""
+    import jaxplan as jp
+    from jaxplan.experiments.config import _generators
+
+    if spec.path is not None:
+        grid = jp.load_map(spec.path, resolution=spec.resolution)
+        extra = spec.scen.read_bytes() if (spec.scen is not None and spec.scenarios.source == "scen") else b""
+        return grid, None, None, _sha(spec.path.read_bytes(), extra)
+    factory, is_dc = _generators()[spec.generator]
+    params = {k: tuple(v) if isinstance(v, (list, tuple)) else v for k, v in spec.params.items()}
+    if is_dc:
+        scene = factory(**params, resolution=spec.resolution)(spec.seed)
+    elif spec.generator == "demo_warehouse":
+        scene = factory()
+    else:
+        scene = factory(spec.seed, **params)
+    grid = scene.grid if scene.grid.resolution == spec.resolution else scene.grid._replace(resolution=spec.resolution)
+    arrays = [np.ascontiguousarray(a).tobytes() for a in (grid.free, grid.height, grid.clearance_height, grid.risk,
+                                                            grid.turn_rule)]
+    return grid, np.asarray(scene.start), np.asarray(scene.goal), _sha(*arrays, repr(grid.resolution).encode())
+
+
+def _choose(n: int, count: int | None, spread: str, seed: int) -> np.ndarray:
+    """Indices of ``count`` of ``n`` filtered rows, in file order."""
+    if count is None or count >= n:
+        return np.arange(n)
+    if spread == "first":
+        return np.arange(count)
+    if spread == "even":
+        return np.unique(np.round(np.linspace(0, n - 1, count)).astype(np.int64))
+    return np.sort(np.random.default_rng(seed).choice(n, size=count, replace=False))
+
+
+def _random_pairs(grid, count: int, seed: int, min_distance: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``count`` connected (start, goal) pairs of free cells at least ``min_distance`` m apart (straight line)."""
+    from jaxplan.search import shortest_lengths
+
+    free = np.argwhere(np.asarray(grid.free))[:, ::-1]  # (x, y)
+    if len(free) < 2:
+        raise ValueError("the map has fewer than two free cells")
+    rng = np.random.default_rng(seed)
+    S, G, L = [], [], []
+    for _ in range(50):
+        k = 4 * count
+        a, b = free[rng.integers(len(free), size=k)], free[rng.integers(len(free), size=k)]
+        d = np.hypot(*(a - b).T) * grid.resolution
+        keep = (d >= max(min_distance, 1e-9))
+        a, b = a[keep], b[keep]
+        if len(a):
+            lens = shortest_lengths(grid, a, b)
+            ok = np.isfinite(lens)
+            S += list(a[ok])
+            G += list(b[ok])
+            L += list(lens[ok])
+        if len(S) >= count:
+            break
+    if len(S) < count:
+        raise ValueError(f"found only {len(S)} of {count} connected start-goal pairs at least {min_distance} m apart")
+    return np.asarray(S[:count], np.int64), np.asarray(G[:count], np.int64), np.asarray(L[:count], np.float64)
+
+
+def _scenarios(spec: MapSpec, grid, start0, goal0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(starts, goals, optimal m, scen rows) of a map, as its `ScenarioSpec` asks."""
+    import jaxplan as jp
+    from jaxplan.search import shortest_lengths
+
+    sc = spec.scenarios
+    if sc.source == "scene":
+        s, g = start0[None].astype(np.int64), goal0[None].astype(np.int64)
+        opt = shortest_lengths(grid, s, g)
+        if not np.isfinite(opt[0]):
+            raise ValueError("the generator's start and goal are not connected")
+        return s, g, opt, np.full(1, -1, np.int64)
+    if sc.source == "random":
+        s, g, opt = _random_pairs(grid, sc.count or 10, sc.seed, sc.min_distance)
+        return s, g, opt, np.full(len(s), -1, np.int64)
+    scen = jp.load_scenarios(spec.scen, grid=grid)
+    keep = np.ones(len(scen.starts), bool)
+    opt_file = np.asarray(scen.optimal, np.float64) * spec.resolution
+    if sc.min_bucket is not None:
+        keep &= scen.buckets >= sc.min_bucket
+    if sc.max_bucket is not None:
+        keep &= scen.buckets <= sc.max_bucket
+    if sc.min_optimal is not None:
+        keep &= opt_file >= sc.min_optimal
+    if sc.max_optimal is not None:
+        keep &= opt_file <= sc.max_optimal
+    keep &= np.any(scen.starts != scen.goals, axis=1)
+    rows = np.flatnonzero(keep)
+    if rows.size == 0:
+        raise ValueError(f"no scenario row of {spec.scen.name} passes the bucket/optimal filters")
+    rows = rows[_choose(rows.size, sc.count, sc.spread, sc.seed)]
+    s, g = scen.starts[rows].astype(np.int64), scen.goals[rows].astype(np.int64)
+    return s, g, shortest_lengths(grid, s, g), rows.astype(np.int64)
+
+
+def prepare(cfg: ExperimentConfig) -> Prepared:
+    """Loads every map, chooses every scenario and cuts the chunks — before any planning.
+
+    Raises:
+      ConfigError: problems only visible with the data (an empty scenario filter,
+        scenario rows that do not fit the map, too few connected random pairs), all at once.
+    """
+    problems, maps = [], []
+    for i, spec in enumerate(cfg.maps):
+        try:
+            grid, s0, g0, digest = _load_map(spec)
+            s, g, opt, rows = _scenarios(spec, grid, s0, g0)
+        except (ValueError, FileNotFoundError) as e:
+            problems.append(f"maps[{i}] ({spec.name}): {e}")
+            continue
+        maps.append(MapWork(spec, grid, s, g, np.asarray(opt, np.float64), rows, digest))
+    if problems:
+        raise ConfigError(problems, str(cfg.path or cfg.name))
+    units, k = [], 0
+    for mi, mw in enumerate(maps):
+        for pi in range(len(cfg.planners)):
+            for ci, lo in enumerate(range(0, len(mw.starts), cfg.chunk)):
+                hi = min(lo + cfg.chunk, len(mw.starts))
+                units.append(Unit(k, f"{k:05d}-m{mi}-p{pi}-c{ci}", mi, pi, lo, hi))
+                k += 1
+    return Prepared(cfg, tuple(maps), tuple(units))
+
+
+def trial_columns(cfg: ExperimentConfig) -> tuple[str, ...]:
+    """The header of trials.csv: `ID_COLUMNS`, ``success`` (always), the configured non-timing metrics, and
+    ``reason`` with navigation."""
+    metrics = ("success",) + tuple(m for m in cfg.metrics if not METRICS[m].timing and m != "success")
+    return ID_COLUMNS + metrics + (("reason",) if "navigate" in cfg.kinds else ())
+
+
+def _plain(x: Any) -> Any:
+    """JSON-able form of config values (for the fingerprint)."""
+    if dataclasses.is_dataclass(x):
+        return {f.name: _plain(getattr(x, f.name)) for f in dataclasses.fields(x)}
+    if isinstance(x, Mapping):
+        return {str(k): _plain(v) for k, v in sorted(x.items())}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    if isinstance(x, Path):
+        return x.name
+    if isinstance(x, float) and not math.isfinite(x):
+        return repr(x)
+    return x
+
+
+def fingerprint(prep: Prepared) -> str:
+    """SHA-256 of everything that shapes trials.csv (not stats, figures or paper numbers)."""
+    cfg = prep.config
+    doc = {
+        "seeds": list(cfg.seeds), "chunk": cfg.chunk, "columns": list(trial_columns(cfg)),
+        "maps": [{"spec": _plain(m.spec), "digest": m.digest} for m in prep.maps],
+        "planners": _plain(cfg.planners), "quick": cfg.is_quick,
+    }
+    return _sha(json.dumps(doc, sort_keys=True).encode())
+
+
+# ---------------------------------------------------------------------------------------------
+# Running one chunk
+
+
+def _fmt(v: Any) -> str:
+    """The fixed text of a value: ``repr`` of a float (nan for undefined), an integer as an integer."""
+    if isinstance(v, (bool, np.bool_)):
+        return "1" if v else "0"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    if isinstance(v, (float, np.floating)):
+        f = float(v)
+        return "nan" if math.isnan(f) else repr(f)
+    return str(v)
+
+
+def _pad(idx: np.ndarray, size: int) -> np.ndarray:
+    return np.concatenate([idx, np.full(size - len(idx), idx[-1])]) if len(idx) < size else idx
+
+
+_PATH_KEYS = ("length", "optimality_gap", "turns", "sharp_turns", "smoothness", "min_clearance", "mean_clearance",
+              "max_curvature")
+_INT_METRICS = ("turns", "sharp_turns", "converged_iteration", "collisions", "recoveries", "replans")
+
+
+def _run_plan(mw: MapWork, pc: PlannerConfig, idx: np.ndarray, seeds: tuple[int, ...], chunk: int,
+              metrics: Sequence[str]) -> tuple[dict, dict, dict]:
+    """Metric arrays ``[n, R]``, arrays to keep, and timings of one plan chunk (one `plan_batch` call)."""
+    import jaxplan as jp
+    from jaxplan.aco._planners import COLONIES
+
+    batched = pc.name in COLONIES
+    run_idx = _pad(idx, chunk) if batched else idx  # equal shapes: one compilation per (map, planner)
+    overrides = {k: tuple(v) if isinstance(v, tuple) else v for k, v in pc.overrides.items()}
+    br = jp.plan_batch(mw.grid, mw.starts[run_idx], mw.goals[run_idx], planner=pc.name, seeds=seeds, **overrides)
+    n, R = len(idx), len(seeds)
+    ok = br.success[:n]
+    out: dict[str, np.ndarray] = {"success": ok.astype(np.int64)}
+    if any(m in _PATH_KEYS for m in metrics):
+        P = br.paths.shape[2]
+        pm = jp.path_metrics(br.paths[:n].reshape(n * R, P, 2), mw.grid, optimal=np.repeat(mw.optimal[idx], R),
+                             n=br.n_cells[:n].reshape(-1))
+        for k in _PATH_KEYS:
+            if k in metrics:
+                v = np.asarray(pm[k], np.float64).reshape(n, R)
+                out[k] = np.where(ok, v, np.nan)
+    if "cost" in metrics:
+        out["cost"] = np.where(ok, br.cost[:n], np.nan)
+    if "converged_iteration" in metrics:
+        out["converged_iteration"] = np.where(ok, br.converged[:n].astype(np.float64), np.nan)
+    keep = {"history": br.history[:n].astype(np.float32), "diversity": br.diversity[:n].astype(np.float32),
+            "successes": br.successes[:n].astype(np.int32), "paths": br.paths[:n].astype(np.int32),
+            "n_cells": br.n_cells[:n].astype(np.int32), "success": ok}
+    trials = len(run_idx) * R
+    timing = {"compile_s": float(br.compile_s), "time_s": float(br.time_s), "plan_time_s": float(br.time_s) / trials}
+    return out, keep, timing
+
+
+def _obstacle_fn(mw: MapWork, m: int, pc: PlannerConfig, run_idx: np.ndarray) -> Callable | None:
+    """``f(e, seed) -> MovingObstacles``: every (scenario, seed) trial draws its own discs, reproducibly."""
+    o = pc.obstacles
+    if o is None or o.n == 0:
+        return None
+    import jaxplan as jp
+
+    res = float(mw.grid.resolution)
+
+    def fn(e: int, seed: int):
+        sc = int(run_idx[e])
+        s = int(np.random.SeedSequence([o.seed, m, sc, int(seed)]).generate_state(1)[0])
+        avoid = (np.stack([mw.starts[sc], mw.goals[sc]]) + 0.5) * res
+        return jp.random_obstacles(mw.grid, n=o.n, speed=o.speed, radius=o.radius, seed=s, waypoints=o.waypoints,
+                                   avoid=avoid, avoid_radius=o.avoid_radius, loop=o.loop)
+
+    return fn
+
+
+_NAV_KEYS = ("success", "collisions", "time_s", "rmse", "max_curvature", "energy", "path_length", "recoveries",
+             "replans")
+
+
+def _run_navigate(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, seeds: tuple[int, ...], chunk: int,
+                  metrics: Sequence[str]) -> tuple[dict, dict, dict]:
+    """Metric arrays ``[n, R]`` (and ``reason``), arrays to keep, and timings of one `navigate_batch` call."""
+    import jaxplan as jp
+
+    run_idx = _pad(idx, chunk)
+    cfg, weights = nav_config(pc)
+    overrides = {k: tuple(v) if isinstance(v, tuple) else v for k, v in pc.overrides.items()}
+    eb = jp.navigate_batch(mw.grid, mw.starts[run_idx], mw.goals[run_idx], pipeline=pc.name, seeds=list(seeds),
+                           obstacles=_obstacle_fn(mw, m, pc, run_idx), config=cfg, params=weights or None,
+                           **overrides)
+    n = len(idx)
+    out: dict[str, np.ndarray] = {}
+    for k in _NAV_KEYS:
+        if k in metrics:
+            v = getattr(eb, k)[:n, :, 0]
+            out[k] = v.astype(np.int64) if k in ("success", "collisions", "recoveries", "replans") else \
+                np.asarray(v, np.float64)
+    out["reason"] = eb.reason[:n, :, 0]
+    T = int(eb.steps[:n].max()) + 1
+    keep = {"positions": eb.states[:n, :, 0, :T, :2].astype(np.float32), "steps": eb.steps[:n, :, 0].astype(np.int32),
+            "plans": eb.plans[:n, :, 0].astype(np.float32), "n_plan": eb.n_plan[:n, :, 0].astype(np.int32),
+            "success": eb.success[:n, :, 0]}
+    timing = {"compile_s": float(eb.compile_s), "time_s": float(eb.run_time_s), "plan_time_s": float(eb.plan_time_s),
+              "step_time_s": float(eb.step_time_s)}
+    return out, keep, timing
+
+
+def _rows(prep: Prepared, u: Unit, values: dict) -> str:
+    """The CSV text (no header) of a chunk's trials, scenario-major then seed."""
+    cfg = prep.config
+    mw, pc = prep.maps[u.m], cfg.planners[u.p]
+    cols = trial_columns(cfg)
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    for i, sc in enumerate(range(u.lo, u.hi)):
+        for r, seed in enumerate(cfg.seeds):
+            row = {"map": mw.spec.name, "planner": pc.label, "kind": pc.kind, "scenario": sc,
+                   "scen_row": int(mw.rows[sc]), "start_x": int(mw.starts[sc, 0]), "start_y": int(mw.starts[sc, 1]),
+                   "goal_x": int(mw.goals[sc, 0]), "goal_y": int(mw.goals[sc, 1]),
+                   "optimal": float(mw.optimal[sc]), "seed": seed}
+            for c in cols[len(ID_COLUMNS):]:
+                if c == "reason":
+                    row[c] = str(values["reason"][i, r]) if "reason" in values else (
+                        "goal" if values["success"][i, r] else "no path")
+                elif c in values:
+                    v = values[c][i, r]
+                    row[c] = int(v) if (c in _INT_METRICS and np.isfinite(v)) else v
+                else:
+                    row[c] = ""  # the metric does not apply to this planner kind
+            w.writerow([_fmt(row[c]) for c in cols])
+    return buf.getvalue()
+
+
+def run_unit(prep: Prepared, u: Unit) -> tuple[str, dict, dict]:
+    """(CSV rows, arrays to keep, timings) of chunk ``u``: one compiled batch call."""
+    cfg = prep.config
+    mw, pc = prep.maps[u.m], cfg.planners[u.p]
+    idx = np.arange(u.lo, u.hi)
+    metrics = ("success",) + cfg.metrics  # success is always a column: other metrics are read given it
+    if pc.kind == "plan":
+        values, keep, timing = _run_plan(mw, pc, idx, cfg.seeds, cfg.chunk, metrics)
+    else:
+        values, keep, timing = _run_navigate(mw, u.m, pc, idx, cfg.seeds, cfg.chunk, metrics)
+    return _rows(prep, u, values), keep, timing
+
+
+# ---------------------------------------------------------------------------------------------
+# Checkpoints
+
+
+def _atomic_write(path: Path, data: bytes) -> None:
+    """Writes ``data`` to ``path`` so that a reader sees the old file or the new one, never a part."""
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    with open(tmp, "wb") as f:
+        f.write(data)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+def read_manifest(run_dir: str | os.PathLike) -> dict:
+    """The manifest of a run folder: ``{"fingerprint", "sessions", "chunks": {uid: entry}}``."""
+    p = Path(run_dir) / "checkpoints" / "manifest.json"
+    return json.loads(p.read_text()) if p.is_file() else {"chunks": {}, "sessions": 0}
+
+
+class _Store:
+    """The run folder's checkpoint store (see the module docstring)."""
+
+    def __init__(self, run_dir: Path, fp: str):
+        self.dir = run_dir
+        self.ck = run_dir / "checkpoints"
+        self.chunks = self.ck / "chunks"
+        self.arrays = self.ck / "arrays"
+        for d in (self.chunks, self.arrays):
+            d.mkdir(parents=True, exist_ok=True)
+        self.path = self.ck / "manifest.json"
+        if self.path.is_file():
+            try:
+                self.manifest = json.loads(self.path.read_text())
+            except json.JSONDecodeError as e:  # cannot happen with atomic writes; say so if it does
+                raise RunFolderError(f"{self.path}: damaged manifest ({e}); delete the run folder") from None
+            if self.manifest.get("fingerprint") != fp:
+                raise RunFolderError(
+                    f"{run_dir} holds the checkpoints of a different experiment (seeds, chunk size, maps, "
+                    "scenarios, planners or metrics changed); delete that folder or pass another --out")
+        else:
+            self.manifest = {"version": MANIFEST_VERSION, "fingerprint": fp, "sessions": 0, "chunks": {}}
+        # Leftovers of a killed writer: our temporary files and orbax's unfinished saves.
+        for p in list(self.chunks.glob(".*.tmp-*")) + list(self.ck.glob(".*.tmp-*")):
+            p.unlink(missing_ok=True)
+        for p in self.arrays.glob("*.orbax-checkpoint-tmp*"):
+            shutil.rmtree(p, ignore_errors=True)
+        self.manifest["sessions"] += 1
+        self.session = self.manifest["sessions"]
+        self._save()
+
+    def _save(self) -> None:
+        _atomic_write(self.path, json.dumps(self.manifest, indent=1, sort_keys=True).encode())
+
+    def done(self, u: Unit) -> bool:
+        e = self.manifest["chunks"].get(u.uid)
+        f = self.chunks / f"{u.uid}.csv"
+        return e is not None and f.is_file() and f.stat().st_size == e["bytes"]
+
+    def commit(self, u: Unit, info: dict, text: str, arrays: dict, timing: dict) -> None:
+        data = text.encode()
+        _atomic_write(self.chunks / f"{u.uid}.csv", data)
+        arrays = {k: np.asarray(v) for k, v in arrays.items() if np.asarray(v).size}
+        if arrays:
+            import orbax.checkpoint as ocp
+
+            ocp.PyTreeCheckpointer().save((self.arrays / u.uid).resolve(), arrays, force=True)
+        self.manifest["chunks"][u.uid] = {**info, "bytes": len(data), "sha256": _sha(data), "session": self.session,
+                                          "arrays": sorted(arrays), **timing}
+        self._save()
+
+    def merged(self, units: Sequence[Unit], header: str) -> bytes:
+        return header.encode() + b"".join((self.chunks / f"{u.uid}.csv").read_bytes() for u in units)
+
+
+def load_chunk_arrays(run_dir: str | os.PathLike, uid: str) -> dict[str, np.ndarray]:
+    """The arrays (orbax) kept for chunk ``uid``: plan chunks ``history f32[n, R, I]``, ``diversity``,
+    ``successes``, ``paths i32[n, R, P, 2]``, ``n_cells``, ``success``; navigate chunks ``positions
+    f32[n, R, T, 2]`` (m), ``steps``, ``plans``, ``n_plan``, ``success``. The manifest entry of ``uid``
+    names its map, planner and scenario range."""
+    import orbax.checkpoint as ocp
+
+    return ocp.PyTreeCheckpointer().restore((Path(run_dir) / "checkpoints" / "arrays" / uid).resolve())
+
+
+# ---------------------------------------------------------------------------------------------
+# Meta and progress
+
+
+def _git_revision() -> str | None:
+    root = Path(__file__).resolve().parents[2]
+    try:
+        rev = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True,
+                             timeout=10).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "--untracked-files=no"],
+                               capture_output=True, text=True, timeout=10).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return (rev + ("+dirty" if dirty else "")) if rev else None
+
+
+def _meta(run_dir: Path, cfg: ExperimentConfig, session: int, started: str) -> dict:
+    import jax
+    import scipy
+
+    import jaxplan
+
+    p = run_dir / "meta.json"
+    old = json.loads(p.read_text()) if p.is_file() else {}
+    meta = {
+        "experiment": cfg.name, "quick": cfg.is_quick, "chunk": cfg.chunk, "seeds": list(cfg.seeds),
+        "jaxplan_version": jaxplan.__version__, "git_revision": _git_revision(), "jax_version": jax.__version__,
+        "numpy_version": np.__version__, "scipy_version": scipy.__version__, "python": platform.python_version(),
+        "platform": platform.platform(), "devices": [str(d) for d in jax.devices()],
+        "started": old.get("started", started),
+        "sessions": old.get("sessions", []) + [{"session": session, "started": started}],
+        "config_sha256": _sha(cfg.text.encode()),
+    }
+    _atomic_write(p, json.dumps(meta, indent=1).encode())
+    return meta
+
+
+def _clock(s: float) -> str:
+    s = int(round(s))
+    return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
+
+
+class _Progress:
+    """``NAME: done/total trials (pct) | chunk k/K | elapsed | left ~`` on stderr (one rewritten line on a TTY)."""
+
+    def __init__(self, name: str, total: int, done: int, chunks: int, enabled: bool):
+        self.name, self.total, self.start_done, self.chunks, self.enabled = name, total, done, chunks, enabled
+        self.t0 = time.perf_counter()
+        self.tty = sys.stderr.isatty()
+
+    def update(self, done: int, chunk: int, what: str) -> None:
+        if not self.enabled:
+            return
+        el = time.perf_counter() - self.t0
+        new = done - self.start_done
+        left = el / new * (self.total - done) if new else float("nan")
+        msg = (f"{self.name}: {done}/{self.total} trials ({done / max(self.total, 1):.0%}) | chunk {chunk}/"
+               f"{self.chunks} {what} | elapsed {_clock(el)} | left ~{_clock(left) if math.isfinite(left) else '?'}")
+        print(("\r" + msg.ljust(110)) if self.tty else msg, end="" if self.tty else "\n", file=sys.stderr, flush=True)
+
+    def close(self) -> None:
+        if self.enabled and self.tty:
+            print(file=sys.stderr, flush=True)
+
+
+# ---------------------------------------------------------------------------------------------
+# The front door
+
+
+def run_experiment(config: ExperimentConfig | str | os.PathLike, out_dir: str | os.PathLike = "runs", *,
+                   quick: bool = False, data_dir: str | os.PathLike | None = None, progress: bool = True,
+                   chunk: int | None = None, stop_after: int | None = None) -> Path:
+    """Runs (or resumes) an experiment and writes its run folder.
+
+    Args:
+      config: an `ExperimentConfig` or the path of a TOML config (validated in full first).
+      out_dir: parent of the run folder ``NAME`` (``NAME-quick`` with ``quick``).
+      quick: apply the config's ``[experiment.quick]`` changes (a smoke run).
+      data_dir: where relative map paths resolve (default ``$JAXPLAN_DATA`` or ../shared/benchmarks).
+      progress: print a progress line on stderr.
+      chunk: scenarios per compiled call, overriding the config's ``experiment.chunk``.
+      stop_after: compute at most this many chunks in this session, then return without
+        the summary (for tests and for splitting a run over several jobs).
+
+    Returns:
+      The run folder.
+
+    Raises:
+      ConfigError: the config or its data has problems (all listed; nothing was run).
+      RunFolderError: the folder holds checkpoints of a different experiment.
+    """
+    cfg = config if isinstance(config, ExperimentConfig) else load_config(config, data_dir=data_dir)
+    if quick and not cfg.is_quick:
+        cfg = apply_quick(cfg)
+    if chunk is not None:
+        if not isinstance(chunk, int) or chunk < 1:
+            raise ConfigError([f"chunk: must be an integer >= 1, got {chunk!r}"], "--chunk")
+        cfg = cfg.replace(chunk=chunk)
+    prep = prepare(cfg)
+    run_dir = Path(out_dir) / (cfg.name + ("-quick" if cfg.is_quick else ""))
+    run_dir.mkdir(parents=True, exist_ok=True)
+    store = _Store(run_dir, fingerprint(prep))
+    started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    _atomic_write(run_dir / "config.toml", cfg.text.encode())
+    _meta(run_dir, cfg, store.session, started)
+
+    R = len(cfg.seeds)
+    done_units = [u for u in prep.units if store.done(u)]
+    done = sum((u.hi - u.lo) * R for u in done_units)
+    bar = _Progress(cfg.name, prep.trials, done, len(prep.units), progress)
+    if progress and done_units:
+        print(f"{cfg.name}: resuming, {len(done_units)}/{len(prep.units)} chunks already done", file=sys.stderr)
+    computed = 0
+    for u in prep.units:
+        if store.done(u):
+            continue
+        if stop_after is not None and computed >= stop_after:
+            bar.close()
+            return run_dir
+        text, arrays, timing = run_unit(prep, u)
+        info = {"map": prep.maps[u.m].spec.name, "planner": cfg.planners[u.p].label, "kind": cfg.planners[u.p].kind,
+                "scenarios": [u.lo, u.hi], "trials": (u.hi - u.lo) * R}
+        store.commit(u, info, text, arrays, timing)
+        computed += 1
+        done += (u.hi - u.lo) * R
+        bar.update(done, u.index + 1, f"{info['map']}/{info['planner']}")
+    bar.close()
+
+    header = ",".join(trial_columns(cfg)) + "\n"
+    _atomic_write(run_dir / "trials.csv", store.merged(prep.units, header))
+    from jaxplan.experiments import report, stats
+
+    timings = [{"uid": u.uid, **store.manifest["chunks"][u.uid]} for u in prep.units]
+    stats.write_timings(run_dir / "timings.csv", timings)
+    result = stats.analyse(run_dir / "trials.csv", run_dir / "timings.csv", cfg)
+    stats.write_summary(run_dir / "summary.csv", result)
+    stats.write_significance(run_dir / "significance.csv", result)
+    meta = json.loads((run_dir / "meta.json").read_text())
+    (run_dir / "summary.md").write_text(report.summary_markdown(result, cfg))
+    (run_dir / "report.md").write_text(report.report_markdown(result, cfg, prep, meta))
+    return run_dir
