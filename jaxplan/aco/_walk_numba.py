@@ -206,11 +206,25 @@ def _ant_stats(a, cells, moves, n, movef, cellf, K, stats):
     stats[6, a] = count
 
 
-@njit(cache=True, nogil=True, parallel=True)
-def _stats_all(cells, moves, n, movef, cellf, K, stats):
-    """`_ant_stats` of every ant (for paths walked in JAX: the same numbers as the numba walk's)."""
-    for a in prange(n.shape[0]):
+@njit(cache=True, nogil=True)
+def _stats_chunk(c, n_chunks, cells, moves, n, movef, cellf, K, stats):
+    for a in range(c, n.shape[0], n_chunks):
         _ant_stats(a, cells, moves, n[a], movef, cellf, K, stats)
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _stats_chunks(n_chunks, cells, moves, n, movef, cellf, K, stats):
+    for c in prange(n_chunks):
+        _stats_chunk(c, n_chunks, cells, moves, n, movef, cellf, K, stats)
+
+
+@njit(cache=True, nogil=True)
+def _stats_all(cells, moves, n, movef, cellf, K, n_chunks, stats):
+    """`_ant_stats` of every ant (for paths walked in JAX: the same numbers as the numba walk's)."""
+    if n_chunks == 1:
+        _stats_chunk(0, 1, cells, moves, n, movef, cellf, K, stats)
+    else:
+        _stats_chunks(n_chunks, cells, moves, n, movef, cellf, K, stats)
 
 
 @njit(cache=True, nogil=True)
@@ -351,26 +365,53 @@ def _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, c
     _ant_stats(a, cells, moves, n, movef, cellf, K, stats)
 
 
+@njit(cache=True, nogil=True)
+def _walk_chunk(c, n_chunks, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+                max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
+                steps_out, part, marks, stats):
+    """Walks ants c, c + n_chunks, ... one after another (a sequential function: called from a
+    parallel loop, its array set-up must not become a parallel region of its own)."""
+    A = start.shape[0]
+    C, K = nbr.shape
+    seen = np.zeros(C, np.int32)
+    p = np.empty(K, np.float32)
+    ok = np.empty(K, np.bool_)
+    is_goal = np.empty(K, np.bool_)
+    for a in range(c, A, n_chunks):
+        _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+                  max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
+                  steps_out, part, marks, stats, seen, p, ok, is_goal)
+
+
 @njit(cache=True, nogil=True, parallel=True)
+def _walk_chunks(n_chunks, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+                 max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
+                 steps_out, parts, marks, stats):
+    """The chunks in parallel: this loop is the kernel's only parallel region (each region is a
+    fork and a join of numba's threads, which costs a scheduler time slice on a busy machine)."""
+    for c in prange(n_chunks):
+        _walk_chunk(c, n_chunks, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local,
+                    alert, max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out,
+                    status_out, steps_out, parts[c] if penalise else parts[0], marks, stats)
+
+
+@njit(cache=True, nogil=True)
 def _walk_all(nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
               max_steps, width, lut, mode, has_hook, penalise, n_chunks, movef, cellf,
               cells, moves, n_out, status_out, steps_out, penalty, marks, stats):
     """Walks every ant; chunk c takes ants c, c + n_chunks, ... (interleaved: ants of every run
-    and colony are spread over the chunks, which evens out their different walk lengths)."""
-    A = start.shape[0]
-    C, K = nbr.shape
+    and colony are spread over the chunks, which evens out their different walk lengths). One
+    chunk runs without numba's thread pool."""
     marks[:] = 0
     parts = np.zeros((n_chunks if penalise else 1, penalty.shape[0]), np.float32)
-    for c in prange(n_chunks):
-        seen = np.zeros(C, np.int32)
-        p = np.empty(K, np.float32)
-        ok = np.empty(K, np.bool_)
-        is_goal = np.empty(K, np.bool_)
-        part = parts[c] if penalise else parts[0]
-        for a in range(c, A, n_chunks):
-            _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
-                      max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
-                      steps_out, part, marks, stats, seen, p, ok, is_goal)
+    if n_chunks == 1:
+        _walk_chunk(0, 1, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+                    max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
+                    steps_out, parts[0], marks, stats)
+    else:
+        _walk_chunks(n_chunks, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+                     max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
+                     steps_out, parts, marks, stats)
     # Counts of +1.0 are exact in float32 (below 2^24), so the chunk order does not matter.
     penalty[:] = 0.0
     if penalise:
@@ -557,8 +598,8 @@ def _walk_handler(frame):
 
 
 def _stats_handler(frame):
-    """The handler of `path_stats`: cells ``i32[A, L + 1]``, moves ``i8[A, L]``, n ``i32[A]``, movef, cellf
-    -> stats ``f32[N_STATS, A]``."""
+    """The handler of `path_stats`: cells ``i32[A, L + 1]``, moves ``i8[A, L]``, n ``i32[A]``, movef, cellf,
+    ``i32[1]`` parallel chunks -> stats ``f32[N_STATS, A]``."""
     base = _address(frame)
     if _not_execute(base):
         return _null()
@@ -580,9 +621,11 @@ def _stats_handler(frame):
     movef = numba.carray(_F32P(d), (nf,))
     d, s = _buffer(args, 4)
     cellf = numba.carray(_F32P(d), (3, _dim(s, 1)))
+    d, s = _buffer(args, 5)
+    n_chunks = np.int64(numba.carray(_I32P(d), (1,))[0])
     d, s = _buffer(rets, 0)
     stats = numba.carray(_F32P(d), (N_STATS, A))
-    _stats_all(cells, moves, n, movef, cellf, K, stats)
+    _stats_all(cells, moves, n, movef, cellf, K, n_chunks, stats)
     return _null()
 
 
@@ -677,7 +720,7 @@ def path_stats(st: StatTables, cells: jnp.ndarray, moves: jnp.ndarray, n: jnp.nd
     call = jax.ffi.ffi_call("jaxplan_aco_path_stats", jax.ShapeDtypeStruct((N_STATS, A), jnp.float32),
                             vmap_method="sequential")
     return call(jnp.asarray(cells, jnp.int32), jnp.asarray(moves, jnp.int8), jnp.asarray(n, jnp.int32), st.movef,
-                st.cellf)
+                st.cellf, jnp.asarray(np.array([_n_chunks(A)], np.int32)))
 
 
 def deposit(tau: jnp.ndarray, paths: tuple, best: tuple, C: int, K: int) -> jnp.ndarray:
