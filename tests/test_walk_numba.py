@@ -332,3 +332,17 @@ def test_update_backends_agree(room, planner):
     for field in ("cost", "length") + (("tau",) if planner != "praco" else ()):
         np.testing.assert_allclose(np.asarray(getattr(a, field)), np.asarray(getattr(b, field)), rtol=1e-5)
     assert np.asarray(a.success).any()
+
+
+def test_native_dead_corner_penalty_matches_power():
+    """Seed 004's penalty in the deposit kernel: τ·(1 − λ_p)^count where an edge was retreated over."""
+    rng = np.random.default_rng(2)
+    T, K = 800, 8
+    tau = jnp.asarray(rng.random(T) * 5, jnp.float32)
+    counts = jnp.asarray(np.where(rng.random(T) < 0.2, rng.integers(1, 40, T), 0), jnp.float32)
+    keep = jnp.float32(0.7)
+    empty = (jnp.zeros((1, 3), jnp.int32), jnp.zeros((1, 2), jnp.int8), jnp.zeros((1,), jnp.int32),
+             jnp.zeros((2, 1), jnp.float32), jnp.zeros((2, 1), jnp.int32))
+    out = jax.jit(WN.deposit, static_argnums=(3, 4))(tau, empty, empty, T // K, K, counts, keep)
+    np.testing.assert_allclose(np.asarray(out), np.asarray(tau * jnp.power(keep, counts)), rtol=2e-6)
+    np.testing.assert_array_equal(np.asarray(out)[np.asarray(counts) == 0], np.asarray(tau)[np.asarray(counts) == 0])

@@ -267,8 +267,10 @@ def _deposit_jax(cfg: RunConfig, tau: jnp.ndarray, ants: Ants, state: ColonyStat
     return flat.reshape(S, C, K)
 
 
-def _deposit_numba(cfg: RunConfig, tau: jnp.ndarray, ants: Ants, state: ColonyState, dep: R.Deposit) -> jnp.ndarray:
-    """Every run's deposits in one native call over the successful ants' valid steps only.
+def _deposit_numba(cfg: RunConfig, params: dict, tau: jnp.ndarray, ants: Ants, state: ColonyState,
+                   dep: R.Deposit) -> jnp.ndarray:
+    """Every run's deposits in one native call over the successful ants' valid steps only, then
+    seed 004's dead-corner penalty on the edges retreated over.
 
     Args:
       tau: ``f32[B, S, C, K]`` evaporated pheromone; ants: all runs' ants (flat ``[B * S * m]``);
@@ -290,7 +292,8 @@ def _deposit_numba(cfg: RunConfig, tau: jnp.ndarray, ants: Ants, state: ColonySt
     L = cfg.max_steps
     best = (state.bs_cells.reshape(B * S, L + 1), state.bs_moves.reshape(B * S, L), state.bs_n.reshape(B * S),
             jnp.stack([pick(dep.bs_own, (B * S,)), pick(dep.bs_nbr, (B * S,))]), jnp.stack([best_colony, best_nbr]))
-    return _walk_numba.deposit(tau.reshape(-1), paths, best, C, K).reshape(B, S, C, K)
+    keep = 1.0 - params["lambda_p"] if ants.penalty is not None else None
+    return _walk_numba.deposit(tau.reshape(-1), paths, best, C, K, ants.penalty, keep).reshape(B, S, C, K)
 
 
 def _finish(colony: Colony, params: dict, tau: jnp.ndarray, penalty: jnp.ndarray | None) -> jnp.ndarray:
@@ -390,10 +393,10 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
         state, dep, (best, diversity, successes, ant_steps) = choose(state, per_run, stats, goal_b)
         tau = evaporate(state.tau)
         if native_update:
-            tau = _deposit_numba(cfg, tau, ants, state, dep)
+            tau = finish(_deposit_numba(cfg, params, tau, ants, state, dep), None)  # penalty included
         else:
-            tau = jax.vmap(functools.partial(_deposit_jax, cfg))(tau, per_run, state, dep)
-        state = state._replace(tau=finish(tau, per_run.penalty))
+            tau = finish(jax.vmap(functools.partial(_deposit_jax, cfg))(tau, per_run, state, dep), per_run.penalty)
+        state = state._replace(tau=tau)
         return state, (best, diversity, successes, ant_steps, per_run.loop_steps, per_run.slots)
 
     state, outs = jax.lax.scan(iteration, state, iter_keys)
