@@ -15,9 +15,10 @@ native call per iteration, the default on a CPU; both give identical results):
 then the time of a seed-003-sized run (20x20 warehouse, risk_aco defaults: 100 ants,
 50 iterations; the paper reports 8.468 s in MATLAB) per backend, and the peak memory of
 iaco with 1,024 ants on brc202d (measured first, in a fresh child process of its own). The
-speed figures are measured twice: with XLA's default threads and in a child process pinned
-to one core, because intra-op threading on a 2-core CPU slows these small, loop-heavy
-kernels down.
+speed figures are measured three times, each in a child process: with XLA's default threads,
+pinned to one core, and with XLA's intra-op threading off (``XLA_FLAGS=--xla_cpu_multi_thread_eigen=false
+intra_op_parallelism_threads=1``) while the numba walk keeps both cores, which shows what
+XLA's intra-op threads gain or cost next to the walk's threads on a small CPU.
 """
 
 from __future__ import annotations
@@ -31,6 +32,14 @@ import sys
 import time
 
 BACKENDS = ("jax", "numba")
+SINGLE_THREADED_XLA = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
+# (label, pin the child to one core, extra XLA_FLAGS): each configuration runs in a child process of its own.
+CONFIGS = (
+    ("default threads", False, ""),
+    ("pinned to 1 core", True, ""),
+    # XLA's own ops on one thread; the numba walk still uses both cores (its threads are numba's).
+    ("XLA single-threaded, 2 cores", False, SINGLE_THREADED_XLA),
+)
 
 
 def measure(iterations: int, repeats: int) -> dict:
@@ -128,10 +137,14 @@ def main() -> None:
         proc = subprocess.run([sys.executable, __file__, "--memory-child"], capture_output=True, text=True, check=True)
         memory = json.loads(proc.stdout.strip().splitlines()[-1])
     results = {}
-    for label, pin in (("default threads", False), ("pinned to 1 core", True)):
+    for label, pin, xla_flags in CONFIGS:
         pre = (lambda: os.sched_setaffinity(0, {0})) if pin else None
+        env = dict(os.environ)
+        if xla_flags:
+            env["XLA_FLAGS"] = (env.get("XLA_FLAGS", "") + " " + xla_flags).strip()
         proc = subprocess.run([sys.executable, __file__, "--child", "--iterations", str(args.iterations),
-                               "--repeats", str(args.repeats)], capture_output=True, text=True, preexec_fn=pre, check=True)
+                               "--repeats", str(args.repeats)], capture_output=True, text=True, preexec_fn=pre,
+                              env=env, check=True)
         results[label] = json.loads(proc.stdout.strip().splitlines()[-1])
     print(f"machine: {os.cpu_count()} cores; {results['default threads']['devices']}")
     for label, res in results.items():

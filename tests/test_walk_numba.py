@@ -313,9 +313,9 @@ def test_native_deposit_equals_xla_scatter_add():
 @pytest.mark.parametrize("planner", ["iaco", "praco"])
 def test_update_backends_agree(room, planner):
     """The array-operation update (other devices) against the native one: the same first iteration
-    (paths and counts; costs to float32 rounding of the summed statistics). praco's ranks can break
-    ties between equally long paths differently (their lengths are summed in another order), so its
-    pheromone is not compared."""
+    (walks and counts; costs to float32 rounding of the summed statistics). praco's cost (length +
+    turns) often ties between different paths, and the two updates, summing lengths in another
+    order, can break such ties differently: its best path and pheromone are not compared."""
     grid, starts, goals = room
     _, p = resolve(planner, dict(ants=16, iterations=1, **({"colonies": 2} if planner == "praco" else {})))
     cfg, params, conn, vh = split_params(grid, p)
@@ -327,7 +327,8 @@ def test_update_backends_agree(room, planner):
         c = RunConfig(**{**cfg.__dict__, "update_backend": backend, "keep_pheromone": True})
         outs[backend] = jax.jit(lambda t, g, pr, k, c=c: run_batch(COLONIES[planner], c, t, g, pr, k))(tables, gt, params, keys)
     a, b = outs["jax"], outs["numba"]
-    for field in ("cells", "n", "success", "successes", "ant_steps"):
+    exact = ("success", "successes", "ant_steps") + (("cells", "n") if planner != "praco" else ())
+    for field in exact:
         np.testing.assert_array_equal(np.asarray(getattr(a, field)), np.asarray(getattr(b, field)))
     for field in ("cost", "length") + (("tau",) if planner != "praco" else ()):
         np.testing.assert_allclose(np.asarray(getattr(a, field)), np.asarray(getattr(b, field)), rtol=1e-5)

@@ -352,16 +352,18 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
     backend = walk_backend(colony, cfg)
     if colony.hook is not None and backend == "jax":
         hook = functools.partial(colony.hook, tables, params, h_cell.reshape(B * C))
-    iter_keys = jnp.swapaxes(jax.vmap(lambda k: jax.random.split(k, I))(key_b), 0, 1)  # [I, B]
+    # One seed per run and iteration, all drawn before the loop in one threefry call per run: the
+    # walk's uniforms are hashed from it (`hash_uniform`). Keeping key splits and draws out of the
+    # loop body keeps the compiled program small (XLA's CPU compile time grows with its kernels).
+    iter_seeds = jax.vmap(lambda k: jax.random.bits(k, (I,), jnp.uint32))(key_b).T  # [I, B]
     choose = jax.vmap(functools.partial(_choose, colony, cfg, tables, params))
     evaporate = jax.vmap(functools.partial(_evaporate, colony, params))
     finish = jax.vmap(functools.partial(_finish, colony, params))
     native_update = update_backend(cfg) == "numba"
     stat_tables = _walk_numba.stat_tables(tables) if native_update else None
 
-    def iteration(state: ColonyState, keys_i):
+    def iteration(state: ColonyState, seeds):
         table = jax.vmap(functools.partial(_move_table, colony, tables, params))(state.tau, log_eta)
-        seeds = jax.vmap(lambda k: jax.random.bits(k, (), jnp.uint32))(keys_i)
         walk_args = (nbr, table.reshape(B * S * C, K), start, goal, row0, cell0, seeds[run_of], local,
                      state.alert.reshape(B * C) if cfg.dead_end == "alert" else None)
         sizes = dict(max_steps=L, width=cfg.width, lut=lut, dead_end=cfg.dead_end,
@@ -399,7 +401,7 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
         state = state._replace(tau=tau)
         return state, (best, diversity, successes, ant_steps, per_run.loop_steps, per_run.slots)
 
-    state, outs = jax.lax.scan(iteration, state, iter_keys)
+    state, outs = jax.lax.scan(iteration, state, iter_seeds)
     history, diversity, successes, ant_steps, loop_steps, slots = (jnp.swapaxes(o, 0, 1) for o in outs)  # [B, I]
     best = jnp.argmin(state.bs_cost, axis=1)
     pick = lambda a: a[jnp.arange(B), best]  # noqa: E731
