@@ -7,12 +7,13 @@ iteration (every run, colony and ant, from the start until goal, dead end or ste
 limit) is one compiled call: each ant walks to the end on its own, the ants are shared
 out over the cores with `prange`. The JAX program calls it as an XLA FFI custom call (a
 numba `cfunc` registered with `jax.ffi`; CPU only), so the iterations' `lax.scan`, the
-move tables, deposits and everything else stay in JAX, and the JAX walk stays the one
-for GPUs.
+move tables and the rules stay in JAX, and the JAX walk stays the one for GPUs. Two more
+native kernels serve the colony's update on the CPU (for either walk): `path_stats` and
+`deposit` visit only the valid steps of the paths instead of whole ``[A, L]`` buffers.
 
 The result equals `walk`'s bit for bit: the same counter-based uniforms (`hash_uniform`,
 one per ant and step), the same float32 inverse-CDF sums in the same order, the same
-dead-end rules, path buffers (including entries past ``n``), penalty counts, dead-end
+dead-end rules, paths (up to ``n``; slots past it are left unwritten), penalty counts, dead-end
 marks and throughput counters (``loop_steps`` and ``slots`` are those the JAX loop,
 with its compaction, would report). With a walk hook (seed 002's `opt_ant`) the hook's
 state-dependent logits come from a table precomputed in JAX (`hook_logits`: one value
@@ -660,7 +661,7 @@ def _deposit_handler(frame):
     CK = np.int64(sizes[0])
     K = np.int64(sizes[1])
     # Own-colony deposits of the ants, their deposits into the next colony, then the best-so-far
-    # paths' (own, next): the order `jaxplan.aco._colony._update` adds them in.
+    # paths' (own, next): the order `jaxplan.aco._colony._deposit_jax` adds them in.
     for group in range(2):
         d, s = _buffer(args, 1 + 5 * group)
         P = _dim(s, 0)
