@@ -13,10 +13,12 @@ native call per iteration, the default on a CPU; both give identical results):
   * compile time of the configuration: XLA's (lower + compile), and the first call's time
     minus the steady-state run time (adds numba's one-off load or compilation);
 then the time of a seed-003-sized run (20x20 warehouse, risk_aco defaults: 100 ants,
-50 iterations; the paper reports 8.468 s in MATLAB) per backend, and the bytes the walk
-needs for 1,024 ants on brc202d. Each figure is measured twice: with XLA's default
-threads and in a child process pinned to one core, because intra-op threading on a
-2-core CPU slows these small, loop-heavy kernels down.
+50 iterations; the paper reports 8.468 s in MATLAB) per backend, and the peak memory of
+iaco with 1,024 ants on brc202d (measured first, in a fresh child process of its own). The
+speed figures are measured three times, each in a child process: with XLA's default threads,
+pinned to one core, and with XLA's intra-op threading off (``XLA_FLAGS=--xla_cpu_multi_thread_eigen=false
+intra_op_parallelism_threads=1``) while the numba walk keeps both cores, which shows what
+XLA's intra-op threads gain or cost next to the walk's threads on a small CPU.
 """
 
 from __future__ import annotations
@@ -30,6 +32,14 @@ import sys
 import time
 
 BACKENDS = ("jax", "numba")
+SINGLE_THREADED_XLA = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
+# (label, pin the child to one core, extra XLA_FLAGS): each configuration runs in a child process of its own.
+CONFIGS = (
+    ("default threads", False, ""),
+    ("pinned to 1 core", True, ""),
+    # XLA's own ops on one thread; the numba walk still uses both cores (its threads are numba's).
+    ("XLA single-threaded, 2 cores", False, SINGLE_THREADED_XLA),
+)
 
 
 def measure(iterations: int, repeats: int) -> dict:
@@ -71,25 +81,41 @@ def measure(iterations: int, repeats: int) -> dict:
         times = [jp.plan(grid, ware.start, ware.goal, planner="risk_aco", seed=s, walk_backend=backend).time_s
                  for s in range(max(repeats, 5))]
         out["seed003_ms"][backend] = 1e3 * statistics.median(times)
-    big = jp.load_map(os.path.join(os.path.dirname(__file__), "..", "..", "shared", "benchmarks", "movingai",
-                                   "brc202d.map")) if os.path.exists(os.path.join(os.path.dirname(__file__), "..", "..",
-                                   "shared", "benchmarks", "movingai", "brc202d.map")) else None
-    if big is not None:
-        C = big.n_cells
-        H, W = big.shape
-        L = min(int(big.free.sum()), 4 * (H + W))
-        A = 1024
-        walk_bytes = A * ((C + 31) // 32) * 4 + A * (L + 1) * 4 * 2 + C * 8 * 4 * 3
-        out["brc202d_1024_ants_MB"] = walk_bytes / 2**20
-        import resource
-
-        free = np.argwhere(big.free)[:, ::-1]
-        before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-        r = jp.plan_batch(big, free[:1], free[-1:], planner="iaco", seeds=[0], ants=A, iterations=2)
-        out["brc202d_peak_rss_MB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-        out["brc202d_rss_growth_MB"] = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) / 1024
-        out["brc202d_run_s"] = r.time_s
     out["devices"] = str(jax.devices())
+    return out
+
+
+BRC202D = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "benchmarks", "movingai",
+                       "brc202d.map")
+
+
+def measure_memory(ants: int, iterations: int) -> dict:
+    """Peak RSS of a fresh process that runs iaco with ``ants`` ants on brc202d (default backend).
+
+    Runs in its own child process, before anything else was allocated there: the process's peak RSS
+    (``ru_maxrss``) then is the run's own footprint (Python, JAX, numba and the compiled program
+    included), not the high-water mark of earlier, larger runs.
+    """
+    import resource
+
+    import numpy as np
+
+    import jaxplan as jp
+
+    out: dict = {"rss_start_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+    big = jp.load_map(BRC202D)
+    C = big.n_cells
+    H, W = big.shape
+    L = min(int(big.free.sum()), 4 * (H + W))
+    # Tabu bits (JAX walk), path buffers (cells i32 + moves i8), move tables (index, valid, weights).
+    out["walk_estimate_MB"] = (ants * ((C + 31) // 32) * 4 + ants * (L + 1) * 4 + ants * L + C * 8 * 4 * 3) / 2**20
+    free = np.argwhere(big.free)[:, ::-1]
+    out["before_run_MB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    r = jp.plan_batch(big, free[:1], free[-1:], planner="iaco", seeds=[0], ants=ants, iterations=iterations)
+    out["peak_rss_MB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    out["run_s"] = r.time_s
+    out["compile_s"] = r.compile_s
+    out["success"] = bool(r.success.all())
     return out
 
 
@@ -98,15 +124,27 @@ def main() -> None:
     ap.add_argument("--iterations", type=int, default=5)
     ap.add_argument("--repeats", type=int, default=5, help="timed runs per configuration (the median is printed)")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--memory-child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         print(json.dumps(measure(args.iterations, args.repeats)))
         return
+    if args.memory_child:
+        print(json.dumps(measure_memory(1024, 2)))
+        return
+    memory = None
+    if os.path.exists(BRC202D):
+        proc = subprocess.run([sys.executable, __file__, "--memory-child"], capture_output=True, text=True, check=True)
+        memory = json.loads(proc.stdout.strip().splitlines()[-1])
     results = {}
-    for label, pin in (("default threads", False), ("pinned to 1 core", True)):
+    for label, pin, xla_flags in CONFIGS:
         pre = (lambda: os.sched_setaffinity(0, {0})) if pin else None
+        env = dict(os.environ)
+        if xla_flags:
+            env["XLA_FLAGS"] = (env.get("XLA_FLAGS", "") + " " + xla_flags).strip()
         proc = subprocess.run([sys.executable, __file__, "--child", "--iterations", str(args.iterations),
-                               "--repeats", str(args.repeats)], capture_output=True, text=True, preexec_fn=pre, check=True)
+                               "--repeats", str(args.repeats)], capture_output=True, text=True, preexec_fn=pre,
+                              env=env, check=True)
         results[label] = json.loads(proc.stdout.strip().splitlines()[-1])
     print(f"machine: {os.cpu_count()} cores; {results['default threads']['devices']}")
     for label, res in results.items():
@@ -122,14 +160,14 @@ def main() -> None:
         ms = r["seed003_ms"]
         print(f"seed-003-sized run (20x20, risk_aco, 100 ants x 50 iterations), {label}: jax {ms['jax']:.1f} ms, "
               f"numba {ms['numba']:.1f} ms (target <= 30 ms; paper: 8,468 ms in MATLAB)")
-    mb = results["default threads"].get("brc202d_1024_ants_MB")
-    if mb is not None:
-        r = results["default threads"]
-        print(f"walk memory, 1,024 ants on brc202d (tabu bits + path buffers + move tables): {mb:.0f} MB estimated; "
-              f"measured (default walk backend): iaco, 1,024 ants x 2 iterations raised the process's peak RSS by "
-              f"{r['brc202d_rss_growth_MB']:.0f} MB to {r['brc202d_peak_rss_MB']:.0f} MB (bound 2,048 MB), "
-              f"run {r['brc202d_run_s']:.2f} s")
-
+    if memory is None:
+        print(f"walk memory: skipped ({BRC202D} not found)")
+    else:
+        m = memory
+        print(f"memory, iaco with 1,024 ants x 2 iterations on brc202d (default backend, fresh child process): peak RSS "
+              f"{m['peak_rss_MB']:.0f} MB (bound 2,048 MB; {m['before_run_MB']:.0f} MB after imports and map loading); "
+              f"walk buffers and move tables {m['walk_estimate_MB']:.0f} MB estimated; compile {m['compile_s']:.2f} s, "
+              f"run {m['run_s']:.2f} s")
 
 if __name__ == "__main__":
     main()

@@ -32,6 +32,24 @@ def _assert_same(a, b, fields=RESULT_FIELDS):
         np.testing.assert_array_equal(getattr(a, f), getattr(b, f), err_msg=f)
 
 
+def _assert_same_walk(ref, out, fields):
+    """Walk outputs field by field; paths only on their valid slots (cells up to n, moves below n)."""
+    n = np.asarray(ref.n)
+    np.testing.assert_array_equal(np.asarray(out.n), n, err_msg="n")
+    L = np.asarray(ref.moves).shape[1]
+    for field in fields:
+        r, o = getattr(ref, field), getattr(out, field)
+        assert (r is None) == (o is None), field
+        if r is None or field == "n":
+            continue
+        r, o = np.asarray(r), np.asarray(o)
+        if field in ("cells", "moves"):
+            valid = np.arange(r.shape[1])[None, :] <= n[:, None] - (field == "moves")
+            r, o = np.where(valid, r, 0), np.where(valid, o, 0)
+            assert r.shape[1] == L + (field == "cells")
+        np.testing.assert_array_equal(o, r, err_msg=field)
+
+
 @njit
 def _exp_many(x, out):
     for i in range(x.size):
@@ -105,11 +123,7 @@ def test_walk_equals_jax_walk_field_by_field(dead_end, penalise, ants):
     args = (d["nbr"], d["table"], d["start"], d["goal"], d["row0"], d["cell0"], d["seed"], d["local"], alert)
     ref = jax.jit(functools.partial(walk, **kw))(*args)
     out = jax.jit(functools.partial(WN.walk, **kw))(*args)
-    for field in ref._fields:
-        r, o = getattr(ref, field), getattr(out, field)
-        assert (r is None) == (o is None), field
-        if r is not None:
-            np.testing.assert_array_equal(np.asarray(o), np.asarray(r), err_msg=field)
+    _assert_same_walk(ref, out, [f for f in ref._fields if f != "stats"])
     status = np.asarray(ref.status)
     assert len(np.unique(status)) >= 2, "the case should mix goal, dead-end and step-limit ants"
     if dead_end == "alert":
@@ -149,10 +163,7 @@ def test_walk_with_opt_ant_hook_equals_jax_walk(dead_end):
     ref = jax.jit(functools.partial(walk, **kw, hook=hook))(*args)
     ht = WN.HookTables(R.hook_opt_ant_logits(tables, params, h_cell, logits), tables.right_turn, tables.turn_rule)
     out = jax.jit(functools.partial(WN.walk, **kw, hook=ht))(*args)
-    for field in ("cells", "moves", "n", "status", "ant_steps", "loop_steps", "slots", "marks"):
-        r, o = getattr(ref, field), getattr(out, field)
-        if r is not None:
-            np.testing.assert_array_equal(np.asarray(o), np.asarray(r), err_msg=field)
+    _assert_same_walk(ref, out, ("cells", "moves", "n", "status", "ant_steps", "loop_steps", "slots", "marks"))
     assert (np.asarray(ref.status) == 1).mean() > 0.2
 
 
@@ -237,3 +248,102 @@ def test_walk_backend_is_validated(room):
         jp.plan(grid, starts[0], goals[0], planner="aco", walk_backend="cuda")
     with pytest.raises(ValueError, match="walk_backend must be one of"):
         RunConfig(colonies=1, ants=2, iterations=1, max_steps=4, width=4, walk_backend="gpu")
+
+
+def _random_paths(seed: int = 5, A: int = 300, ants_per_colony: int = 50):
+    """Paths walked in JAX on a random map, with the tables the statistics and deposits read."""
+    scene = jp.RandomMapGenerator(20, 18, 0.25)(3)
+    B, S = 1, 2
+    d = _walk_inputs(scene.grid, B, S, ants_per_colony, seed=seed)
+    kw = dict(max_steps=120, width=scene.grid.width, lut=move_lut(d["tables"].offsets), dead_end="retreat")
+    ants = jax.jit(functools.partial(walk, **kw))(d["nbr"], d["table"], d["start"], d["goal"], d["row0"], d["cell0"],
+                                                  d["seed"], d["local"], None)
+    return scene, d, kw, ants
+
+
+def test_native_path_stats_match_the_array_version_and_the_walks():
+    scene, d, kw, ants = _random_paths()
+    tables = d["tables"]
+    rng = np.random.default_rng(0)
+    # Non-trivial risk and height layers, so every statistic is exercised.
+    tables = tables._replace(risk=jnp.asarray(rng.random(d["C"]), jnp.float32),
+                             height=jnp.asarray(rng.random(d["C"]) * 3, jnp.float32))
+    st = WN.stat_tables(tables)
+    native = np.asarray(jax.jit(WN.path_stats)(st, ants.cells, ants.moves, ants.n))
+    ref = R.path_stats(tables, ants)
+    for i, field in enumerate(R.PathStats._fields):
+        exact = field in ("turns", "cells")
+        np.testing.assert_allclose(native[i], np.asarray(getattr(ref, field)), rtol=0 if exact else 2e-5,
+                                   atol=0 if exact else 1e-5, err_msg=field)
+    # The numba walk sums the same statistics in its kernel: the same bits as the separate call.
+    out = jax.jit(functools.partial(WN.walk, **kw, stats=st))(d["nbr"], d["table"], d["start"], d["goal"], d["row0"],
+                                                                d["cell0"], d["seed"], d["local"], None)
+    np.testing.assert_array_equal(np.asarray(out.stats), native)
+    assert (np.asarray(ants.n) > 1).mean() > 0.5
+
+
+def test_native_deposit_equals_xla_scatter_add():
+    """The deposit kernel adds the same amounts in the same order as XLA's scatter-add."""
+    from jaxplan.aco._colony import _scatter_paths
+
+    scene, d, kw, ants = _random_paths(A=300)
+    C, K = d["C"], d["K"]
+    S, m = 2, 50
+    rng = np.random.default_rng(1)
+    tau = jnp.asarray(rng.random(S * C * K) * 3, jnp.float32)
+    own = jnp.asarray(np.where(rng.random(S * m) < 0.5, rng.random(S * m) * 100, 0.0), jnp.float32)
+    nbr = jnp.asarray(np.where(rng.random(S * m) < 0.3, rng.random(S * m) * 50, 0.0), jnp.float32)
+    colony = jnp.repeat(jnp.arange(S), m)
+    nxt = (colony + 1) % S
+    best = jnp.asarray([3, 70])
+    bs_cells, bs_moves, bs_n = ants.cells[best], ants.moves[best], ants.n[best]
+    bs_amt = jnp.asarray([[5.0, 7.0], [1.5, 0.0]], jnp.float32)
+    moves32 = ants.moves.astype(jnp.int32)
+    ref = _scatter_paths(tau, colony, ants.cells, moves32, ants.n, own, K, C * K)
+    ref = _scatter_paths(ref, nxt, ants.cells, moves32, ants.n, nbr, K, C * K)
+    ref = _scatter_paths(ref, jnp.arange(S), bs_cells, bs_moves.astype(jnp.int32), bs_n, bs_amt[0], K, C * K)
+    ref = _scatter_paths(ref, (jnp.arange(S) + 1) % S, bs_cells, bs_moves.astype(jnp.int32), bs_n, bs_amt[1], K, C * K)
+    out = jax.jit(WN.deposit, static_argnums=(3, 4))(
+        tau, (ants.cells, ants.moves, ants.n, jnp.stack([own, nbr]), jnp.stack([colony, nxt])),
+        (bs_cells, bs_moves, bs_n, bs_amt, jnp.stack([jnp.arange(S), (jnp.arange(S) + 1) % S])), C, K)
+    np.testing.assert_array_equal(np.asarray(out), np.asarray(ref))
+    assert not np.array_equal(np.asarray(out), np.asarray(tau))
+
+
+@pytest.mark.parametrize("planner", ["iaco", "praco"])
+def test_update_backends_agree(room, planner):
+    """The array-operation update (other devices) against the native one: the same first iteration
+    (walks and counts; costs to float32 rounding of the summed statistics). praco's cost (length +
+    turns) often ties between different paths, and the two updates, summing lengths in another
+    order, can break such ties differently: its best path and pheromone are not compared."""
+    grid, starts, goals = room
+    _, p = resolve(planner, dict(ants=16, iterations=1, **({"colonies": 2} if planner == "praco" else {})))
+    cfg, params, conn, vh = split_params(grid, p)
+    tables = map_tables(grid, conn, vh)
+    gt = goal_tables(grid, starts, goals, conn, vh)
+    keys = _seed_keys([0, 1])
+    outs = {}
+    for backend in ("jax", "numba"):
+        c = RunConfig(**{**cfg.__dict__, "update_backend": backend, "keep_pheromone": True})
+        outs[backend] = jax.jit(lambda t, g, pr, k, c=c: run_batch(COLONIES[planner], c, t, g, pr, k))(tables, gt, params, keys)
+    a, b = outs["jax"], outs["numba"]
+    exact = ("success", "successes", "ant_steps") + (("cells", "n") if planner != "praco" else ())
+    for field in exact:
+        np.testing.assert_array_equal(np.asarray(getattr(a, field)), np.asarray(getattr(b, field)))
+    for field in ("cost", "length") + (("tau",) if planner != "praco" else ()):
+        np.testing.assert_allclose(np.asarray(getattr(a, field)), np.asarray(getattr(b, field)), rtol=1e-5)
+    assert np.asarray(a.success).any()
+
+
+def test_native_dead_corner_penalty_matches_power():
+    """Seed 004's penalty in the deposit kernel: τ·(1 − λ_p)^count where an edge was retreated over."""
+    rng = np.random.default_rng(2)
+    T, K = 800, 8
+    tau = jnp.asarray(rng.random(T) * 5, jnp.float32)
+    counts = jnp.asarray(np.where(rng.random(T) < 0.2, rng.integers(1, 40, T), 0), jnp.float32)
+    keep = jnp.float32(0.7)
+    empty = (jnp.zeros((1, 3), jnp.int32), jnp.zeros((1, 2), jnp.int8), jnp.zeros((1,), jnp.int32),
+             jnp.zeros((2, 1), jnp.float32), jnp.zeros((2, 1), jnp.int32))
+    out = jax.jit(WN.deposit, static_argnums=(3, 4))(tau, empty, empty, T // K, K, counts, keep)
+    np.testing.assert_allclose(np.asarray(out), np.asarray(tau * jnp.power(keep, counts)), rtol=2e-6)
+    np.testing.assert_array_equal(np.asarray(out)[np.asarray(counts) == 0], np.asarray(tau)[np.asarray(counts) == 0])

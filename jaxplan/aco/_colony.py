@@ -74,6 +74,11 @@ class RunConfig:
       walk_backend: ``"jax"`` (the `lax.while_loop` walk, for any device), ``"numba"`` (one
         native call per iteration, `jaxplan.aco._walk_numba`; same results) or ``"auto"``
         (numba when JAX computes on the CPU).
+      update_backend: where the path statistics and deposits are computed after the walk:
+        ``"numba"`` (CPU; visits only the valid steps), ``"jax"`` (array operations over the whole
+        ``[ants, max_steps]`` buffers, any device) or ``"auto"`` (numba on the CPU). Independent of
+        ``walk_backend``, so both walks give the same results; the two updates may differ in the
+        last bits of the summed path statistics (another summation order).
     """
 
     colonies: int
@@ -86,6 +91,7 @@ class RunConfig:
     penalise: bool = False
     keep_pheromone: bool = False
     walk_backend: str = "auto"
+    update_backend: str = "auto"
 
     def __post_init__(self) -> None:
         for name in ("colonies", "ants", "iterations", "max_steps", "width"):
@@ -100,14 +106,16 @@ class RunConfig:
             raise ValueError("the dead-corner penalty needs dead_end='retreat'")
         if self.walk_backend not in WALK_BACKENDS:
             raise ValueError(f"walk_backend must be one of {WALK_BACKENDS}, got {self.walk_backend!r}")
+        if self.update_backend not in WALK_BACKENDS:
+            raise ValueError(f"update_backend must be one of {WALK_BACKENDS}, got {self.update_backend!r}")
 
 
 class ColonyState(NamedTuple):
     """What evolves between iterations.
 
     tau: ``f32[S, C, K]`` pheromone per colony and directed edge; alert: ``bool[C]``
-    pseudo-obstacles; bs_*: each colony's best-so-far path (cells ``[S, L + 1]``, moves
-    ``[S, L]``, n ``[S]``, cost ``[S]``, length ``[S]``, turns ``[S]``).
+    pseudo-obstacles; bs_*: each colony's best-so-far path (cells ``i32[S, L + 1]``, moves
+    ``i8[S, L]``, both zero past the path; n ``[S]``, cost ``[S]``, length ``[S]``, turns ``[S]``).
     """
 
     tau: jnp.ndarray
@@ -173,7 +181,7 @@ def _init_state(colony: Colony, cfg: RunConfig, tables: MapTables, params: dict)
         tau=jnp.broadcast_to(tau0, (S, C, K)).astype(jnp.float32),
         alert=jnp.zeros((C,), bool),
         bs_cells=jnp.zeros((S, L + 1), jnp.int32),
-        bs_moves=jnp.zeros((S, L), jnp.int32),
+        bs_moves=jnp.zeros((S, L), jnp.int8),
         bs_n=jnp.zeros((S,), jnp.int32),
         bs_cost=jnp.full((S,), jnp.inf, jnp.float32),
         bs_length=jnp.full((S,), jnp.inf, jnp.float32),
@@ -194,13 +202,16 @@ def _move_table(colony: Colony, tables: MapTables, params: dict, tau: jnp.ndarra
     return jnp.where(tables.valid, jnp.exp(logits - jnp.where(jnp.isfinite(mx), mx, 0.0)), 0.0)
 
 
-def _update(colony: Colony, cfg: RunConfig, tables: MapTables, params: dict, state: ColonyState, ants: Ants,
-            goal: GoalTables):
-    """One run's pheromone and best-so-far update from its ants (``[S * m]`` of them)."""
+def _choose(colony: Colony, cfg: RunConfig, tables: MapTables, params: dict, state: ColonyState, ants: Ants,
+            stats: R.PathStats, goal: GoalTables):
+    """One run's costs, deposit amounts and best-so-far update from its ants (``[S * m]`` of them).
+
+    Returns:
+      ``(state, deposit, outputs)``: the state with the new best-so-far paths (pheromone not yet
+      updated), the `R.Deposit` amounts, and (best cost, diversity, successes, ant steps).
+    """
     S, m = cfg.colonies, cfg.ants
-    C, K = tables.index.shape
-    CK = C * K
-    stats = R.path_stats(tables, ants)
+    L = cfg.max_steps
     ok = ants.status == GOAL
     cost = jnp.where(ok, colony.cost(stats, params, tables, goal), jnp.inf)
     cost = jnp.where(jnp.isnan(cost), jnp.inf, cost).reshape(S, m)
@@ -209,38 +220,87 @@ def _update(colony: Colony, cfg: RunConfig, tables: MapTables, params: dict, sta
     ant_idx = jnp.arange(S) * m + it_best
     it_cost = cost[jnp.arange(S), it_best]
     better = it_cost < state.bs_cost
-    bs_cells = jnp.where(better[:, None], ants.cells[ant_idx], state.bs_cells)
-    bs_moves = jnp.where(better[:, None], ants.moves[ant_idx], state.bs_moves)
-    bs_n = jnp.where(better, ants.n[ant_idx], state.bs_n)
+    # Path slots past n are unspecified in `Ants`: keep zeros there, so a run's outputs are its own.
+    new_n = ants.n[ant_idx]
+    new_cells = jnp.where(jnp.arange(L + 1)[None, :] <= new_n[:, None], ants.cells[ant_idx], 0)
+    new_moves = jnp.where(jnp.arange(L)[None, :] < new_n[:, None], ants.moves[ant_idx], 0).astype(jnp.int8)
+    bs_cells = jnp.where(better[:, None], new_cells, state.bs_cells)
+    bs_moves = jnp.where(better[:, None], new_moves, state.bs_moves)
+    bs_n = jnp.where(better, new_n, state.bs_n)
     bs_cost = jnp.where(better, it_cost, state.bs_cost)
     bs_length = jnp.where(better, length[jnp.arange(S), it_best], state.bs_length)
     bs_turns = jnp.where(better, stats.turns.reshape(S, m)[jnp.arange(S), it_best], state.bs_turns)
-    # Pheromone update: evaporation, deposits, dead-corner penalty, bounds.
-    evap = (1.0 - params["rho"]) if colony.evaporation == "rate" else params["rho_res"]
     dep = R.combine(colony.deposits, cost, bs_cost, params)
-    flat = (evap * state.tau).reshape(S * CK)
-    colony_of_ant = jnp.repeat(jnp.arange(S), m)
-    nxt = (jnp.arange(S) + 1) % S
-    if dep.own is not None:
-        flat = _scatter_paths(flat, colony_of_ant, ants.cells, ants.moves, ants.n, dep.own.ravel(), K, CK)
-    if dep.nbr is not None:
-        flat = _scatter_paths(flat, nxt[colony_of_ant], ants.cells, ants.moves, ants.n, dep.nbr.ravel(), K, CK)
-    if dep.bs_own is not None:
-        flat = _scatter_paths(flat, jnp.arange(S), bs_cells, bs_moves, bs_n, dep.bs_own, K, CK)
-    if dep.bs_nbr is not None:
-        flat = _scatter_paths(flat, nxt, bs_cells, bs_moves, bs_n, dep.bs_nbr, K, CK)
-    tau = flat.reshape(S, C, K)
-    if ants.penalty is not None:
-        tau = tau * jnp.power(1.0 - params["lambda_p"], ants.penalty.reshape(S, C, K))
-    tau = colony.bound(tau, params)
     alert = state.alert
     if ants.marks is not None:
         alert = alert | ants.marks
     n_ok = jnp.sum(ok)
     # Failed ants carry cost inf, so the finite costs are the successful ants (all colonies').
     diversity = run_metrics.diversity(cost, jnp.isfinite(cost), axis=None)
-    new = ColonyState(tau, alert, bs_cells, bs_moves, bs_n, bs_cost, bs_length, bs_turns)
-    return new, (jnp.min(bs_cost), diversity, n_ok.astype(jnp.int32), jnp.sum(ants.ant_steps))
+    new = ColonyState(state.tau, alert, bs_cells, bs_moves, bs_n, bs_cost, bs_length, bs_turns)
+    return new, dep, (jnp.min(bs_cost), diversity, n_ok.astype(jnp.int32), jnp.sum(ants.ant_steps))
+
+
+def _evaporate(colony: Colony, params: dict, tau: jnp.ndarray) -> jnp.ndarray:
+    """τ ← (1−ρ)·τ (``"rate"``) or ρ_res·τ (``"residual"``)."""
+    evap = (1.0 - params["rho"]) if colony.evaporation == "rate" else params["rho_res"]
+    return evap * tau
+
+
+def _deposit_jax(cfg: RunConfig, tau: jnp.ndarray, ants: Ants, state: ColonyState, dep: R.Deposit) -> jnp.ndarray:
+    """One run's deposits as XLA scatter-adds over the whole ``[S * m, L]`` path buffers (any device)."""
+    S, m = cfg.colonies, cfg.ants
+    _, C, K = tau.shape
+    CK = C * K
+    flat = tau.reshape(S * CK)
+    colony_of_ant = jnp.repeat(jnp.arange(S), m)
+    nxt = (jnp.arange(S) + 1) % S
+    moves, bs_moves = ants.moves.astype(jnp.int32), state.bs_moves.astype(jnp.int32)
+    if dep.own is not None:
+        flat = _scatter_paths(flat, colony_of_ant, ants.cells, moves, ants.n, dep.own.ravel(), K, CK)
+    if dep.nbr is not None:
+        flat = _scatter_paths(flat, nxt[colony_of_ant], ants.cells, moves, ants.n, dep.nbr.ravel(), K, CK)
+    if dep.bs_own is not None:
+        flat = _scatter_paths(flat, jnp.arange(S), state.bs_cells, bs_moves, state.bs_n, dep.bs_own, K, CK)
+    if dep.bs_nbr is not None:
+        flat = _scatter_paths(flat, nxt, state.bs_cells, bs_moves, state.bs_n, dep.bs_nbr, K, CK)
+    return flat.reshape(S, C, K)
+
+
+def _deposit_numba(cfg: RunConfig, params: dict, tau: jnp.ndarray, ants: Ants, state: ColonyState,
+                   dep: R.Deposit) -> jnp.ndarray:
+    """Every run's deposits in one native call over the successful ants' valid steps only, then
+    seed 004's dead-corner penalty on the edges retreated over.
+
+    Args:
+      tau: ``f32[B, S, C, K]`` evaporated pheromone; ants: all runs' ants (flat ``[B * S * m]``);
+      state: the runs' states with the new best-so-far paths (``[B, S, ...]``); dep: ``[B, S, m]`` /
+      ``[B, S]`` amounts.
+    """
+    B, S, C, K = tau.shape
+    m = cfg.ants
+    zeros = lambda shape: jnp.zeros(shape, jnp.float32)  # noqa: E731
+    pick = lambda a, shape: zeros(shape) if a is None else a.reshape(shape)  # noqa: E731
+    own_colony = jnp.repeat(jnp.arange(B * S), m)  # [B * S * m]: row b * S + s of tau
+    run_first = (own_colony // S) * S
+    nbr_colony = run_first + (own_colony - run_first + 1) % S
+    best_colony = jnp.arange(B * S)
+    best_nbr = (best_colony // S) * S + (best_colony % S + 1) % S
+    paths = (ants.cells, ants.moves, ants.n,
+             jnp.stack([pick(dep.own, (B * S * m,)), pick(dep.nbr, (B * S * m,))]),
+             jnp.stack([own_colony, nbr_colony]))
+    L = cfg.max_steps
+    best = (state.bs_cells.reshape(B * S, L + 1), state.bs_moves.reshape(B * S, L), state.bs_n.reshape(B * S),
+            jnp.stack([pick(dep.bs_own, (B * S,)), pick(dep.bs_nbr, (B * S,))]), jnp.stack([best_colony, best_nbr]))
+    keep = 1.0 - params["lambda_p"] if ants.penalty is not None else None
+    return _walk_numba.deposit(tau.reshape(-1), paths, best, C, K, ants.penalty, keep).reshape(B, S, C, K)
+
+
+def _finish(colony: Colony, params: dict, tau: jnp.ndarray, penalty: jnp.ndarray | None) -> jnp.ndarray:
+    """One run's pheromone after its deposits: seed 004's dead-corner penalty, then the bounds."""
+    if penalty is not None:
+        tau = tau * jnp.power(1.0 - params["lambda_p"], penalty.reshape(tau.shape))
+    return colony.bound(tau, params)
 
 
 def walk_backend(colony: Colony, cfg: RunConfig) -> str:
@@ -251,6 +311,14 @@ def walk_backend(colony: Colony, cfg: RunConfig) -> str:
             raise ValueError(f"colony {colony.name!r}: its walk hook has no table form for walk_backend='numba'")
         return "jax"
     return backend
+
+
+def update_backend(cfg: RunConfig) -> str:
+    """Where path statistics and deposits are computed: ``"numba"`` (one native call each, over the
+    valid steps only) when JAX computes on the CPU, whatever walk the ants take, else ``"jax"``."""
+    if cfg.update_backend == "auto":
+        return "numba" if jax.default_backend() == "cpu" else "jax"
+    return cfg.update_backend
 
 
 def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys: jax.Array) -> RunOutput:
@@ -284,12 +352,18 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
     backend = walk_backend(colony, cfg)
     if colony.hook is not None and backend == "jax":
         hook = functools.partial(colony.hook, tables, params, h_cell.reshape(B * C))
-    iter_keys = jnp.swapaxes(jax.vmap(lambda k: jax.random.split(k, I))(key_b), 0, 1)  # [I, B]
-    update = jax.vmap(functools.partial(_update, colony, cfg, tables, params))
+    # One seed per run and iteration, all drawn before the loop in one threefry call per run: the
+    # walk's uniforms are hashed from it (`hash_uniform`). Keeping key splits and draws out of the
+    # loop body keeps the compiled program small (XLA's CPU compile time grows with its kernels).
+    iter_seeds = jax.vmap(lambda k: jax.random.bits(k, (I,), jnp.uint32))(key_b).T  # [I, B]
+    choose = jax.vmap(functools.partial(_choose, colony, cfg, tables, params))
+    evaporate = jax.vmap(functools.partial(_evaporate, colony, params))
+    finish = jax.vmap(functools.partial(_finish, colony, params))
+    native_update = update_backend(cfg) == "numba"
+    stat_tables = _walk_numba.stat_tables(tables) if native_update else None
 
-    def iteration(state: ColonyState, keys_i):
+    def iteration(state: ColonyState, seeds):
         table = jax.vmap(functools.partial(_move_table, colony, tables, params))(state.tau, log_eta)
-        seeds = jax.vmap(lambda k: jax.random.bits(k, (), jnp.uint32))(keys_i)
         walk_args = (nbr, table.reshape(B * S * C, K), start, goal, row0, cell0, seeds[run_of], local,
                      state.alert.reshape(B * C) if cfg.dead_end == "alert" else None)
         sizes = dict(max_steps=L, width=cfg.width, lut=lut, dead_end=cfg.dead_end,
@@ -299,7 +373,7 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
             if colony.hook is not None:
                 logits = colony.hook_logits(tables, params, h_cell, table)
                 hook_tables = HookTables(logits, tables.right_turn, tables.turn_rule)
-            ants = _walk_numba.walk(*walk_args, **sizes, hook=hook_tables)
+            ants = _walk_numba.walk(*walk_args, **sizes, hook=hook_tables, stats=stat_tables)
         else:
             ants = walk(*walk_args, **sizes, hook=hook)
         per_run = Ants(
@@ -310,10 +384,24 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
             marks=None if ants.marks is None else ants.marks.reshape(B, C),
             slots=jnp.broadcast_to(ants.slots, (B,)),
         )
-        state, (best, diversity, successes, ant_steps) = update(state, per_run, goal_b)
+        if native_update:
+            # Sums over the valid steps only; the numba walk has them already, a JAX walk's paths get
+            # the same kernel (so both walks give the same bits).
+            rows = ants.stats if ants.stats is not None else _walk_numba.path_stats(
+                stat_tables, ants.cells, ants.moves, ants.n)
+            stats = R.stats_from_rows(rows.reshape(-1, B, M))
+        else:
+            stats = jax.vmap(functools.partial(R.path_stats, tables))(per_run)
+        state, dep, (best, diversity, successes, ant_steps) = choose(state, per_run, stats, goal_b)
+        tau = evaporate(state.tau)
+        if native_update:
+            tau = finish(_deposit_numba(cfg, params, tau, ants, state, dep), None)  # penalty included
+        else:
+            tau = finish(jax.vmap(functools.partial(_deposit_jax, cfg))(tau, per_run, state, dep), per_run.penalty)
+        state = state._replace(tau=tau)
         return state, (best, diversity, successes, ant_steps, per_run.loop_steps, per_run.slots)
 
-    state, outs = jax.lax.scan(iteration, state, iter_keys)
+    state, outs = jax.lax.scan(iteration, state, iter_seeds)
     history, diversity, successes, ant_steps, loop_steps, slots = (jnp.swapaxes(o, 0, 1) for o in outs)  # [B, I]
     best = jnp.argmin(state.bs_cost, axis=1)
     pick = lambda a: a[jnp.arange(B), best]  # noqa: E731

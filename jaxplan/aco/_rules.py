@@ -48,6 +48,14 @@ class PathStats(NamedTuple):
 
 
 def path_stats(tables: MapTables, ants: Ants) -> PathStats:
+    """`PathStats` of ``ants`` (``[A, L]`` moves, ``[A, L + 1]`` cells) as array operations over whole buffers.
+
+    On a CPU the colony takes them from the numba kernels instead (`jaxplan.aco._walk_numba.path_stats`:
+    the same sums over the valid steps only, added left to right; XLA may add in another order, so the
+    last bits can differ).
+    """
+    moves = ants.moves.astype(jnp.int32)
+    ants = ants._replace(moves=moves)
     L = ants.moves.shape[1]
     t = jnp.arange(L)
     step_mask = t[None, :] < ants.n[:, None]  # [A, L]
@@ -69,6 +77,11 @@ def path_stats(tables: MapTables, ants: Ants) -> PathStats:
     mean_h = jnp.sum(jnp.where(cell_mask, h, 0.0), axis=1) / count
     msd = jnp.sum(jnp.where(cell_mask, (h - mean_h[:, None]) ** 2, 0.0), axis=1) / count
     return PathStats(length, turns, heading, inv_clear, risk, msd, count)
+
+
+def stats_from_rows(rows: jnp.ndarray) -> PathStats:
+    """`PathStats` from the rows of a ``f32[7, ...]`` array (the numba kernels' layout, fields in order)."""
+    return PathStats(*(rows[i] for i in range(len(PathStats._fields))))
 
 
 # ---------------------------------------------------------------------------------------------

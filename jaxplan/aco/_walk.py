@@ -27,8 +27,8 @@ class Ants(NamedTuple):
     """Paths of one iteration's ants.
 
     Attributes:
-      cells: ``i32[A, L + 1]`` visited cells; entries past ``n`` are stale.
-      moves: ``i32[A, L]`` move index taken at each step.
+      cells: ``i32[A, L + 1]`` visited cells; entries past ``n`` are unspecified (stale or never written).
+      moves: ``i8[A, L]`` move index taken at each step; entries from ``n`` on are unspecified.
       n: ``i32[A]`` number of moves in the final path.
       status: ``i32[A]``: 1 goal reached, 2 stopped at a dead end, 3 step limit.
       penalty: ``f32[C * K]`` or ``None``: count of retreats over each edge (seed 004's
@@ -38,6 +38,8 @@ class Ants(NamedTuple):
       slots: ``i32`` ant slots the loop processed (``A`` per step, ``A/4`` once compacted).
       marks: ``bool[B * C]`` (``dead_end="alert"``): cells found to be true dead ends
         (no allowed move but the way back), to become pseudo-obstacles of their run.
+      stats: ``f32[N_STATS, A]`` path statistics (`jaxplan.aco._walk_numba.path_stats`), from the
+        numba walk; None from `walk`.
     """
 
     cells: jnp.ndarray
@@ -49,6 +51,7 @@ class Ants(NamedTuple):
     loop_steps: jnp.ndarray
     marks: jnp.ndarray | None = None
     slots: jnp.ndarray | None = None
+    stats: jnp.ndarray | None = None
 
 
 def draw(p: jnp.ndarray, nb: jnp.ndarray, u: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray, jnp.ndarray]:
@@ -270,6 +273,6 @@ def walk(
     t, st, _, cells, (penalty, marks) = carry
     pos, prev, n, status, counted = st
     status = jnp.where(status == WALKING, STEP_LIMIT, status)
-    moves = jnp.maximum(moves_between(cells[:, :-1], cells[:, 1:], width, lut), 0)
+    moves = jnp.maximum(moves_between(cells[:, :-1], cells[:, 1:], width, lut), 0).astype(jnp.int8)
     return Ants(cells=cells, moves=moves, n=n, status=status, penalty=penalty,
                 ant_steps=counted, loop_steps=t, marks=marks, slots=slots)

@@ -7,12 +7,13 @@ iteration (every run, colony and ant, from the start until goal, dead end or ste
 limit) is one compiled call: each ant walks to the end on its own, the ants are shared
 out over the cores with `prange`. The JAX program calls it as an XLA FFI custom call (a
 numba `cfunc` registered with `jax.ffi`; CPU only), so the iterations' `lax.scan`, the
-move tables, deposits and everything else stay in JAX, and the JAX walk stays the one
-for GPUs.
+move tables and the rules stay in JAX, and the JAX walk stays the one for GPUs. Two more
+native kernels serve the colony's update on the CPU (for either walk): `path_stats` and
+`deposit` visit only the valid steps of the paths instead of whole ``[A, L]`` buffers.
 
 The result equals `walk`'s bit for bit: the same counter-based uniforms (`hash_uniform`,
 one per ant and step), the same float32 inverse-CDF sums in the same order, the same
-dead-end rules, path buffers (including entries past ``n``), penalty counts, dead-end
+dead-end rules, paths (up to ``n``; slots past it are left unwritten), penalty counts, dead-end
 marks and throughput counters (``loop_steps`` and ``slots`` are those the JAX loop,
 with its compaction, would report). With a walk hook (seed 002's `opt_ant`) the hook's
 state-dependent logits come from a table precomputed in JAX (`hook_logits`: one value
@@ -41,7 +42,8 @@ from numba.extending import intrinsic
 
 from jaxplan.aco._walk import COMPACT_FACTOR, COMPACT_MIN_ANTS, DEAD_END, GOAL, STEP_LIMIT, WALKING, Ants
 
-__all__ = ["WALK_BACKENDS", "HookTables", "resolve_backend", "walk"]
+__all__ = ["WALK_BACKENDS", "N_STATS", "HookTables", "StatTables", "resolve_backend", "stat_tables", "walk",
+           "path_stats", "deposit"]
 
 WALK_BACKENDS = ("jax", "numba", "auto")
 _MODES = {"die": 0, "retreat": 1, "alert": 2}
@@ -158,14 +160,112 @@ def _u2f(typingctx, x):
 
 
 # ---------------------------------------------------------------------------------------------
+# Path statistics and deposits: per ant, over the valid steps only.
+
+# Rows of the statistics output (`jaxplan.aco._rules.PathStats` fields, in order).
+N_STATS = 7
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _ant_stats(a, cells, moves, n, movef, cellf, K, stats):
+    """`jaxplan.aco._rules.path_stats` of ant ``a`` (moves ``[0, n)``, cells ``[0, n]``) into ``stats[:, a]``.
+
+    float32 sums from the first step to the last. ``movef``: ``f32[K + K * K]`` move lengths, then
+    |heading change| per pair of moves; ``cellf``: ``f32[3, C]`` clearance, risk, height.
+    """
+    length = _F(0.0)
+    turns = _F(0.0)
+    heading = _F(0.0)
+    for t in range(n):
+        mv = np.int64(moves[a, t])
+        length += movef[mv]
+        if t > 0:
+            before = np.int64(moves[a, t - 1])
+            if mv != before:
+                turns += _F(1.0)
+                heading += movef[K + before * K + mv]
+    inv_clear = _F(0.0)
+    risk = _F(0.0)
+    h_sum = _F(0.0)
+    for t in range(n + 1):
+        c = cells[a, t]
+        inv_clear += _F(1.0) / cellf[0, c]
+        risk += cellf[1, c]
+        h_sum += cellf[2, c]
+    count = _F(n + 1)
+    mean_h = h_sum / count
+    msd = _F(0.0)
+    for t in range(n + 1):
+        d = cellf[2, cells[a, t]] - mean_h
+        msd += d * d
+    stats[0, a] = length
+    stats[1, a] = turns
+    stats[2, a] = heading
+    stats[3, a] = inv_clear
+    stats[4, a] = risk
+    stats[5, a] = msd / count
+    stats[6, a] = count
+
+
+@njit(cache=True, nogil=True)
+def _stats_chunk(c, n_chunks, cells, moves, n, movef, cellf, K, stats):
+    for a in range(c, n.shape[0], n_chunks):
+        _ant_stats(a, cells, moves, n[a], movef, cellf, K, stats)
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _stats_chunks(n_chunks, cells, moves, n, movef, cellf, K, stats):
+    for c in prange(n_chunks):
+        _stats_chunk(c, n_chunks, cells, moves, n, movef, cellf, K, stats)
+
+
+@njit(cache=True, nogil=True)
+def _stats_all(cells, moves, n, movef, cellf, K, n_chunks, stats):
+    """`_ant_stats` of every ant (for paths walked in JAX: the same numbers as the numba walk's)."""
+    if n_chunks == 1:
+        _stats_chunk(0, 1, cells, moves, n, movef, cellf, K, stats)
+    else:
+        _stats_chunks(n_chunks, cells, moves, n, movef, cellf, K, stats)
+
+
+@njit(cache=True, nogil=True)
+def _deposit_paths(tau, cells, moves, n, amount, colony, CK, K):
+    """``tau[colony[p] * CK + cells[p, t] * K + moves[p, t]] += amount[p]`` for ``t < n[p]``, path by path,
+    step by step (the order of XLA's scatter-add over the same ``[P, L]`` updates). A zero amount is
+    skipped: adding +0 to a non-negative τ changes nothing, and failed ants deposit 0."""
+    for q in range(n.shape[0]):
+        w = amount[q]
+        if w == _F(0.0):
+            continue
+        base = np.int64(colony[q]) * CK
+        for t in range(n[q]):
+            tau[base + np.int64(cells[q, t]) * K + np.int64(moves[q, t])] += w
+
+
+@njit(cache=True, nogil=True)
+def _penalise(tau, counts, keep):
+    """Seed 004's dead-corner penalty: ``tau[e] *= keep ** counts[e]`` where an edge was retreated over.
+
+    A pass over the counts, with a power only where one is non-zero (XLA's `jnp.power` over every
+    edge cost praco ~1.7 ms per iteration on a 100x100 map with 5 colonies; libm's powf may differ
+    from XLA's in the last bit).
+    """
+    for e in range(counts.shape[0]):
+        c = counts[e]
+        if c != _F(0.0):
+            tau[e] = tau[e] * keep ** c
+
+
+# ---------------------------------------------------------------------------------------------
 # The walk.
 
 
 @njit(cache=True, nogil=True)
 def _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
-              max_steps, width, lut, mode, has_hook, penalise, cells, moves, n_out, status_out, steps_out,
-              penalty, marks, seen, p, ok, is_goal):
-    """Walks ant ``a`` to its end; ``seen`` is the chunk's tabu, stamped with ``a + 1`` (never cleared)."""
+              max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out, steps_out,
+              penalty, marks, stats, seen, p, ok, is_goal):
+    """Walks ant ``a`` to its end and sums its path statistics; ``seen`` is the chunk's tabu, stamped
+    with ``a + 1`` (never cleared). Path slots past the final ``n`` are left as they are."""
     K = nbr.shape[1]
     L = max_steps
     s0 = start[a]
@@ -179,7 +279,6 @@ def _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, c
     pos = s0
     prev = -1
     n = 0
-    high = 0  # deepest path slot written: `cells` beyond it keep their zeros
     status = WALKING
     cells[a, 0] = s0
     seen[s0] = stamp
@@ -246,7 +345,6 @@ def _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, c
             moves[a, n] = k  # the move between slots n and n + 1, as `walk` derives it
             n += 1
             cells[a, n] = new
-            high = max(high, n)
             seen[new] = stamp
             prev = k
             pos = new
@@ -278,39 +376,57 @@ def _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, c
     n_out[a] = n
     status_out[a] = status
     steps_out[a] = t
-    # `walk` derives every move from consecutive slots, stale ones included: slots up to n hold
-    # the path (moves recorded above); past it, a retreat may have left an older branch behind.
-    # The output buffers come uninitialised from XLA: `walk`'s zeros past the deepest slot.
-    for j in range(high + 1, L + 1):
-        cells[a, j] = 0
-    stale_end = min(high + 1, L)
-    for j in range(n, stale_end):
-        m = _move_between(cells[a, j], cells[a, j + 1], width, lut)
-        moves[a, j] = max(m, 0)
-    for j in range(max(n, stale_end), L):
-        moves[a, j] = 0
+    # While the path is still in cache (the colony needs them for every ant, successful or not).
+    _ant_stats(a, cells, moves, n, movef, cellf, K, stats)
+
+
+@njit(cache=True, nogil=True)
+def _walk_chunk(c, n_chunks, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+                max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
+                steps_out, part, marks, stats):
+    """Walks ants c, c + n_chunks, ... one after another (a sequential function: called from a
+    parallel loop, its array set-up must not become a parallel region of its own)."""
+    A = start.shape[0]
+    C, K = nbr.shape
+    seen = np.zeros(C, np.int32)
+    p = np.empty(K, np.float32)
+    ok = np.empty(K, np.bool_)
+    is_goal = np.empty(K, np.bool_)
+    for a in range(c, A, n_chunks):
+        _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+                  max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
+                  steps_out, part, marks, stats, seen, p, ok, is_goal)
 
 
 @njit(cache=True, nogil=True, parallel=True)
+def _walk_chunks(n_chunks, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+                 max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
+                 steps_out, parts, marks, stats):
+    """The chunks in parallel: this loop is the kernel's only parallel region (each region is a
+    fork and a join of numba's threads, which costs a scheduler time slice on a busy machine)."""
+    for c in prange(n_chunks):
+        _walk_chunk(c, n_chunks, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local,
+                    alert, max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out,
+                    status_out, steps_out, parts[c] if penalise else parts[0], marks, stats)
+
+
+@njit(cache=True, nogil=True)
 def _walk_all(nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
-              max_steps, width, lut, mode, has_hook, penalise, n_chunks,
-              cells, moves, n_out, status_out, steps_out, penalty, marks):
+              max_steps, width, lut, mode, has_hook, penalise, n_chunks, movef, cellf,
+              cells, moves, n_out, status_out, steps_out, penalty, marks, stats):
     """Walks every ant; chunk c takes ants c, c + n_chunks, ... (interleaved: ants of every run
-    and colony are spread over the chunks, which evens out their different walk lengths)."""
-    A = start.shape[0]
-    C, K = nbr.shape
+    and colony are spread over the chunks, which evens out their different walk lengths). One
+    chunk runs without numba's thread pool."""
     marks[:] = 0
     parts = np.zeros((n_chunks if penalise else 1, penalty.shape[0]), np.float32)
-    for c in prange(n_chunks):
-        seen = np.zeros(C, np.int32)
-        p = np.empty(K, np.float32)
-        ok = np.empty(K, np.bool_)
-        is_goal = np.empty(K, np.bool_)
-        part = parts[c] if penalise else parts[0]
-        for a in range(c, A, n_chunks):
-            _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
-                      max_steps, width, lut, mode, has_hook, penalise, cells, moves, n_out, status_out, steps_out,
-                      part, marks, seen, p, ok, is_goal)
+    if n_chunks == 1:
+        _walk_chunk(0, 1, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+                    max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
+                    steps_out, parts[0], marks, stats)
+    else:
+        _walk_chunks(n_chunks, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+                     max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
+                     steps_out, parts, marks, stats)
     # Counts of +1.0 are exact in float32 (below 2^24), so the chunk order does not matter.
     penalty[:] = 0.0
     if penalise:
@@ -419,13 +535,14 @@ def _dim(dims, i):
     return _i64(dims + 8 * i)
 
 
-def _handler(frame):
-    """``XLA_FFI_Error* handler(XLA_FFI_CallFrame*)`` for `walk`'s call; see `_ARGS` for the buffers."""
-    base = _address(frame)
+@njit(cache=True, nogil=True, inline="always")
+def _not_execute(base):
+    """Answers XLA's metadata query (FFI API version 0.1, no traits, stateless); True unless this
+    call is the EXECUTE stage, the only one with work."""
     ext = _i64(base + 8)
     if ext != 0 and _i32(ext + 8) == 1:
-        # XLA asks for the handler's metadata (XLA_FFI_Metadata_Extension): FFI API version 0.1,
-        # no traits, stateless. Older minor versions are accepted by every newer XLA.
+        # XLA asks for the handler's metadata (XLA_FFI_Metadata_Extension). Older minor versions
+        # are accepted by every newer XLA.
         meta = _i64(ext + 24)
         m64 = numba.carray(_I64P(meta), (6,))
         m32 = numba.carray(_I32P(meta), (12,))
@@ -435,8 +552,14 @@ def _handler(frame):
         m32[7] = 1  # minor
         m32[8] = 0  # traits
         m64[5] = 0  # state_type_id: XLA_FFI_UNKNOWN_TYPE_ID
-        return _null()
-    if _i32(base + 32) != 3:  # only the EXECUTE stage has work
+        return True
+    return _i32(base + 32) != 3
+
+
+def _walk_handler(frame):
+    """``XLA_FFI_Error* handler(XLA_FFI_CallFrame*)`` for `walk`'s call; see `walk` for the buffers."""
+    base = _address(frame)
+    if _not_execute(base):
         return _null()
     args = _i64(base + 40 + 32)
     rets = _i64(base + 80 + 32)
@@ -464,6 +587,10 @@ def _handler(frame):
     d, s = _buffer(args, 9)
     cfg = numba.carray(_I32P(d), (6,))
     L = np.int64(cfg[0])
+    d, s = _buffer(args, 10)
+    movef = numba.carray(_F32P(d), (K + K * K,))
+    d, s = _buffer(args, 11)
+    cellf = numba.carray(_F32P(d), (3, _dim(s, 1)))
     d, s = _buffer(rets, 0)
     cells = numba.carray(_I32P(d), (A, L + 1))
     d, s = _buffer(rets, 1)
@@ -476,27 +603,104 @@ def _handler(frame):
     penalty = numba.carray(_F32P(d), (_dim(s, 0),))
     d, s = _buffer(rets, 5)
     marks = numba.carray(_U8P(d), (_dim(s, 0),))
+    d, s = _buffer(rets, 6)
+    stats = numba.carray(_F32P(d), (N_STATS, A))
     _walk_all(nbr, table, hook_l, right_turn, turn_rule, ints[0], ints[1], ints[2], ints[3], seed, ints[4], alert,
-              L, np.int64(cfg[1]), lut, np.int64(cfg[2]), cfg[3] != 0, cfg[4] != 0, np.int64(cfg[5]),
-              cells, moves, per_ant[0], per_ant[1], per_ant[2], penalty, marks)
+              L, np.int64(cfg[1]), lut, np.int64(cfg[2]), cfg[3] != 0, cfg[4] != 0, np.int64(cfg[5]), movef, cellf,
+              cells, moves, per_ant[0], per_ant[1], per_ant[2], penalty, marks, stats)
     _loop_counters(per_ant[2], L, counters)
     return _null()
 
 
-_TARGET = "jaxplan_aco_walk"
-_HANDLER = None  # the compiled cfunc, kept alive while XLA may call it
+def _stats_handler(frame):
+    """The handler of `path_stats`: cells ``i32[A, L + 1]``, moves ``i8[A, L]``, n ``i32[A]``, movef, cellf,
+    ``i32[1]`` parallel chunks -> stats ``f32[N_STATS, A]``."""
+    base = _address(frame)
+    if _not_execute(base):
+        return _null()
+    args = _i64(base + 40 + 32)
+    rets = _i64(base + 80 + 32)
+    d, s = _buffer(args, 0)
+    A = _dim(s, 0)
+    L1 = _dim(s, 1)
+    cells = numba.carray(_I32P(d), (A, L1))
+    d, s = _buffer(args, 1)
+    moves = numba.carray(_I8P(d), (A, L1 - 1))
+    d, s = _buffer(args, 2)
+    n = numba.carray(_I32P(d), (A,))
+    d, s = _buffer(args, 3)
+    nf = _dim(s, 0)
+    K = np.int64(0)
+    while K + K * K < nf:
+        K += 1
+    movef = numba.carray(_F32P(d), (nf,))
+    d, s = _buffer(args, 4)
+    cellf = numba.carray(_F32P(d), (3, _dim(s, 1)))
+    d, s = _buffer(args, 5)
+    n_chunks = np.int64(numba.carray(_I32P(d), (1,))[0])
+    d, s = _buffer(rets, 0)
+    stats = numba.carray(_F32P(d), (N_STATS, A))
+    _stats_all(cells, moves, n, movef, cellf, K, n_chunks, stats)
+    return _null()
+
+
+def _deposit_handler(frame):
+    """The handler of `deposit`: tau ``f32[T]`` (aliased to the result), then for the ants and for the
+    best-so-far paths each: cells ``i32[P, L + 1]``, moves ``i8[P, L]``, n ``i32[P]``, amounts ``f32[2, P]``,
+    colonies ``i32[2, P]``; then ``i32[2]`` (C·K, K), the retreat counts ``f32[T]`` (or ``[1]``: none) and
+    ``f32[1]`` the factor an edge keeps per retreat."""
+    base = _address(frame)
+    if _not_execute(base):
+        return _null()
+    args = _i64(base + 40 + 32)
+    rets = _i64(base + 80 + 32)
+    d, s = _buffer(rets, 0)
+    tau = numba.carray(_F32P(d), (_dim(s, 0),))
+    d, s = _buffer(args, 11)
+    sizes = numba.carray(_I32P(d), (2,))
+    CK = np.int64(sizes[0])
+    K = np.int64(sizes[1])
+    # Own-colony deposits of the ants, their deposits into the next colony, then the best-so-far
+    # paths' (own, next): the order `jaxplan.aco._colony._deposit_jax` adds them in.
+    for group in range(2):
+        d, s = _buffer(args, 1 + 5 * group)
+        P = _dim(s, 0)
+        L1 = _dim(s, 1)
+        cells = numba.carray(_I32P(d), (P, L1))
+        d, s = _buffer(args, 2 + 5 * group)
+        moves = numba.carray(_I8P(d), (P, L1 - 1))
+        d, s = _buffer(args, 3 + 5 * group)
+        n = numba.carray(_I32P(d), (P,))
+        d, s = _buffer(args, 4 + 5 * group)
+        amounts = numba.carray(_F32P(d), (2, P))
+        d, s = _buffer(args, 5 + 5 * group)
+        colonies = numba.carray(_I32P(d), (2, P))
+        for kind in range(2):
+            _deposit_paths(tau, cells, moves, n, amounts[kind], colonies[kind], CK, K)
+    d, s = _buffer(args, 12)
+    penalty = numba.carray(_F32P(d), (_dim(s, 0),))
+    d, s = _buffer(args, 13)
+    keep = numba.carray(_F32P(d), (1,))
+    if penalty.shape[0] == tau.shape[0]:
+        _penalise(tau, penalty, keep[0])
+    return _null()
+
+
+_TARGETS = {"jaxplan_aco_walk": _walk_handler, "jaxplan_aco_path_stats": _stats_handler,
+            "jaxplan_aco_deposit": _deposit_handler}
+_HANDLERS: dict = {}  # the compiled cfuncs, kept alive while XLA may call them
 
 
 def _register() -> None:
-    """Compiles (or loads from numba's cache) the handler and registers it with XLA, once."""
-    global _HANDLER
-    if _HANDLER is None:
-        # Start numba's thread pool first: loading the cached handler links the parallel kernel
+    """Compiles (or loads from numba's cache) the handlers and registers them with XLA, once."""
+    if not _HANDLERS:
+        # Start numba's thread pool first: loading a cached handler links the parallel kernels
         # against the pool's launch functions, which are null until then.
         numba.get_num_threads()
-        handler = numba.cfunc(types.voidptr(types.voidptr), cache=True, nopython=True)(_handler)
-        jax.ffi.register_ffi_target(_TARGET, jax.ffi.pycapsule(handler.ctypes), platform="cpu")
-        _HANDLER = handler
+        for target, fn in _TARGETS.items():
+            handler = numba.cfunc(types.voidptr(types.voidptr), cache=True, nopython=True)(fn)
+            jax.ffi.register_ffi_target(target, jax.ffi.pycapsule(handler.ctypes), platform="cpu")
+            _HANDLERS[target] = handler
 
 
 def _n_chunks(A: int) -> int:
@@ -506,6 +710,70 @@ def _n_chunks(A: int) -> int:
     except AttributeError:  # not on Linux
         cores = os.cpu_count() or 1
     return max(1, min(numba.get_num_threads(), cores, A))
+
+
+class StatTables(NamedTuple):
+    """The per-map numbers `jaxplan.aco._rules.path_stats` reads, packed for the numba kernels.
+
+    Attributes:
+      movef: ``f32[K + K * K]`` move lengths (m), then |heading change| from move i to move j at ``K + i * K + j``.
+      cellf: ``f32[3, C]`` clearance (m), risk, height (m) per cell.
+    """
+
+    movef: jnp.ndarray
+    cellf: jnp.ndarray
+
+
+def stat_tables(tables) -> StatTables:
+    """`StatTables` of a `jaxplan.aco._context.MapTables`."""
+    movef = jnp.concatenate([tables.step, tables.turn_angle.reshape(-1)]).astype(jnp.float32)
+    cellf = jnp.stack([tables.clearance, tables.risk, tables.height]).astype(jnp.float32)
+    return StatTables(movef, cellf)
+
+
+def path_stats(st: StatTables, cells: jnp.ndarray, moves: jnp.ndarray, n: jnp.ndarray) -> jnp.ndarray:
+    """``f32[N_STATS, A]``: the statistics the numba walk returns, for paths walked elsewhere.
+
+    Args:
+      cells: ``i32[A, L + 1]``; moves: ``i8[A, L]``; n: ``i32[A]`` (slots past ``n`` are not read).
+    """
+    _register()
+    A = n.shape[0]
+    call = jax.ffi.ffi_call("jaxplan_aco_path_stats", jax.ShapeDtypeStruct((N_STATS, A), jnp.float32),
+                            vmap_method="sequential")
+    return call(jnp.asarray(cells, jnp.int32), jnp.asarray(moves, jnp.int8), jnp.asarray(n, jnp.int32), st.movef,
+                st.cellf, jnp.asarray(np.array([_n_chunks(A)], np.int32)))
+
+
+def deposit(tau: jnp.ndarray, paths: tuple, best: tuple, C: int, K: int, penalty: jnp.ndarray | None = None,
+            keep: jnp.ndarray | None = None) -> jnp.ndarray:
+    """Adds deposits along paths to the flat pheromone ``tau f32[T]`` (T = G·C·K), in one native call.
+
+    Only the valid steps of paths with a non-zero amount are visited, so the cost is that of the
+    successful ants' steps, not of the ``[P, L]`` buffers. The result equals XLA's scatter-add of
+    the same amounts (`jaxplan.aco._colony._scatter_paths`) bit for bit: same additions, same order.
+
+    Args:
+      tau: ``f32[T]`` pheromone (already evaporated); its buffer is updated in place.
+      paths, best: ``(cells i32[P, L + 1], moves i8[P, L], n i32[P], amounts f32[2, P], colonies i32[2, P])``
+        for the ants and for the best-so-far paths: amounts ``[0]`` go to colony ``colonies[0]``
+        (row ``colony * C * K`` of ``tau``), then amounts ``[1]`` to ``colonies[1]``.
+      C, K: cells and moves per cell.
+      penalty: optional ``f32[T]`` retreat counts per edge (seed 004): after the deposits, an edge
+        keeps ``keep ** count`` of its pheromone; keep: ``f32`` scalar, 1 − λ_p.
+    """
+    _register()
+    T = tau.shape[0]
+    args = []
+    for cells, moves, n, amounts, colonies in (paths, best):
+        args += [jnp.asarray(cells, jnp.int32), jnp.asarray(moves, jnp.int8), jnp.asarray(n, jnp.int32),
+                 jnp.asarray(amounts, jnp.float32), jnp.asarray(colonies, jnp.int32)]
+    call = jax.ffi.ffi_call("jaxplan_aco_deposit", jax.ShapeDtypeStruct((T,), jnp.float32),
+                            vmap_method="sequential", input_output_aliases={0: 0})
+    if penalty is None:
+        penalty, keep = jnp.zeros((1,), jnp.float32), jnp.float32(1.0)
+    return call(tau, *args, jnp.asarray(np.array([C * K, K], np.int32)), jnp.asarray(penalty, jnp.float32).reshape(-1),
+                jnp.asarray(keep, jnp.float32).reshape(1))
 
 
 def walk(
@@ -525,12 +793,16 @@ def walk(
     dead_end: str,
     penalty_size: int = 0,
     hook: HookTables | None = None,
+    stats: StatTables | None = None,
 ) -> Ants:
-    """`jaxplan.aco._walk.walk` as one native call (XLA FFI, CPU): same arguments, same `Ants`, bit for bit.
+    """`jaxplan.aco._walk.walk` as one native call (XLA FFI, CPU): same arguments, same `Ants`, bit for bit
+    on every path slot up to ``n`` (slots past it are unspecified in both), plus ``Ants.stats``.
 
     ``table`` is not used when ``hook`` is given (the hook's logits are in `HookTables.logits`,
-    built by the colony's ``hook_logits`` rule). Works under `jit`, `lax.scan` and `vmap` (a
-    vmapped batch is walked element by element, each in parallel over its ants).
+    built by the colony's ``hook_logits`` rule). ``stats``: the map's `StatTables`; each ant's path
+    statistics are summed as soon as it stops (``Ants.stats``, as `path_stats` computes them; zeros'
+    worth of tables when None). Works under `jit`, `lax.scan` and `vmap` (a vmapped batch is walked
+    element by element, each in parallel over its ants).
     """
     _register()
     A = start.shape[0]
@@ -544,6 +816,8 @@ def walk(
         hook_l, right_turn, turn_rule = hook.logits, hook.right_turn, hook.turn_rule
         table = jnp.zeros((1, K), jnp.float32)  # unused
     n_marks = alert.shape[0] if mode == _ALERT else 0
+    if stats is None:
+        stats = StatTables(jnp.ones((K + K * K,), jnp.float32), jnp.ones((3, C), jnp.float32))
     cfg = np.array([L, width, mode, hook is not None, penalty_size > 0, _n_chunks(A)], np.int32)
     shapes = [
         jax.ShapeDtypeStruct((A, L + 1), jnp.int32),  # cells
@@ -553,14 +827,15 @@ def walk(
         jax.ShapeDtypeStruct((2,), jnp.int32),  # loop_steps, slots
         jax.ShapeDtypeStruct((max(penalty_size, 1),), jnp.float32),
         jax.ShapeDtypeStruct((max(n_marks, 1),), jnp.bool_),
+        jax.ShapeDtypeStruct((N_STATS, A), jnp.float32),
     ]
-    call = jax.ffi.ffi_call(_TARGET, shapes, vmap_method="sequential")
-    cells, moves, per_ant, counters, penalty, marks = call(
+    call = jax.ffi.ffi_call("jaxplan_aco_walk", shapes, vmap_method="sequential")
+    cells, moves, per_ant, counters, penalty, marks, path_st = call(
         i32(nbr), jnp.asarray(table, jnp.float32), jnp.asarray(hook_l, jnp.float32), i32(right_turn),
         jnp.asarray(turn_rule, bool), jnp.stack([i32(start), i32(goal), i32(row0), i32(cell0), i32(local)]),
         jnp.asarray(seed, jnp.uint32), i32(lut), jnp.asarray(alert, bool) if n_marks else jnp.zeros((1,), bool),
-        jnp.asarray(cfg),
+        jnp.asarray(cfg), stats.movef, stats.cellf,
     )
-    return Ants(cells=cells, moves=moves.astype(jnp.int32), n=per_ant[0], status=per_ant[1],
+    return Ants(cells=cells, moves=moves, n=per_ant[0], status=per_ant[1],
                 penalty=penalty if penalty_size else None, ant_steps=per_ant[2], loop_steps=counters[0],
-                marks=marks if n_marks else None, slots=counters[1])
+                marks=marks if n_marks else None, slots=counters[1], stats=path_st)
