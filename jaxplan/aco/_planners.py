@@ -287,6 +287,9 @@ def _plan_one(name: str):
     return fn
 
 
+_SEEDLESS = ("astar", "dijkstra", "astar_kng")
+
+
 def plan_batch(
     grid: GridMap,
     starts: ArrayLike,
@@ -301,7 +304,8 @@ def plan_batch(
       grid: the map.
       starts, goals: ``int[N, 2]`` cells.
       planner: a registered planner (ACO planners run batched; exact planners solve each
-        scenario once and repeat it across seeds, since they ignore the seed).
+        scenario once and repeat it across seeds, since they ignore the seed; sampling
+        planners run once per scenario and seed).
       seeds: iterable of non-negative integer seeds (R of them).
       **overrides: planner parameters, as for `jaxplan.plan`.
 
@@ -313,15 +317,21 @@ def plan_batch(
     if planner in COLONIES:
         out, dt, compile_s, width = _run_colony(planner, grid, s, g, seeds, p)
         return _to_batch(planner, out, dt, compile_s, width)
-    R_ = len(_seed_keys(seeds))
+    seed_list = [int(x) for x in seeds]
+    R_ = len(_seed_keys(seed_list))
     t0 = time.perf_counter()
-    results = [spec.fn(grid, a, b, 0, **p) for a, b in zip(s, g)]
+    if planner in _SEEDLESS:  # deterministic: one plan per scenario serves every seed
+        once = [spec.fn(grid, a, b, 0, **p) for a, b in zip(s, g)]
+        results = [[r] * R_ for r in once]
+    else:  # sampling planners (rrt_star, mrbs_rrt) depend on the seed
+        results = [[spec.fn(grid, a, b, seed, **p) for seed in seed_list] for a, b in zip(s, g)]
     dt = time.perf_counter() - t0
-    P = max((len(r.path) for r in results), default=1)
+    P = max((len(r.path) for row in results for r in row), default=1)
     paths = np.full((len(results), R_, max(P, 1), 2), -1, np.int64)
-    for i, r in enumerate(results):
-        paths[i, :, : len(r.path)] = r.path
-    col = lambda f: np.repeat(np.array([f(r) for r in results])[:, None], R_, axis=1)  # noqa: E731
+    for i, row in enumerate(results):
+        for j, r in enumerate(row):
+            paths[i, j, : len(r.path)] = r.path
+    col = lambda f: np.array([[f(r) for r in row] for row in results]).reshape(len(results), R_)  # noqa: E731
     return BatchResult(
         paths=paths, n_cells=col(lambda r: len(r.path)), length=col(lambda r: r.length), cost=col(lambda r: r.cost),
         turns=col(lambda r: r.turns), success=col(lambda r: r.success), converged=col(lambda r: 0),
