@@ -53,7 +53,8 @@ class NavConfig:
       replan_deviation: drifting farther than this from the tracked path triggers a re-plan
         from where the robot is. A DWA robot that misses an aisle entrance is carried past
         the cross aisles it would need (it cannot turn into a 1 m aisle at speed); measured
-        on the warehouse, one of 50 short rows then drove to the map's far end.
+        on the warehouse, one of 50 short rows then drove to the map's far end. Not while a
+        disc is within half of ``block_distance``: then the drift is an evasion.
       replan_period: at most one re-plan per robot per this many seconds (seed 000: 0.2 s).
       block_distance: how far along the remaining path a disc is looked for (6 m: a walker
         closing head-on in a 1 m aisle must be seen while the robot can still turn round).

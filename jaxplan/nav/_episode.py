@@ -300,7 +300,19 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
 
     if config.replan:
         reach = rad_all + rr + config.block_margin
-        lost = c.error > config.replan_deviation  # drifted off the path (e.g. overshot an aisle)
+        if N > 1:
+            # Another robot blocks a path only while it stands (parked at its goal, or waiting): a moving
+            # one is left to the DWA — measured: two robots re-planning around each other's predicted
+            # tracks kept swerving into each other.
+            moving = (jnp.abs(c.state[..., 3]) >= 0.1) & ~c.done  # [B, N]
+            robot_reach = jnp.where(jnp.repeat(moving, C, axis=1)[:, None, :], 0.0, reach[:, :, M:])
+            reach = jnp.concatenate([reach[:, :, :M], robot_reach], axis=2)
+        # Drifted off the path (e.g. overshot an aisle) — unless a disc is within half the look-ahead:
+        # then the drift is an evasion, and a fresh path through the disc undoes it (measured: two
+        # robots crossing re-planned back into each other).
+        gap = jnp.sqrt(jnp.sum((pos_all - pos[:, :, None, :]) ** 2, axis=-1)) - rad_all  # [B, N, D]
+        crowded = jnp.any(gap < 0.5 * config.block_distance, axis=-1)
+        lost = (c.error > config.replan_deviation) & ~crowded
         if M > 0 or N > 1:
             # Each disc at its predicted positions over the next block_horizon seconds.
             ts = jnp.arange(int(config.block_horizon / 0.5) + 1, dtype=jnp.float32) * 0.5  # [P]
