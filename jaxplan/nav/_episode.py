@@ -26,7 +26,6 @@ robot of every episode is done; trajectories go to fixed-size buffers.
 from __future__ import annotations
 
 import dataclasses
-import math
 from typing import NamedTuple
 
 import jax

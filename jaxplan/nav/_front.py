@@ -27,14 +27,14 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from typing import Any, Callable, Mapping, NamedTuple, Sequence
+from typing import Any, Mapping, NamedTuple, Sequence
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 from numpy.typing import ArrayLike
 
-from jaxplan.dwa._config import DWAConfig, DWAParams
+from jaxplan.dwa._config import DWAParams
 from jaxplan.dwa._step import table_of, validate_config, validate_params
 from jaxplan.grid._fields import clearance_field
 from jaxplan.grid._gridmap import GridMap
