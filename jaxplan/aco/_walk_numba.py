@@ -176,14 +176,15 @@ def _ant_stats(a, cells, moves, n, movef, cellf, K, stats):
     length = _F(0.0)
     turns = _F(0.0)
     heading = _F(0.0)
+    # Branch-free: whether a step turns is data-dependent (a branch on it mispredicts often), and
+    # keeping the heading adds its |change| of exactly 0, which leaves the float32 sum unchanged.
+    before = np.int64(moves[a, 0]) if n > 0 else 0
     for t in range(n):
         mv = np.int64(moves[a, t])
         length += movef[mv]
-        if t > 0:
-            before = np.int64(moves[a, t - 1])
-            if mv != before:
-                turns += _F(1.0)
-                heading += movef[K + before * K + mv]
+        turns += _F(mv != before)
+        heading += movef[K + before * K + mv]
+        before = mv
     inv_clear = _F(0.0)
     risk = _F(0.0)
     h_sum = _F(0.0)
@@ -260,124 +261,142 @@ def _penalise(tau, counts, keep):
 # The walk.
 
 
-@njit(cache=True, nogil=True)
-def _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
-              max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out, steps_out,
-              penalty, marks, stats, seen, p, ok, is_goal):
-    """Walks ant ``a`` to its end and sums its path statistics; ``seen`` is the chunk's tabu, stamped
-    with ``a + 1`` (never cleared). Path slots past the final ``n`` are left as they are."""
-    K = nbr.shape[1]
-    L = max_steps
-    s0 = start[a]
-    g = goal[a]
-    r0 = row0[a]
-    c0 = cell0[a]
-    sd = seed[a]
-    loc = local[a]
-    stamp = a + 1
-    alerting = mode == _ALERT
-    pos = s0
-    prev = -1
-    n = 0
-    status = WALKING
-    cells[a, 0] = s0
-    seen[s0] = stamp
-    t = 0
-    while t < L:
-        # Allowed moves: inside the map, not tabu, not a pseudo-obstacle of the run. Written
-        # without short-circuits: the branches would be unpredictable.
-        row = r0 + pos
-        if not has_hook:
-            # Weights and their running sums (`draw`'s: Σp left to right, 0 + p[0] is p[0] exactly).
-            acc = _F(0.0)
-            for k in range(K):
-                nb = nbr[pos, k]
-                safe = max(nb, 0)
-                o = (nb >= 0) & (seen[safe] != stamp)
-                if alerting:
-                    o = o & (not alert[c0 + safe])
-                w = table[row, k] + _TINY
-                acc = acc + (w if o else _F(0.0))
-                p[k] = acc
-        else:
-            for k in range(K):
-                nb = nbr[pos, k]
-                safe = max(nb, 0)
-                o = (nb >= 0) & (seen[safe] != stamp)
-                if alerting:
-                    o = o & (not alert[c0 + safe])
-                ok[k] = o
-            # Seed 002's hook: an adjacent goal wins (judged on the moves allowed so far), else
-            # on a right-turn cell the quarter turn right of the heading is forced when allowed.
-            any_goal = False
-            for k in range(K):
-                is_goal[k] = ok[k] and nbr[pos, k] == g
-                any_goal = any_goal or is_goal[k]
-            if any_goal:
+def _walk_ant_for(moves_per_cell: int):
+    """`walk_ant` compiled for ``moves_per_cell`` moves per cell (0: any, read from ``nbr``). With K a
+    compile-time constant the move loops unroll, which makes the 8-connected step ~1.2-1.4x faster."""
+
+    @njit(cache=True, nogil=True)
+    def walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+                 max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
+                 steps_out, penalty, marks, stats, seen, p, ok, is_goal):
+        """Walks ant ``a`` to its end and sums its path statistics if it reached the goal (zeros
+        otherwise); ``seen`` is the chunk's tabu, stamped with ``a + 1`` (never cleared). Path slots
+        past the final ``n`` are left as they are."""
+        K = moves_per_cell if moves_per_cell else nbr.shape[1]
+        L = max_steps
+        s0 = start[a]
+        g = goal[a]
+        r0 = row0[a]
+        c0 = cell0[a]
+        sd = seed[a]
+        loc = local[a]
+        stamp = a + 1
+        alerting = mode == _ALERT
+        pos = s0
+        prev = -1
+        n = 0
+        status = WALKING
+        cells[a, 0] = s0
+        seen[s0] = stamp
+        t = 0
+        while t < L:
+            # Allowed moves: inside the map, not tabu, not a pseudo-obstacle of the run. Written
+            # without short-circuits: the branches would be unpredictable.
+            row = r0 + pos
+            if not has_hook:
+                # Weights and their running sums (`draw`'s: Σp left to right, 0 + p[0] is p[0] exactly).
+                # A disallowed move adds w·0 = +0 (w is finite), the same sum as skipping it, but without
+                # a branch: which neighbours are free or visited is data-dependent, and the mispredicted
+                # branches of the `w if allowed else 0` form cost about half of the step.
+                acc = _F(0.0)
                 for k in range(K):
-                    ok[k] = is_goal[k]
-            elif prev >= 0 and turn_rule[pos]:
-                right = right_turn[prev]
-                if ok[right]:
+                    nb = nbr[pos, k]
+                    safe = max(nb, 0)
+                    o = (nb >= 0) & (seen[safe] != stamp)
+                    if alerting:
+                        o = o & (alert[c0 + safe] == 0)
+                    acc = acc + (table[row, k] + _TINY) * _F(o)
+                    p[k] = acc
+            else:
+                for k in range(K):
+                    nb = nbr[pos, k]
+                    safe = max(nb, 0)
+                    o = (nb >= 0) & (seen[safe] != stamp)
+                    if alerting:
+                        o = o & (not alert[c0 + safe])
+                    ok[k] = o
+                # Seed 002's hook: an adjacent goal wins (judged on the moves allowed so far), else
+                # on a right-turn cell the quarter turn right of the heading is forced when allowed.
+                any_goal = False
+                for k in range(K):
+                    is_goal[k] = ok[k] and nbr[pos, k] == g
+                    any_goal = any_goal or is_goal[k]
+                if any_goal:
                     for k in range(K):
-                        ok[k] = k == right
-            mx = _NEG_INF
-            for k in range(K):
-                v = hook_l[1 if k == prev else 0, row, k] if ok[k] else _NEG_INF
-                p[k] = v
-                mx = max(mx, v)
-            shift = mx if np.isfinite(mx) else _F(0.0)
-            acc = _F(0.0)
-            for k in range(K):
-                # An allowed move whose logit is -inf gets exp(-inf) = 0, then the floor.
-                acc = acc + (_exp_xla(p[k] - shift) + _TINY if ok[k] else _F(0.0))
-                p[k] = acc
-        # Inverse CDF with one uniform, as `draw`: k = number of the running sums of the first
-        # K - 1 weights at or below u·Σp.
-        total = p[K - 1]
-        threshold = _uniform(sd, t, loc) * total
-        k = 0
-        for j in range(K - 1):
-            k += p[j] <= threshold
-        t += 1  # the ant was walking during this step
-        if total > 0:
-            new = nbr[pos, k]
-            moves[a, n] = k  # the move between slots n and n + 1, as `walk` derives it
-            n += 1
-            cells[a, n] = new
-            seen[new] = stamp
-            prev = k
-            pos = new
-            if new == g:
-                status = GOAL
+                        ok[k] = is_goal[k]
+                elif prev >= 0 and turn_rule[pos]:
+                    right = right_turn[prev]
+                    if ok[right]:
+                        for k in range(K):
+                            ok[k] = k == right
+                mx = _NEG_INF
+                for k in range(K):
+                    v = hook_l[1 if k == prev else 0, row, k] if ok[k] else _NEG_INF
+                    p[k] = v
+                    mx = max(mx, v)
+                shift = mx if np.isfinite(mx) else _F(0.0)
+                acc = _F(0.0)
+                for k in range(K):
+                    # An allowed move whose logit is -inf gets exp(-inf) = 0, then the floor.
+                    acc = acc + (_exp_xla(p[k] - shift) + _TINY if ok[k] else _F(0.0))
+                    p[k] = acc
+            # Inverse CDF with one uniform, as `draw`: k = number of the running sums of the first
+            # K - 1 weights at or below u·Σp.
+            total = p[K - 1]
+            threshold = _uniform(sd, t, loc) * total
+            k = 0
+            for j in range(K - 1):
+                k += p[j] <= threshold
+            t += 1  # the ant was walking during this step
+            if total > 0:
+                new = nbr[pos, k]
+                moves[a, n] = k  # the move between slots n and n + 1, as `walk` derives it
+                n += 1
+                cells[a, n] = new
+                seen[new] = stamp
+                prev = k
+                pos = new
+                if new == g:
+                    status = GOAL
+                    break
+                continue
+            # Stuck: no allowed move.
+            if alerting:
+                # Seed 002's dead-end alert: only one open move (the way back, ignoring this ant's tabu).
+                open_moves = 0
+                for j in range(K):
+                    nb = nbr[pos, j]
+                    open_moves += (nb >= 0) & (not alert[c0 + max(nb, 0)])
+                if open_moves <= 1 and pos != s0 and pos != g:
+                    marks[c0 + pos] = True
+            if mode == _DIE or n == 0:
+                status = DEAD_END
                 break
-            continue
-        # Stuck: no allowed move.
-        if alerting:
-            # Seed 002's dead-end alert: only one open move (the way back, ignoring this ant's tabu).
-            open_moves = 0
-            for j in range(K):
-                nb = nbr[pos, j]
-                open_moves += (nb >= 0) & (not alert[c0 + max(nb, 0)])
-            if open_moves <= 1 and pos != s0 and pos != g:
-                marks[c0 + pos] = True
-        if mode == _DIE or n == 0:
-            status = DEAD_END
-            break
-        back = cells[a, n - 1]
-        if penalise:
-            penalty[(r0 + back) * K + _move_between(back, pos, width, lut)] += 1.0
-        if has_hook:
-            prev = _move_between(cells[a, n - 2], back, width, lut) if n >= 2 else -1
-        pos = back
-        n -= 1
-    if status == WALKING:
-        status = STEP_LIMIT
-    n_out[a] = n
-    status_out[a] = status
-    steps_out[a] = t
-    # While the path is still in cache (the colony needs them for every ant, successful or not).
-    _ant_stats(a, cells, moves, n, movef, cellf, K, stats)
+            back = cells[a, n - 1]
+            if penalise:
+                penalty[(r0 + back) * K + _move_between(back, pos, width, lut)] += 1.0
+            if has_hook:
+                prev = _move_between(cells[a, n - 2], back, width, lut) if n >= 2 else -1
+            pos = back
+            n -= 1
+        if status == WALKING:
+            status = STEP_LIMIT
+        n_out[a] = n
+        status_out[a] = status
+        steps_out[a] = t
+        # While the path is still in cache. Only an ant at the goal has a cost (the colony gives the
+        # others cost inf and never reads their statistics), so the others' stay zero: most ants of
+        # early iterations stop at the step limit, and summing their long paths cost a third of the walk.
+        if status == GOAL:
+            _ant_stats(a, cells, moves, n, movef, cellf, K, stats)
+        else:
+            for i in range(N_STATS):
+                stats[i, a] = _F(0.0)
+
+    return walk_ant
+
+
+_walk_ant, _walk_ant_8, _walk_ant_16 = _walk_ant_for(0), _walk_ant_for(8), _walk_ant_for(16)
 
 
 @njit(cache=True, nogil=True)
@@ -393,9 +412,18 @@ def _walk_chunk(c, n_chunks, nbr, table, hook_l, right_turn, turn_rule, start, g
     ok = np.empty(K, np.bool_)
     is_goal = np.empty(K, np.bool_)
     for a in range(c, A, n_chunks):
-        _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
-                  max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
-                  steps_out, part, marks, stats, seen, p, ok, is_goal)
+        if K == 8:
+            _walk_ant_8(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+                        max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out,
+                        status_out, steps_out, part, marks, stats, seen, p, ok, is_goal)
+        elif K == 16:
+            _walk_ant_16(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+                         max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out,
+                         status_out, steps_out, part, marks, stats, seen, p, ok, is_goal)
+        else:
+            _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+                      max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
+                      steps_out, part, marks, stats, seen, p, ok, is_goal)
 
 
 @njit(cache=True, nogil=True, parallel=True)
@@ -801,7 +829,8 @@ def walk(
     ``table`` is not used when ``hook`` is given (the hook's logits are in `HookTables.logits`,
     built by the colony's ``hook_logits`` rule). ``stats``: the map's `StatTables`; each ant's path
     statistics are summed as soon as it stops (``Ants.stats``, as `path_stats` computes them; zeros'
-    worth of tables when None). Works under `jit`, `lax.scan` and `vmap` (a vmapped batch is walked
+    worth of tables when None), for the ants that reached the goal only: the others' columns are zero
+    (they have no cost). Works under `jit`, `lax.scan` and `vmap` (a vmapped batch is walked
     element by element, each in parallel over its ants).
     """
     _register()
