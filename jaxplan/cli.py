@@ -1,4 +1,4 @@
-"""Command line: ``jaxplan demo | plan | run``.
+"""Command line: ``jaxplan demo | plan | run | figures``.
 
 Subcommands for experiments, tuning, figures and benchmarks join as they are built.
 """
@@ -105,6 +105,18 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_figures(args: argparse.Namespace) -> int:
+    """``jaxplan figures RUN``: every ``[[figures]]`` entry of the run's config as PNG and SVG, plus index.md."""
+    from jaxplan.experiments.figures import draw_figures
+
+    drawn, problems = draw_figures(args.run, args.out, data_dir=args.data_dir)
+    name = Path(args.run).resolve().name
+    print(f"wrote {len(drawn)} figures to {Path(args.out) / name}/ (index.md lists them)")
+    for p in problems:
+        print(f"  not drawn: {p}", file=sys.stderr)
+    return 0 if not problems else 1
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="jaxplan", description="Grid path planning for warehouse robots, in JAX.")
     sub = p.add_subparsers(dest="command", required=True)
@@ -130,6 +142,11 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--chunk", type=int, default=None, help="scenarios per compiled call (default: the config's)")
     r.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
     r.set_defaults(func=cmd_run)
+    f = sub.add_parser("figures", help="draw the figures a run's config names into OUT/RUN/ (PNG, SVG, index.md)")
+    f.add_argument("run", help="a run folder written by `jaxplan run` (e.g. runs/NAME)")
+    f.add_argument("--out", default="figures", help="figure root (default: figures; files go to OUT/RUN/)")
+    f.add_argument("--data-dir", default=None, help="folder that the config's map paths are relative to")
+    f.set_defaults(func=cmd_figures)
     return p
 
 

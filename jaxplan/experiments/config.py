@@ -81,6 +81,11 @@ Schema (every key shown; ``#`` marks defaults and alternatives)::
     maps = ["wh20"]             # default: all
     planners = ["IACO"]         # default: all
     band = "iqr"
+    # Other kinds: box/bar (metric = ...; default the first stats metric), paths and pheromone
+    # (scenario, seed; plan planners), trajectories and controls (scenario, seed; navigate planners:
+    # executed paths among the moving discs, v and omega over time), fan (the DWA rollouts at the
+    # given control steps = [..]), diversity (seed 004: sd of the ants' costs per iteration), and
+    # sweep (metric against x: a generator parameter name, e.g. "obstacle_ratio", or one number per map).
 
     [paper]                     # the paper's numbers, shown beside ours, labelled "paper"
     source = "Seed 000, Table 2"
@@ -180,12 +185,16 @@ METRICS: Mapping[str, Metric] = MappingProxyType({m.name: m for m in (
 """Every metric a config may name, in the column order of the outputs."""
 
 FIGURE_KINDS: Mapping[str, frozenset] = MappingProxyType({
-    "convergence": frozenset({"band", "log"}),
+    "convergence": frozenset({"band", "log", "scenario"}),
     "box": frozenset({"metric"}),
     "bar": frozenset({"metric"}),
     "paths": frozenset({"scenario", "seed"}),
     "trajectories": frozenset({"scenario", "seed"}),
     "pheromone": frozenset({"scenario", "seed", "log"}),
+    "diversity": frozenset({"band", "log", "scenario"}),
+    "fan": frozenset({"scenario", "seed", "steps"}),
+    "controls": frozenset({"scenario", "seed"}),
+    "sweep": frozenset({"metric", "x", "xlabel"}),
 })
 """Figure kinds and the keys each accepts besides ``kind name title maps planners format``."""
 _FIGURE_COMMON = frozenset({"kind", "name", "title", "maps", "planners", "format"})
@@ -923,6 +932,21 @@ def _read_figures(r: _Reader, raw: dict, metrics: tuple, maps: set, labels: set)
         if "band" in t and t["band"] not in ("iqr", "sd", "minmax", False):
             r.bad(_join(p, "band"), f"must be 'iqr', 'sd', 'minmax' or false, got {t['band']!r}")
         r.get(t, p, "log", "bool", None)
+        r.get(t, p, "xlabel", "str", None)
+        if kind == "sweep" and "metric" not in t:
+            r.bad(_join(p, "metric"), "required key is missing")
+        if "steps" in t and not (isinstance(t["steps"], list) and t["steps"]
+                                 and all(isinstance(v, int) and not isinstance(v, bool) and v >= 0
+                                         for v in t["steps"])):
+            r.bad(_join(p, "steps"), f"expected a non-empty list of control steps >= 0, got {_describe(t['steps'])}")
+        if kind == "sweep":
+            x = t.get("x")
+            if isinstance(x, list):
+                n_maps = len(t.get("maps") or maps)
+                if len(x) != n_maps or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in x):
+                    r.bad(_join(p, "x"), f"expected {n_maps} numbers (one per map) or a generator parameter name")
+            elif not isinstance(x, str):
+                r.bad(_join(p, "x"), "required: a generator parameter name or one number per map")
         if kind:
             out.append(FigureSpec(kind, name, _frozen({k: v for k, v in t.items() if k not in ("kind", "name")})))
     return tuple(out)

@@ -398,7 +398,9 @@ def _run_navigate(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, seeds
                 np.asarray(v, np.float64)
     out["reason"] = eb.reason[:n, :, 0]
     T = int(eb.steps[:n].max()) + 1
-    keep = {"positions": eb.states[:n, :, 0, :T, :2].astype(np.float32), "steps": eb.steps[:n, :, 0].astype(np.int32),
+    # states (x, y, theta, v, omega) feed the velocity traces and the DWA fans of `jaxplan figures`.
+    keep = {"positions": eb.states[:n, :, 0, :T, :2].astype(np.float32),
+            "states": eb.states[:n, :, 0, :T].astype(np.float32), "steps": eb.steps[:n, :, 0].astype(np.int32),
             "plans": eb.plans[:n, :, 0].astype(np.float32), "n_plan": eb.n_plan[:n, :, 0].astype(np.int32),
             "success": eb.success[:n, :, 0]}
     timing = {"compile_s": float(eb.compile_s), "time_s": float(eb.run_time_s), "plan_time_s": float(eb.plan_time_s),
@@ -523,7 +525,7 @@ class _Store:
 def load_chunk_arrays(run_dir: str | os.PathLike, uid: str) -> dict[str, np.ndarray]:
     """The arrays (orbax) kept for chunk ``uid``: plan chunks ``history f32[n, R, I]``, ``diversity``,
     ``successes``, ``paths i32[n, R, P, 2]``, ``n_cells``, ``success``; navigate chunks ``positions
-    f32[n, R, T, 2]`` (m), ``steps``, ``plans``, ``n_plan``, ``success``. The manifest entry of ``uid``
+    f32[n, R, T, 2]`` (m), ``states f32[n, R, T, 5]`` (x, y, theta, v, omega), ``steps``, ``plans``, ``n_plan``, ``success``. The manifest entry of ``uid``
     names its map, planner and scenario range."""
     import orbax.checkpoint as ocp
 

@@ -1,0 +1,621 @@
+"""`draw_figures`: every ``[[figures]]`` entry of a run folder's config, as PNG and SVG, with an index page.
+
+A run folder (`jaxplan.experiments.runner`) holds what the figures need: ``config.toml``
+(the config verbatim; ``meta.json`` says whether it ran with ``--quick``), ``trials.csv``
+and, per chunk, orbax arrays (plan chunks: ``history``, ``diversity``, ``paths``,
+``n_cells``; navigate chunks: ``states``, ``steps``, ``plans``, ``n_plan``). The maps and
+scenarios are rebuilt from the config (`prepare`: deterministic, no planning). Two kinds
+recompute a little, deterministically, and say so in their captions: ``pheromone``
+re-plans the one (scenario, seed) with ``keep_pheromone=True`` (the runner does not keep
+``[C, K]`` pheromone tables per trial), and ``fan`` evaluates `jaxplan.dwa_step` at the
+stored robot states (the episode keeps no rollouts). The moving discs of a trajectory
+plot are redrawn from the runner's own per-trial obstacle seeds.
+
+Kinds (keys besides ``kind name title maps planners format``):
+
+    convergence  best cost per iteration, median and band over seeds, at ``scenario`` (plan planners)
+    diversity    seed 004's diversity (sd of the ants' path costs) per iteration, same layout
+    box          per-seed means of ``metric`` per planner (box plot), one panel per map
+    bar          mean ± sd over seeds of ``metric`` per planner, the paper's value beside ours, hatched
+    sweep        ``metric`` against ``x`` (a generator parameter, e.g. ``obstacle_ratio``, or one number
+                 per map): mean ± sd over seeds per planner, the paper's values as open markers
+    paths        global paths over the map at (``scenario``, ``seed``) (plan and navigate planners)
+    pheromone    final pheromone per cell of each colony planner at (``scenario``, ``seed``)
+    trajectories executed robot paths with the moving discs' tracks (navigate planners)
+    controls     v (m/s) and omega (rad/s) against time (navigate planners), seed 002 Figs 8/11
+    fan          DWA rollouts (feasible blue, infeasible red, chosen black) at control ``steps``
+
+Output: ``OUT/RUN/STEM.png`` and ``.svg`` (``format`` = one of png/svg/pdf writes only that),
+``OUT/RUN/index.md`` (one section per figure with its caption), and ``OUT/index.md``
+listing every run's index found under ``OUT``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from jaxplan.experiments import plots
+from jaxplan.experiments.config import METRICS, ExperimentConfig, FigureSpec, apply_quick, nav_config, parse_config
+
+__all__ = ["Drawn", "RunData", "load_run", "draw_figures", "write_index"]
+
+plt = plots.plt  # the Agg backend is chosen in plots
+
+
+@dataclass(frozen=True)
+class Drawn:
+    """One written figure: its stem, files (relative to the run's figure folder) and caption."""
+
+    name: str
+    kind: str
+    files: tuple[str, ...]
+    caption: str
+
+
+@dataclass
+class RunData:
+    """A run folder read back: config (quick applied if it ran quick), maps, manifest, trials."""
+
+    run_dir: Path
+    config: ExperimentConfig
+    prep: Any  # runner.Prepared
+    manifest: dict
+    trials: dict | None
+    _arrays: dict
+
+    def arrays(self, m: int, p: int, scenario: int) -> tuple[dict, int] | None:
+        """(chunk arrays, row of ``scenario`` in them) for map ``m``, planner ``p``; None if not stored."""
+        from jaxplan.experiments.runner import load_chunk_arrays
+
+        for u in self.prep.units:
+            if u.m == m and u.p == p and u.lo <= scenario < u.hi:
+                if u.uid not in self.manifest.get("chunks", {}):
+                    return None
+                if u.uid not in self._arrays:
+                    try:
+                        self._arrays[u.uid] = load_chunk_arrays(self.run_dir, u.uid)
+                    except (FileNotFoundError, ValueError):
+                        self._arrays[u.uid] = None
+                a = self._arrays[u.uid]
+                return None if a is None else (a, scenario - u.lo)
+        return None
+
+
+def load_run(run_dir: str | os.PathLike, data_dir: str | os.PathLike | None = None) -> RunData:
+    """Reads a run folder written by `run_experiment`.
+
+    Raises:
+      FileNotFoundError: not a run folder (no config.toml), or no finished chunk.
+    """
+    from jaxplan.experiments import stats
+    from jaxplan.experiments.runner import prepare, read_manifest
+
+    run_dir = Path(run_dir)
+    cfg_path = run_dir / "config.toml"
+    if not cfg_path.is_file():
+        raise FileNotFoundError(f"{run_dir} is not a run folder (no config.toml); run `jaxplan run CONFIG` first")
+    meta_path = run_dir / "meta.json"
+    meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
+    cfg = parse_config(cfg_path.read_text(), data_dir=data_dir, source=str(cfg_path))
+    if meta.get("quick"):
+        cfg = apply_quick(cfg)
+    if meta.get("chunk"):
+        cfg = cfg.replace(chunk=int(meta["chunk"]))  # `--chunk` may have overridden the config's
+    manifest = read_manifest(run_dir)
+    if not manifest.get("chunks"):
+        raise FileNotFoundError(f"{run_dir} has no finished chunk yet")
+    trials_path = run_dir / "trials.csv"
+    trials = stats.read_trials(trials_path) if trials_path.is_file() else None
+    return RunData(run_dir, cfg, prepare(cfg), manifest, trials, {})
+
+
+# ---------------------------------------------------------------------------------------------
+# Helpers
+
+
+def _selected(run: RunData, spec: FigureSpec, kind: str | None = None) -> tuple[list[int], list[int]]:
+    """Indices of the maps and planners the figure names (default all; ``kind`` filters planners)."""
+    cfg = run.config
+    maps = spec.params.get("maps") or [m.spec.name for m in run.prep.maps]
+    labels = spec.params.get("planners") or [p.label for p in cfg.planners]
+    mi = [i for i, m in enumerate(run.prep.maps) if m.spec.name in maps]
+    pi = [i for i, p in enumerate(cfg.planners) if p.label in labels and (kind is None or p.kind == kind)]
+    return mi, pi
+
+
+def _panels(n: int, w: float = 5.0, h: float = 4.2, rows: int = 1):
+    fig, axes = plt.subplots(rows, n, figsize=(w * n, h * rows), constrained_layout=True, squeeze=False)
+    return fig, axes
+
+
+def _layer(grid) -> str | None:
+    """The map layer worth showing: risk (seed 003) or terrain height (seeds 002), else none."""
+    if np.any(np.asarray(grid.risk) > 0):
+        return "risk"
+    if np.ptp(np.asarray(grid.height)) > 0:
+        return "height"
+    return None
+
+
+def _title(spec: FigureSpec, default: str) -> str:
+    return spec.params.get("title") or default
+
+
+def _metric(run: RunData, spec: FigureSpec) -> str:
+    m = spec.params.get("metric")
+    if m is None:
+        m = (run.config.stats.metrics or run.config.metrics)[0]
+    return m
+
+
+def _metric_label(metric: str) -> str:
+    unit = METRICS[metric].unit
+    return f"{metric} ({unit})" if unit else metric
+
+
+def _need_trials(run: RunData) -> dict:
+    if run.trials is None:
+        raise FileNotFoundError(f"{run.run_dir}/trials.csv is missing: the run has not finished")
+    return run.trials
+
+
+def _scenario_seed(run: RunData, spec: FigureSpec) -> tuple[int, int, int]:
+    """(scenario, seed value, seed column) of a per-trial figure (defaults: scenario 0, the first seed)."""
+    seeds = run.config.seeds
+    sc = int(spec.params.get("scenario", 0))
+    seed = int(spec.params.get("seed", seeds[0]))
+    if seed not in seeds:
+        raise ValueError(f"figure {spec.name!r}: seed {seed} is not one of the run's seeds {list(seeds)}")
+    return sc, seed, seeds.index(seed)
+
+
+def _cell_path_m(path: np.ndarray, n: int, res: float) -> np.ndarray:
+    """``[n, 2]`` cell-coordinate points -> metres (cell centres)."""
+    return (np.asarray(path[:n], np.float64) + 0.5) * res
+
+
+def _obstacles(run: RunData, m: int, p: int, sc: int, seed: int):
+    """The trial's `MovingObstacles` (the runner's own per-trial draw), or None."""
+    from jaxplan.experiments.runner import _obstacle_fn
+
+    fn = _obstacle_fn(run.prep.maps[m], m, run.config.planners[p], np.asarray([sc]))
+    return None if fn is None else fn(0, seed)
+
+
+def _disc_positions(obs, times: np.ndarray) -> np.ndarray:
+    """``f64[len(times), M, 2]`` disc centres (m) at ``times`` (s)."""
+    from jaxplan.nav import discs_at
+
+    return np.stack([np.asarray(discs_at(obs, float(t)).positions, np.float64) for t in times])
+
+
+# ---------------------------------------------------------------------------------------------
+# One function per kind: (run, spec) -> (figure, caption)
+
+
+def _curves(run: RunData, spec: FigureSpec, key: str, ylabel: str, what: str):
+    mi, pi = _selected(run, spec, "plan")
+    pi = [p for p in pi if run.config.planners[p].name not in ("astar", "dijkstra")]
+    if not pi:
+        raise ValueError(f"figure {spec.name!r}: no iterative plan planner selected")
+    sc = int(spec.params.get("scenario", 0))
+    band = spec.params.get("band", "iqr") or None
+    fig, axes = _panels(len(mi))
+    for ax, m in zip(axes[0], mi):
+        curves = {}
+        for p in pi:
+            got = run.arrays(m, p, sc)
+            if got is not None and key in got[0]:
+                curves[run.config.planners[p].label] = np.asarray(got[0][key][got[1]], np.float64)
+        if curves:
+            plots.plot_convergence(ax, curves, band=band, ylabel=ylabel)
+        if spec.params.get("log"):
+            ax.set_yscale("log")
+        ax.set_title(f"{run.prep.maps[m].spec.name}, scenario {sc}")
+    fig.suptitle(_title(spec, what))
+    bands = {"iqr": "median and 25-75 % band", "sd": "mean ± 1 sd", "minmax": "median and min-max band",
+             None: "median"}[band]
+    return fig, f"{what} over {len(run.config.seeds)} seeds at scenario {sc} ({bands})."
+
+
+def _convergence(run, spec):
+    return _curves(run, spec, "history", "best cost", "Convergence: best cost per iteration")
+
+
+def _diversity(run, spec):
+    return _curves(run, spec, "diversity", "diversity (sd of ant costs)",
+                   "Population diversity (sd of the ants' path costs) per iteration")
+
+
+def _box(run, spec):
+    from jaxplan.experiments.stats import per_seed_means
+
+    t = _need_trials(run)
+    metric = _metric(run, spec)
+    mi, pi = _selected(run, spec)
+    fig, axes = _panels(len(mi), w=max(4.0, 1.1 * len(pi) + 1.5))
+    for ax, m in zip(axes[0], mi):
+        name = run.prep.maps[m].spec.name
+        data, labels = [], []
+        for p in pi:
+            label = run.config.planners[p].label
+            if METRICS[metric].kinds.isdisjoint({run.config.planners[p].kind}):
+                continue
+            v, _ = per_seed_means(t, name, label, metric, run.config.seeds)
+            data.append(v[np.isfinite(v)])
+            labels.append(label)
+        ax.boxplot(data, tick_labels=labels) if data else None
+        ax.set_ylabel(_metric_label(metric))
+        ax.set_title(name)
+        ax.tick_params(axis="x", labelrotation=30)
+    fig.suptitle(_title(spec, f"{metric}: per-seed means"))
+    return fig, f"Box plot of the per-seed means of {metric} (each seed averaged over the map's scenarios)."
+
+
+def _paper_value(cfg: ExperimentConfig, map_: str, label: str, metric: str):
+    for v in cfg.paper:
+        if v.planner == label and v.metric == metric and v.map in (None, map_):
+            return v
+    return None
+
+
+def _bar(run, spec):
+    from jaxplan.experiments.stats import per_seed_means
+
+    t = _need_trials(run)
+    metric = _metric(run, spec)
+    mi, pi = _selected(run, spec)
+    cfg = run.config
+    fig, axes = _panels(len(mi), w=max(4.0, 1.2 * len(pi) + 1.5))
+    any_paper = False
+    for ax, m in zip(axes[0], mi):
+        name = run.prep.maps[m].spec.name
+        xs, labels = np.arange(len(pi)), []
+        for j, p in enumerate(pi):
+            label = cfg.planners[p].label
+            labels.append(label)
+            v, _ = per_seed_means(t, name, label, metric, cfg.seeds)
+            v = v[np.isfinite(v)]
+            if v.size:
+                ax.bar(j - 0.2, v.mean(), 0.4, yerr=v.std(ddof=1) if v.size > 1 else 0, color="C0", capsize=3,
+                       label="ours" if j == 0 else None)
+            pv = _paper_value(cfg, name, label, metric)
+            if pv is not None:
+                any_paper = True
+                ax.bar(j + 0.2, pv.mean, 0.4, yerr=pv.sd or 0, color="white", edgecolor="C1", hatch="//",
+                       capsize=3, label="paper" if not ax.get_legend_handles_labels()[1].count("paper") else None)
+        ax.set_xticks(xs, labels, rotation=30)
+        ax.set_ylabel(_metric_label(metric))
+        ax.set_title(name)
+        ax.legend(fontsize=8)
+    fig.suptitle(_title(spec, f"{metric}: mean ± sd over seeds"))
+    cap = f"Mean ± sd over seeds of the per-seed means of {metric}"
+    if any_paper:
+        cap += f"; hatched bars: the paper's reported values ({cfg.paper_source}), not ours"
+    return fig, cap + "."
+
+
+def _sweep(run, spec):
+    from jaxplan.experiments.stats import per_seed_means
+
+    t = _need_trials(run)
+    metric = _metric(run, spec)
+    mi, pi = _selected(run, spec)
+    cfg = run.config
+    x = spec.params["x"]
+    if isinstance(x, str):
+        xs = []
+        for m in mi:
+            ms = run.prep.maps[m].spec
+            if x not in ms.params:
+                raise ValueError(f"figure {spec.name!r}: map {ms.name!r} has no generator parameter {x!r}")
+            xs.append(float(ms.params[x]))
+        xlabel = spec.params.get("xlabel", x)
+    else:
+        xs = [float(v) for v in x]
+        xlabel = spec.params.get("xlabel", "x")
+    xs = np.asarray(xs)
+    order = np.argsort(xs, kind="stable")
+    fig, ax = plt.subplots(figsize=(6, 4.2), constrained_layout=True)
+    any_paper = False
+    for p in pi:
+        label = cfg.planners[p].label
+        mean, sd, pap = [], [], []
+        for m in mi:
+            v, _ = per_seed_means(t, run.prep.maps[m].spec.name, label, metric, cfg.seeds)
+            v = v[np.isfinite(v)]
+            mean.append(v.mean() if v.size else math.nan)
+            sd.append(v.std(ddof=1) if v.size > 1 else 0.0)
+            pv = _paper_value(cfg, run.prep.maps[m].spec.name, label, metric)
+            pap.append(pv.mean if pv is not None else math.nan)
+        mean, sd, pap = (np.asarray(a)[order] for a in (mean, sd, pap))
+        (line,) = ax.plot(xs[order], mean, marker="o", label=label)
+        ax.fill_between(xs[order], mean - sd, mean + sd, color=line.get_color(), alpha=0.2, lw=0)
+        if np.isfinite(pap).any():
+            any_paper = True
+            ax.plot(xs[order], pap, ls="--", marker="s", mfc="none", color=line.get_color(), label=f"{label} (paper)")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(_metric_label(metric))
+    ax.legend(fontsize=8)
+    ax.set_title(_title(spec, f"{metric} against {xlabel}"))
+    cap = f"{metric} against {xlabel}: mean ± sd over seeds"
+    if any_paper:
+        cap += f"; dashed open markers: the paper's values ({cfg.paper_source}), not ours"
+    return fig, cap + "."
+
+
+def _paths(run, spec):
+    mi, pi = _selected(run, spec)
+    sc, seed, r = _scenario_seed(run, spec)
+    fig, axes = _panels(len(mi), w=6.0, h=4.8)
+    for ax, m in zip(axes[0], mi):
+        mw = run.prep.maps[m]
+        res = float(mw.grid.resolution)
+        paths, labels = [], []
+        for p in pi:
+            got = run.arrays(m, p, sc)
+            if got is None:
+                continue
+            a, i = got
+            if "paths" in a:
+                pts, n = a["paths"][i, r], int(a["n_cells"][i, r])
+            elif "plans" in a:
+                pts, n = a["plans"][i, r], int(a["n_plan"][i, r])
+            else:
+                continue
+            paths.append(_cell_path_m(pts, n, res))
+            labels.append(run.config.planners[p].label)
+        plots.plot_map(ax, mw.grid, layer=_layer(mw.grid), title=f"{mw.spec.name}, scenario {sc}, seed {seed}")
+        plots.plot_paths(ax, mw.grid, paths, labels=labels, start=_cell_path_m(mw.starts[sc][None], 1, res)[0],
+                         goal=_cell_path_m(mw.goals[sc][None], 1, res)[0], coords="m")
+    fig.suptitle(_title(spec, "Planned paths"))
+    return fig, f"Global paths of each planner at scenario {sc}, seed {seed} (cell centres; start circle, goal star)."
+
+
+def _pheromone(run, spec):
+    import jaxplan as jp
+
+    mi, pi = _selected(run, spec, "plan")
+    sc, seed, _ = _scenario_seed(run, spec)
+    todo = []
+    for m in mi:
+        for p in pi:
+            pc = run.config.planners[p]
+            if pc.name in jp.planners() and "rho" in jp.planners()[pc.name].defaults:
+                todo.append((m, p))
+    if not todo:
+        raise ValueError(f"figure {spec.name!r}: no ant colony planner selected")
+    fig, axes = _panels(len(todo), w=5.5, h=4.4)
+    for ax, (m, p) in zip(axes[0], todo):
+        mw, pc = run.prep.maps[m], run.config.planners[p]
+        overrides = {k: tuple(v) if isinstance(v, list) else v for k, v in pc.overrides.items()}
+        res = jp.plan(mw.grid, mw.starts[sc], mw.goals[sc], planner=pc.name, seed=seed, keep_pheromone=True,
+                      **overrides)
+        plots.plot_pheromone(ax, mw.grid, res.info["tau"], log=spec.params.get("log", True),
+                             title=f"{pc.label} on {mw.spec.name}")
+        if res.success:
+            plots.plot_paths(ax, mw.grid, [np.asarray(res.path)], labels=[f"{pc.label} path"], lw=1.2)
+    fig.suptitle(_title(spec, "Final pheromone per cell"))
+    return fig, (f"Final pheromone per cell (max over its allowed outgoing edges) at scenario {sc}, seed {seed}; "
+                 "recomputed by re-planning that trial with keep_pheromone=True.")
+
+
+def _nav_trial(run, m, p, sc, r):
+    """(positions f32[T, 2] m, states f32[T, 5] or None, steps, plan m [L, 2]) of one navigate trial, or None."""
+    got = run.arrays(m, p, sc)
+    if got is None:
+        return None
+    a, i = got
+    steps = int(a["steps"][i, r])
+    pos = np.asarray(a["positions"][i, r, :steps + 1], np.float64)
+    states = np.asarray(a["states"][i, r, :steps + 1], np.float64) if "states" in a else None
+    plan = _cell_path_m(a["plans"][i, r], int(a["n_plan"][i, r]), float(run.prep.maps[m].grid.resolution))
+    return pos, states, steps, plan
+
+
+def _trajectories(run, spec):
+    mi, pi = _selected(run, spec, "navigate")
+    if not pi:
+        raise ValueError(f"figure {spec.name!r}: no navigate planner selected")
+    sc, seed, r = _scenario_seed(run, spec)
+    fig, axes = _panels(len(mi) * len(pi), w=6.0, h=4.8)
+    k = 0
+    for m in mi:
+        mw = run.prep.maps[m]
+        res = float(mw.grid.resolution)
+        for p in pi:
+            ax = axes[0][k]
+            k += 1
+            pc = run.config.planners[p]
+            plots.plot_map(ax, mw.grid, layer=_layer(mw.grid), title=f"{pc.label} on {mw.spec.name}")
+            got = _nav_trial(run, m, p, sc, r)
+            if got is None:
+                continue
+            pos, _, steps, plan = got
+            period = nav_config(pc)[0].dwa.period
+            obs = _obstacles(run, m, p, sc, seed)
+            if obs is not None:
+                times = np.arange(steps + 1) * period
+                d = _disc_positions(obs, times)
+                radii = np.asarray(obs.radii, np.float64)
+                for j in range(d.shape[1]):
+                    ax.plot(d[:, j, 0], d[:, j, 1], color="0.45", lw=0.8, ls=":")
+                    # where each disc was when the robot came closest to it
+                    t_close = int(np.argmin(np.hypot(*(d[:, j] - pos[:len(d)]).T)))
+                    ax.add_patch(plt.Circle(tuple(d[t_close, j]), radii[j], color="tab:red", alpha=0.5))
+                    ax.plot(*pos[t_close], "x", color="tab:red", ms=5)
+            plots.plot_paths(ax, mw.grid, [plan, pos], labels=["global path", "executed"],
+                             start=pos[0], goal=_cell_path_m(mw.goals[sc][None], 1, res)[0], coords="m", lw=1.5)
+    fig.suptitle(_title(spec, f"Executed trajectories, scenario {sc}, seed {seed}"))
+    return fig, (f"Executed trajectories (scenario {sc}, seed {seed}) over the global path; dotted: the moving "
+                 "discs' tracks, red discs where each disc was at the robot's closest approach (x).")
+
+
+def _controls(run, spec):
+    mi, pi = _selected(run, spec, "navigate")
+    if not pi:
+        raise ValueError(f"figure {spec.name!r}: no navigate planner selected")
+    sc, seed, r = _scenario_seed(run, spec)
+    fig, axes = plt.subplots(2, len(mi), figsize=(7 * len(mi), 5.5), constrained_layout=True, squeeze=False,
+                             sharex="col")
+    for c, m in enumerate(mi):
+        for p in pi:
+            pc = run.config.planners[p]
+            got = _nav_trial(run, m, p, sc, r)
+            if got is None or got[1] is None:
+                continue
+            states = got[1]
+            t = np.arange(len(states)) * nav_config(pc)[0].dwa.period
+            axes[0][c].plot(t, states[:, 3], label=pc.label, lw=1.3)
+            axes[1][c].plot(t, states[:, 4], label=pc.label, lw=1.3)
+        axes[0][c].set_ylabel("v (m/s)")
+        axes[1][c].set_ylabel("omega (rad/s)")
+        axes[1][c].set_xlabel("time (s)")
+        axes[0][c].set_title(f"{run.prep.maps[m].spec.name}, scenario {sc}, seed {seed}")
+        axes[0][c].legend(fontsize=8)
+    fig.suptitle(_title(spec, "Linear and angular velocity"))
+    return fig, f"Linear velocity v and angular velocity omega of the executed episode (scenario {sc}, seed {seed})."
+
+
+def _fan(run, spec):
+    import jaxplan as jp
+
+    mi, pi = _selected(run, spec, "navigate")
+    if not pi:
+        raise ValueError(f"figure {spec.name!r}: no navigate planner selected")
+    sc, seed, r = _scenario_seed(run, spec)
+    panels = [(m, p) for m in mi for p in pi]
+    fig, axes = _panels(len(panels), w=6.0, h=4.8)
+    for ax, (m, p) in zip(axes[0], panels):
+        mw, pc = run.prep.maps[m], run.config.planners[p]
+        navcfg, weights = nav_config(pc)
+        dwa = navcfg.dwa
+        pipe = jp.nav.get_pipeline(pc.name)
+        if navcfg.evaluator is None and pipe.evaluator and hasattr(dwa, "evaluator"):
+            dwa = dataclasses.replace(dwa, evaluator=pipe.evaluator)
+        dwa = dataclasses.replace(dwa, keep_rollouts=True)  # episodes drop them; the fan needs them
+        plots.plot_map(ax, mw.grid, title=f"{pc.label} on {mw.spec.name}", colorbar=False)
+        got = _nav_trial(run, m, p, sc, r)
+        if got is None or got[1] is None:
+            continue
+        pos, states, steps, plan = got
+        wanted = spec.params.get("steps") or [steps // 2]
+        obs = _obstacles(run, m, p, sc, seed)
+        ax.plot(pos[:, 0], pos[:, 1], color="0.3", lw=1.0, label="executed")
+        ax.plot(plan[:, 0], plan[:, 1], color="C2", lw=1.0, ls="--", label="global path")
+        lo, hi = pos.min(0), pos.max(0)
+        for s in wanted:
+            s = min(int(s), steps)
+            state = states[s]
+            # sub-goal: the global path's point `lookahead` metres past the point nearest the robot
+            near = int(np.argmin(np.hypot(*(plan - state[:2]).T))) if len(plan) else 0
+            seg = np.r_[0.0, np.cumsum(np.hypot(*np.diff(plan[near:], axis=0).T))] if len(plan) else np.zeros(1)
+            ahead = near + int(np.searchsorted(seg, navcfg.lookahead)) if len(plan) else 0
+            subgoal = plan[min(ahead, len(plan) - 1)] if len(plan) else state[:2]
+            discs = None
+            if obs is not None:
+                from jaxplan.nav import discs_at
+
+                discs = discs_at(obs, s * dwa.period)
+                for c, rad in zip(np.asarray(discs.positions), np.asarray(discs.radii)):
+                    ax.add_patch(plt.Circle(tuple(c), float(rad), color="tab:red", alpha=0.5))
+            _, info = jp.dwa_step(state, subgoal, mw.grid, obstacles=discs, params=weights or None, config=dwa,
+                                  path=plan if len(plan) > 1 else None)
+            ro, ok = np.asarray(info.rollouts), np.asarray(info.feasible)
+            for j in np.flatnonzero(~ok)[::2]:
+                ax.plot(ro[j, :, 0], ro[j, :, 1], color="tab:red", lw=0.3, alpha=0.4)
+            for j in np.flatnonzero(ok):
+                ax.plot(ro[j, :, 0], ro[j, :, 1], color="tab:blue", lw=0.3, alpha=0.5)
+            ch = int(info.chosen)
+            ax.plot(ro[ch, :, 0], ro[ch, :, 1], color="k", lw=2.0)
+            ax.plot(*subgoal, "*", color="C1", ms=9)
+            lo, hi = np.minimum(lo, ro[..., :2].reshape(-1, 2).min(0)), np.maximum(hi, ro[..., :2].reshape(-1, 2).max(0))
+        ax.legend(fontsize=7, loc="best")
+        if len(wanted) == 1:  # zoom on the fan
+            c = states[min(int(wanted[0]), steps), :2]
+            span = max(2.5, dwa.horizon * float(dwa.robot.v_max) * 1.3)
+            ax.set_xlim(c[0] - span, c[0] + span)
+            ax.set_ylim(c[1] + span, c[1] - span)  # row 0 at the top, as plot_map draws it
+    fig.suptitle(_title(spec, "DWA trajectory fans"))
+    return fig, (f"Dynamic-window rollouts at control steps {spec.params.get('steps') or 'mid-episode'} "
+                 f"(scenario {sc}, seed {seed}): feasible blue, infeasible red, chosen black, sub-goal star; "
+                 "recomputed with jaxplan.dwa_step at the stored robot states.")
+
+
+DRAW: dict[str, Callable[[RunData, FigureSpec], tuple[Any, str]]] = {
+    "convergence": _convergence, "diversity": _diversity, "box": _box, "bar": _bar, "sweep": _sweep,
+    "paths": _paths, "pheromone": _pheromone, "trajectories": _trajectories, "controls": _controls, "fan": _fan,
+}
+"""Figure kind -> drawing function ``(run, spec) -> (figure, caption)``."""
+
+
+# ---------------------------------------------------------------------------------------------
+# The front door
+
+
+def write_index(out: Path, run_name: str, title: str, drawn: Sequence[Drawn], problems: Sequence[str]) -> Path:
+    """Writes ``out/run_name/index.md`` and refreshes ``out/index.md`` (a list of every run's index)."""
+    d = out / run_name
+    lines = [f"# Figures: {run_name}", "", title, ""]
+    for f in drawn:
+        lines += [f"## {f.name} ({f.kind})", "", f"![{f.name}]({f.files[0]})", "", f.caption, "",
+                  "Files: " + ", ".join(f"[{x}]({x})" for x in f.files), ""]
+    if problems:
+        lines += ["## Not drawn", ""] + [f"- {p}" for p in problems] + [""]
+    (d / "index.md").write_text("\n".join(lines))
+    runs = sorted(p.parent.name for p in out.glob("*/index.md"))
+    top = ["# Figures", "", "One page per run folder (`jaxplan figures RUN`).", ""]
+    top += [f"- [{r}]({r}/index.md)" for r in runs]
+    extra = sorted(p.name for p in out.glob("*.png"))
+    if extra:
+        top += ["", "Other figures:", ""] + [f"- [{x}]({x})" for x in extra]
+    (out / "index.md").write_text("\n".join(top) + "\n")
+    return d / "index.md"
+
+
+def draw_figures(run_dir: str | os.PathLike, out: str | os.PathLike = "figures", *,
+                 data_dir: str | os.PathLike | None = None, strict: bool = False) -> tuple[list[Drawn], list[str]]:
+    """Draws every ``[[figures]]`` entry of a run folder's config.
+
+    Args:
+      run_dir: a folder written by `run_experiment`.
+      out: figure root; files go to ``out/RUN/`` (RUN = the run folder's name).
+      data_dir: where the config's relative map paths resolve (as for `run_experiment`).
+      strict: raise on the first figure that cannot be drawn (default: list it and go on).
+
+    Returns:
+      (the figures written, the problems of those not drawn — one line each).
+
+    Raises:
+      FileNotFoundError: not a run folder, or nothing finished in it.
+    """
+    run = load_run(run_dir, data_dir)
+    run_name = Path(run_dir).resolve().name
+    d = Path(out) / run_name
+    d.mkdir(parents=True, exist_ok=True)
+    drawn, problems = [], []
+    for spec in run.config.figures:
+        try:
+            fig, caption = DRAW[spec.kind](run, spec)
+        except (ValueError, KeyError, FileNotFoundError) as e:
+            if strict:
+                raise
+            problems.append(f"{spec.name} ({spec.kind}): {e}")
+            continue
+        fmts = [spec.params["format"]] if spec.params.get("format") else ["png", "svg"]
+        files = []
+        for ext in fmts:
+            plots.save_figure(fig, str(d / f"{spec.name}.{ext}"))
+            files.append(f"{spec.name}.{ext}")
+        plt.close(fig)
+        drawn.append(Drawn(spec.name, spec.kind, tuple(files), caption))
+    write_index(Path(out), run_name, run.config.description or run.config.name, drawn, problems)
+    return drawn, problems
