@@ -2,10 +2,20 @@
 
 from jaxplan.tune._bounds import Bounds, clip, from_unit, make_bounds, reflect, to_unit
 from jaxplan.tune._strategies import STRATEGIES, Strategy, cma_es, grid_search, make_strategy, random_search, sanitize, snes
+from jaxplan.tune._gradients import (
+    RelaxedResult, quadratic_features, reinforce, relaxed_dwa, relaxed_dwa_loss, score_function_grad, surrogate,
+)
+from jaxplan.tune._objective import (
+    ACO_METRICS, DWA_METRICS, DWAEpisodes, Evaluation, Objective, Split, aco_objective, dwa_episodes, dwa_objective,
+    dwa_scenarios,
+)
 from jaxplan.tune._sparrow import SparrowState, adaptive_weight, issa, levy, ssa
 
 __all__ = [
     "Bounds", "clip", "from_unit", "make_bounds", "reflect", "to_unit",
     "STRATEGIES", "Strategy", "cma_es", "grid_search", "make_strategy", "random_search", "sanitize", "snes",
+    "RelaxedResult", "quadratic_features", "reinforce", "relaxed_dwa", "relaxed_dwa_loss", "score_function_grad",
+    "surrogate", "ACO_METRICS", "DWA_METRICS", "DWAEpisodes", "Evaluation", "Objective", "Split", "aco_objective",
+    "dwa_episodes", "dwa_objective", "dwa_scenarios",
     "SparrowState", "adaptive_weight", "issa", "levy", "ssa",
 ]

@@ -1,4 +1,5 @@
-"""Gradient-free optimisers behind one interface: grid, random, CMA-ES / SNES (evosax), SSA, ISSA.
+"""Optimisers behind one interface: grid, random, CMA-ES / SNES (evosax), SSA, ISSA (and, from
+`jaxplan.tune._gradients`, the score-function and surrogate routes).
 
 Every optimiser is a `Strategy`: a NamedTuple of three pure functions closed over static
 hyperparameters (the optax/evosax pattern)::
@@ -204,7 +205,7 @@ def _sparrows():
     return _sparrow
 
 
-STRATEGIES = ("grid", "random", "cma_es", "snes", "ssa", "issa")
+STRATEGIES = ("grid", "random", "cma_es", "snes", "ssa", "issa", "reinforce", "surrogate")
 
 
 def make_strategy(name: str, population_size: int, generations: int, **options) -> Strategy:
@@ -225,4 +226,12 @@ def make_strategy(name: str, population_size: int, generations: int, **options) 
         return _sparrows().ssa(population_size, generations, **options)
     if name == "issa":
         return _sparrows().issa(population_size, generations, **options)
+    if name == "reinforce":
+        from jaxplan.tune._gradients import reinforce
+
+        return reinforce(population_size, **options)
+    if name == "surrogate":
+        from jaxplan.tune._gradients import surrogate
+
+        return surrogate(population_size, generations, **options)
     raise ValueError(f"unknown strategy {name!r}; choose from {STRATEGIES}")
