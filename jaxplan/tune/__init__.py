@@ -9,6 +9,8 @@ from jaxplan.tune._objective import (
     ACO_METRICS, DWA_METRICS, DWAEpisodes, Evaluation, Objective, Split, aco_objective, dwa_episodes, dwa_objective,
     dwa_scenarios,
 )
+from jaxplan.tune._config import TuneConfig, apply_tune_quick, load_tune_config, parse_tune_config
+from jaxplan.tune._workflow import TuneResult, build_objective, compare, fragment_toml, plot_tuning, run_tuning, tune_loop
 from jaxplan.tune._sparrow import SparrowState, adaptive_weight, issa, levy, ssa
 
 __all__ = [
@@ -17,5 +19,7 @@ __all__ = [
     "RelaxedResult", "quadratic_features", "reinforce", "relaxed_dwa", "relaxed_dwa_loss", "score_function_grad",
     "surrogate", "ACO_METRICS", "DWA_METRICS", "DWAEpisodes", "Evaluation", "Objective", "Split", "aco_objective",
     "dwa_episodes", "dwa_objective", "dwa_scenarios",
+    "TuneConfig", "apply_tune_quick", "load_tune_config", "parse_tune_config", "TuneResult", "build_objective",
+    "compare", "fragment_toml", "plot_tuning", "run_tuning", "tune_loop",
     "SparrowState", "adaptive_weight", "issa", "levy", "ssa",
 ]

@@ -1,0 +1,371 @@
+"""The tuning workflow: progress, a CSV log per generation, orbax checkpoints, exact resume, best weights, figure.
+
+`tune_loop` runs one `Strategy` on one `Objective` for G generations. Generation g draws
+its key as ``fold_in(key(seed), g)`` — a function of (seed, g) only — so a run that is
+killed and resumed from its last checkpoint replays exactly the generations an
+uninterrupted run would (same populations, same fitness bits, same final state).
+
+Run folder ``OUT/NAME`` (``OUT/NAME-quick`` for quick runs)::
+
+    config.toml               the config, verbatim (run_tuning)
+    generations.csv           one row per generation: evaluations so far, best so far, the
+                              generation's best / mean (finite values) / worst finite, how many
+                              fitness values were NaN/inf (counted, then treated as the worst),
+                              and the best-so-far weights by name; deterministic (no wall times)
+    timings.csv               wall-clock seconds of each generation's compiled evaluation
+    checkpoints/manifest.json the commit log: fingerprint, last checkpointed generation, the rows so far
+    checkpoints/gen_NNNNN/    the strategy state after generation NNNNN (orbax), every k generations
+    summary.json              defaults vs best weights on the train and held-out test sets, the
+                              seed-to-seed spread (sd over seeds of the per-seed mean cost), NaN count
+    best.toml                 the best weights as a [[planners]] entry for `jaxplan run`
+    convergence.png           best-so-far and generation mean against evaluations
+
+A checkpoint commits in two steps — orbax writes the state, then the manifest (temporary
+file, fsync, rename: `jaxplan.experiments.runner._atomic_write`) names it — so a process
+killed at any instant leaves at worst a state the manifest does not name, and the resume
+recomputes those generations.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import math
+import shutil
+import sys
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxplan.experiments.runner import RunFolderError, _atomic_write, _clock
+from jaxplan.tune._objective import Objective, Split
+from jaxplan.tune._strategies import Strategy, make_strategy, sanitize
+
+__all__ = ["tune_loop", "run_tuning", "TuneResult", "fragment_toml", "plot_tuning"]
+
+MANIFEST = "manifest.json"
+
+
+class TuneResult(dict):
+    """``{"state", "rows", "best_x", "best_f", "n_bad", "evaluations", "resumed_from"}`` of a `tune_loop`."""
+
+
+def _columns(names) -> list[str]:
+    return ["generation", "evaluations", "best", "gen_best", "gen_mean", "gen_worst", "n_bad"] + list(names)
+
+
+def _csv(rows: list[dict], names) -> bytes:
+    cols = _columns(names)
+    buf = io.StringIO()
+    buf.write(",".join(cols) + "\n")
+    for r in rows:
+        buf.write(",".join(repr(r[c]) if isinstance(r[c], float) else str(r[c]) for c in cols) + "\n")
+    return buf.getvalue().encode()
+
+
+def _save_state(path: Path, state) -> None:
+    import orbax.checkpoint as ocp
+
+    leaves = jax.tree_util.tree_leaves(state)
+    data = {}
+    for i, a in enumerate(leaves):
+        a = jnp.asarray(a)
+        if jnp.issubdtype(a.dtype, jax.dtypes.prng_key):
+            a = jax.random.key_data(a)  # typed keys are stored as their raw data
+        data[f"leaf_{i:04d}"] = np.asarray(a)
+    ocp.PyTreeCheckpointer().save(path.resolve(), data, force=True)
+
+
+def _load_state(path: Path, template):
+    import orbax.checkpoint as ocp
+
+    data = ocp.PyTreeCheckpointer().restore(path.resolve())
+    leaves, treedef = jax.tree_util.tree_flatten(template)
+    out = []
+    for i, t in enumerate(leaves):
+        a = np.asarray(data[f"leaf_{i:04d}"])
+        t = jnp.asarray(t)
+        out.append(jax.random.wrap_key_data(a) if jnp.issubdtype(t.dtype, jax.dtypes.prng_key)
+                   else jnp.asarray(a, t.dtype))
+    return jax.tree_util.tree_unflatten(treedef, out)
+
+
+class _Progress:
+    def __init__(self, name: str, total: int, enabled: bool):
+        self.name, self.total, self.enabled, self.t0 = name, total, enabled, time.perf_counter()
+        self.tty = sys.stderr.isatty()
+
+    def update(self, row: dict, eval_s: float) -> None:
+        if not self.enabled:
+            return
+        el = time.perf_counter() - self.t0
+        msg = (f"{self.name}: generation {row['generation']}/{self.total} | best {row['best']:.6g} | "
+               f"gen mean {row['gen_mean']:.6g} | NaN/inf {row['n_bad']} | eval {eval_s:.2f} s | "
+               f"elapsed {_clock(el)}")
+        print(("\r" + msg.ljust(110)) if self.tty else msg, end="" if self.tty else "\n", file=sys.stderr, flush=True)
+
+    def close(self) -> None:
+        if self.enabled and self.tty:
+            print(file=sys.stderr, flush=True)
+
+
+def tune_loop(objective: Objective, strategy: Strategy, generations: int, run_dir: str | Path, *, seed: int = 0,
+              checkpoint_every: int = 2, resume: bool = True, progress: bool = True, fingerprint: str = "",
+              x0: Any = "defaults", callback: Callable[[int, dict], None] | None = None) -> TuneResult:
+    """Runs ``generations`` generations of ``strategy`` on the training split of ``objective``.
+
+    Args:
+      objective: the `Objective` (each generation's population is one compiled call).
+      strategy: a `Strategy`.
+      generations: G >= 1.
+      run_dir: the folder for generations.csv, timings.csv and checkpoints/.
+      seed: PRNG seed; generation g uses ``fold_in(key(seed), g)``.
+      checkpoint_every: k >= 1; a checkpoint after every k-th generation and after the last.
+      resume: continue from the folder's last checkpoint (same fingerprint) instead of starting over.
+      fingerprint: identifies the run; a folder holding another run's checkpoints is refused.
+      x0: the strategies' starting point: ``"defaults"`` (the paper's weights), None (box centre) or ``f32[D]``.
+      callback: ``callback(generation, row)`` after each generation (before its checkpoint).
+
+    Returns:
+      `TuneResult`.
+
+    Raises:
+      RunFolderError: the folder holds a different run's checkpoints (and ``resume`` is True).
+    """
+    if not isinstance(generations, int) or generations < 1:
+        raise ValueError(f"generations must be a positive integer, got {generations!r}")
+    if not isinstance(checkpoint_every, int) or checkpoint_every < 1:
+        raise ValueError(f"checkpoint_every must be a positive integer, got {checkpoint_every!r}")
+    run_dir = Path(run_dir)
+    ck = run_dir / "checkpoints"
+    b = objective.bounds
+    fp = hashlib.sha256(f"{fingerprint}|{strategy.name}|{strategy.population_size}|{generations}|{seed}|"
+                        f"{b.names}|{b.low.tolist()}|{b.high.tolist()}".encode()).hexdigest()
+    root = jax.random.key(seed)
+    start = x0 if not (isinstance(x0, str) and x0 == "defaults") else objective.defaults
+    state = strategy.init(jax.random.fold_in(root, 2**31 - 1), b, start)
+    rows: list[dict] = []
+    times: list[str] = []
+    g0 = 0
+    manifest_path = ck / MANIFEST
+    if resume and manifest_path.is_file():
+        man = json.loads(manifest_path.read_text())
+        if man.get("fingerprint") != fp:
+            raise RunFolderError(f"{run_dir} holds the checkpoints of a different tuning run (config, strategy, "
+                                 "space or seed changed); delete that folder, pass another out folder or resume=False")
+        g0 = int(man["generation"])
+        if g0 > 0:
+            state = _load_state(ck / f"gen_{g0:05d}", state)
+            rows = man["rows"][:g0]
+            times = man.get("times", [])[:g0]
+    elif ck.exists():
+        shutil.rmtree(ck)
+    for p in ck.glob("*.orbax-checkpoint-tmp*") if ck.exists() else ():
+        shutil.rmtree(p, ignore_errors=True)
+    ck.mkdir(parents=True, exist_ok=True)
+    ask, tell = jax.jit(strategy.ask), jax.jit(strategy.tell)
+    prog = _Progress(run_dir.name, generations, progress)
+    P = strategy.population_size
+    n_bad_total = sum(r["n_bad"] for r in rows)
+
+    def commit(g: int) -> None:
+        _save_state(ck / f"gen_{g:05d}", state)
+        man = {"fingerprint": fp, "generation": g, "rows": rows, "times": times}
+        _atomic_write(manifest_path, json.dumps(man, indent=1).encode())
+        for old in ck.glob("gen_*"):  # keep the last two checkpoints
+            if old.is_dir() and int(old.name[4:]) < g - checkpoint_every:
+                shutil.rmtree(old, ignore_errors=True)
+
+    try:
+        for g in range(g0, generations):
+            pop = ask(jax.random.fold_in(root, g), state)
+            ev = objective.evaluate(pop, "train")
+            fit, n_bad = sanitize(jnp.asarray(ev.fitness))
+            state = tell(state, pop, jnp.asarray(ev.fitness))
+            raw = np.asarray(ev.fitness, np.float64)
+            finite = raw[np.isfinite(raw)]
+            n_bad_total += int(n_bad)
+            bx = np.asarray(state.best_x, np.float64)
+            row = {"generation": g + 1, "evaluations": (g + 1) * P, "best": float(state.best_f),
+                   "gen_best": float(finite.min()) if finite.size else math.nan,
+                   "gen_mean": float(finite.mean()) if finite.size else math.nan,
+                   "gen_worst": float(finite.max()) if finite.size else math.nan, "n_bad": int(n_bad),
+                   **{n: float(v) for n, v in zip(b.names, bx)}}
+            rows.append(row)
+            times.append(f"{g + 1},{ev.time_s!r},{ev.compile_s!r}")
+            _atomic_write(run_dir / "generations.csv", _csv(rows, b.names))
+            _atomic_write(run_dir / "timings.csv", ("generation,eval_s,compile_s\n" + "\n".join(times) + "\n").encode())
+            prog.update(row, ev.time_s)
+            if callback is not None:
+                callback(g + 1, row)
+            if (g + 1) % checkpoint_every == 0 or g + 1 == generations:
+                commit(g + 1)
+    finally:
+        prog.close()
+    return TuneResult(state=state, rows=rows, best_x=np.asarray(state.best_x), best_f=float(state.best_f),
+                      n_bad=n_bad_total, evaluations=generations * P, resumed_from=g0)
+
+
+# ---------------------------------------------------------------------------------------------
+# Outputs
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    if isinstance(v, (float, np.floating)):
+        return repr(float(v))
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise TypeError(f"cannot write {v!r} to TOML")
+
+
+def _inline(d: dict) -> str:
+    return "{ " + ", ".join(f"{k} = {_toml_value(v)}" for k, v in d.items()) + " }"
+
+
+def fragment_toml(objective: Objective, x, *, label: str, overrides: dict | None = None, pipeline: str | None = None,
+                  comment: str = "") -> str:
+    """A ``[[planners]]`` entry of an experiment config (`jaxplan run`) with the weights ``x [D]``.
+
+    ACO: ``kind = "plan"``, the planner with ``overrides`` = its settings plus the tuned weights.
+    DWA: ``kind = "navigate"``, ``pipeline`` with ``params`` = the tuned critic weights (and
+    ``dwa`` = the DWAConfig settings the tuning used).
+    """
+    p = objective.params(np.asarray(x))
+    head = "".join(f"# {line}\n" for line in comment.splitlines())
+    if objective.kind == "aco":
+        ov = {**dict(overrides or {}), **p}
+        return (f"{head}[[planners]]\nlabel = {_toml_value(label)}\nkind = \"plan\"\n"
+                f"name = {_toml_value(objective.planner)}\noverrides = {_inline(ov)}\n")
+    body = (f"{head}[[planners]]\nlabel = {_toml_value(label)}\nkind = \"navigate\"\n"
+            f"name = {_toml_value(pipeline or 'astar_kng_dwa')}\nparams = {_inline(p)}\n")
+    if overrides:
+        body += f"dwa = {_inline(dict(overrides))}\n"
+    return body
+
+
+def plot_tuning(rows_by_label: dict[str, list[dict]], path: str | Path, title: str = "") -> list[str]:
+    """Convergence figure: best-so-far (solid) and generation mean (dotted) against evaluations."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from jaxplan.experiments.plots import save_figure
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    for i, (label, rows) in enumerate(rows_by_label.items()):
+        ev = [r["evaluations"] for r in rows]
+        c = f"C{i % 10}"
+        ax.plot(ev, [r["best"] for r in rows], "-", color=c, label=label)
+        if len(rows_by_label) == 1:
+            ax.plot(ev, [r["gen_mean"] for r in rows], ":", color=c, label=f"{label} (generation mean)")
+    ax.set_xlabel("evaluations (weight vectors)")
+    ax.set_ylabel("training objective (lower is better)")
+    ax.set_title(title or "tuning convergence")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    out = save_figure(fig, str(path))
+    plt.close(fig)
+    return out
+
+
+def _splits(cfg, grid, starts, goals, optimal) -> tuple[Split, Split]:
+    n = len(starts)
+    if n < 2:
+        raise ValueError(f"a tuning run needs at least 2 scenarios (train and test), the map gave {n}")
+    k = min(cfg.train_count, n - 1)
+    te = slice(k, n if cfg.test_count is None else min(n, k + cfg.test_count))
+    return (Split(starts[:k], goals[:k], optimal[:k], tuple(cfg.train_seeds)),
+            Split(starts[te], goals[te], optimal[te], tuple(cfg.test_seeds)))
+
+
+def build_objective(cfg) -> Objective:
+    """The `Objective` of a `TuneConfig` (map loaded, scenarios chosen and split)."""
+    from jaxplan.experiments.runner import _load_map, _scenarios
+    from jaxplan.tune._objective import aco_objective, dwa_objective
+
+    grid, s0, g0, _ = _load_map(cfg.map)
+    starts, goals, optimal, _ = _scenarios(cfg.map, grid, s0, g0)
+    train, test = _splits(cfg, grid, starts, goals, optimal)
+    space = {k: (list(v) if isinstance(v, list) else tuple(v)) for k, v in cfg.space.items()}
+    if cfg.kind == "aco":
+        return aco_objective(grid, train, test, cfg.planner, space, dict(cfg.weights), dict(cfg.overrides),
+                             name=cfg.name)
+    return dwa_objective(grid, train, test, cfg.planner, space, dict(cfg.weights), dict(cfg.overrides),
+                         max_time=cfg.max_time, n_discs=cfg.discs, name=cfg.name)
+
+
+def compare(objective: Objective, x, split: str) -> dict:
+    """Defaults vs ``x`` on a split, in one compiled call: mean cost, seed-to-seed sd, metric means."""
+    ev = objective.evaluate(np.stack([objective.defaults, np.asarray(x, np.float32)]), split)
+    sd = ev.per_seed.std(axis=1, ddof=1) if ev.per_seed.shape[1] > 1 else np.zeros(2)
+    out = {}
+    for i, k in enumerate(("defaults", "tuned")):
+        out[k] = {"objective": float(ev.fitness[i]), "seed_sd": float(sd[i]),
+                  "per_seed": [float(v) for v in ev.per_seed[i]],
+                  "metrics": {m: float(v[i]) for m, v in ev.metrics.items()}}
+    out["improvement"] = out["defaults"]["objective"] - out["tuned"]["objective"]
+    return out
+
+
+def run_tuning(config_path, out="runs", quick: bool = False, data_dir=None, progress: bool = True,
+               resume: bool = True) -> Path:
+    """Runs the tuning config at ``config_path``; returns the run folder ``OUT/NAME`` (``NAME-quick``).
+
+    Loads and validates the config (`jaxplan.tune._config`, `ConfigError` listing every problem),
+    loads the map and scenarios, splits them into the training and held-out test sets, runs the
+    configured strategy for the configured generations (one compiled call per generation,
+    progress on stderr, generations.csv, orbax checkpoints every ``checkpoint_every``
+    generations; with ``resume`` a folder with this run's checkpoints continues from the last
+    one, exactly; without it the folder's checkpoints are discarded), then writes
+    summary.json (defaults vs best on train and test with the seed-to-seed spread),
+    best.toml (a ``[[planners]]`` entry `jaxplan run` accepts) and convergence.png.
+    """
+    from jaxplan.tune._config import apply_tune_quick, load_tune_config
+
+    cfg = load_tune_config(config_path, data_dir=data_dir)
+    if quick:
+        cfg = apply_tune_quick(cfg)
+    run_dir = Path(out) / (cfg.name + ("-quick" if cfg.is_quick else ""))
+    run_dir.mkdir(parents=True, exist_ok=True)
+    objective = build_objective(cfg)
+    strategy = make_strategy(cfg.strategy, cfg.population, cfg.generations, **dict(cfg.options))
+    fp = hashlib.sha256(cfg.text.encode() + (b"|quick" if cfg.is_quick else b"")).hexdigest()
+    _atomic_write(run_dir / "config.toml", cfg.text.encode())
+    t0 = time.perf_counter()
+    res = tune_loop(objective, strategy, cfg.generations, run_dir, seed=cfg.seed,
+                    checkpoint_every=cfg.checkpoint_every, resume=resume, progress=progress, fingerprint=fp)
+    wall = time.perf_counter() - t0
+    best = res["best_x"]
+    summary = {
+        "name": cfg.name, "kind": cfg.kind, "planner": cfg.planner, "strategy": cfg.strategy,
+        "population": cfg.population, "generations": cfg.generations, "evaluations": res["evaluations"],
+        "resumed_from_generation": res["resumed_from"], "n_bad": res["n_bad"],
+        "space": {n: [float(lo), float(hi)] for n, lo, hi in zip(objective.bounds.names, objective.bounds.low,
+                                                                    objective.bounds.high)},
+        "defaults": objective.params(objective.defaults), "best": objective.params(best),
+        "best_train_during_search": res["best_f"],
+        "train": compare(objective, best, "train"), "test": compare(objective, best, "test"),
+        "weights": dict(cfg.weights), "wall_s_this_session": wall,
+    }
+    _atomic_write(run_dir / "summary.json", json.dumps(summary, indent=1).encode())
+    te = summary["test"]
+    comment = (f"best weights of tuning run {cfg.name} ({cfg.strategy}, {res['evaluations']} evaluations)\n"
+               f"held-out test objective: tuned {te['tuned']['objective']:.6g} ± {te['tuned']['seed_sd']:.3g}, "
+               f"paper defaults {te['defaults']['objective']:.6g} ± {te['defaults']['seed_sd']:.3g} (sd over seeds)")
+    frag = fragment_toml(objective, best, label=f"{cfg.planner}-tuned", overrides=dict(cfg.overrides),
+                         pipeline=cfg.pipeline, comment=comment)
+    _atomic_write(run_dir / "best.toml", frag.encode())
+    plot_tuning({cfg.strategy: res["rows"]}, run_dir / "convergence.png", title=f"{cfg.name}: {cfg.strategy}")
+    return run_dir
