@@ -29,15 +29,19 @@ from typing import Any, Mapping, NamedTuple
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax.sharding import Mesh
+from jax.sharding import PartitionSpec as P
 from numpy.typing import ArrayLike
 
 from jaxplan.aco import _rules as R
-from jaxplan.aco._colony import Colony, RunConfig, run_batch
+from jaxplan.aco._colony import Colony, RunConfig, run_batch, walk_backend
 from jaxplan.aco._context import GoalTables, MapTables, check_one, goal_tables, map_tables
 from jaxplan.aco._walk_numba import WALK_BACKENDS
 from jaxplan.grid._gridmap import GridMap, passable
 from jaxplan.registry import register_planner, resolve
 from jaxplan.result import PlanResult
+from jaxplan.scale._memory import aco_memory, check_memory
+from jaxplan.scale._mesh import BATCH_AXIS, check_mesh, pad_leading, padded_size
 
 __all__ = ["COLONIES", "BatchResult", "plan_batch", "aco_defaults"]
 
@@ -173,15 +177,28 @@ def cached_map_tables(grid: GridMap, connectivity: int, vehicle_height: float | 
     return _memo(_TABLES, key, lambda: map_tables(grid, connectivity, vehicle_height), limit=8)
 
 
-def compiled(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys) -> tuple[Any, float]:
-    """The compiled batch program for these shapes, and the seconds spent compiling it now (0 if cached)."""
+def compiled(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys,
+             mesh: Mesh | None = None) -> tuple[Any, float]:
+    """The compiled batch program for these shapes, and the seconds spent compiling it now (0 if cached).
+
+    With a ``mesh`` (`jaxplan.scale.batch_mesh`), the scenario axis of ``goals`` (a multiple of
+    the mesh's devices) is split over its devices with `jax.shard_map`; the map tables, params
+    and keys are replicated. Every run depends only on its own scenario and key, so the result
+    equals the single-device one.
+    """
     sig = jax.tree_util.tree_map(lambda a: (a.shape, a.dtype), (tables, goals, params, keys))
-    key = (colony, cfg, str(jax.tree_util.tree_structure(sig)), str(jax.tree_util.tree_leaves(sig)))
+    key = (colony, cfg, str(jax.tree_util.tree_structure(sig)), str(jax.tree_util.tree_leaves(sig)), mesh)
     if key in _PROGRAMS:
         _PROGRAMS.move_to_end(key)
         return _PROGRAMS[key], 0.0
     t0 = time.perf_counter()
-    fn = jax.jit(lambda t, g, p, k: run_batch(colony, cfg, t, g, p, k)).lower(tables, goals, params, keys).compile()
+    body = lambda t, g, p, k: run_batch(colony, cfg, t, g, p, k)  # noqa: E731
+    if mesh is not None:
+        # check_vma=False: the numba walk is an FFI custom call, whose outputs carry no
+        # varying-axes annotation; every output really is per shard (split along BATCH_AXIS).
+        body = jax.shard_map(body, mesh=mesh, in_specs=(P(), P(BATCH_AXIS), P(), P()), out_specs=P(BATCH_AXIS),
+                             check_vma=False)
+    fn = jax.jit(body).lower(tables, goals, params, keys).compile()
     dt = time.perf_counter() - t0
     _memo(_PROGRAMS, key, lambda: fn, limit=32)
     return fn, dt
@@ -248,16 +265,31 @@ class BatchResult(NamedTuple):
 
 
 def _run_colony(name: str, grid: GridMap, starts: np.ndarray, goals: np.ndarray, seeds, p: Mapping[str, Any],
-                keep_pheromone: bool = False):
+                keep_pheromone: bool = False, mesh: Mesh | None = None):
     cfg, params, connectivity, vh = split_params(grid, p)
     if keep_pheromone:
         cfg = RunConfig(**{**cfg.__dict__, "keep_pheromone": True})
     tables = cached_map_tables(grid, connectivity, vh)
-    gt = goal_tables(grid, starts, goals, connectivity, vh, geodesic=cfg.heuristic == "geodesic")
+    N = len(starts)
     keys = _seed_keys(seeds)
-    fn, compile_s = compiled(COLONIES[name], cfg, tables, gt, params, keys)
+    colony = COLONIES[name]
+    runs = (N if mesh is None else padded_size(N, check_mesh(mesh))) * keys.shape[0]
+    # Refuse a batch that cannot fit before anything of it is allocated (on a mesh, per device).
+    devices = 1 if mesh is None else mesh.devices.size
+    C, K = tables.index.shape
+    est = aco_memory(C, K, runs // devices, cfg.colonies, cfg.ants, cfg.max_steps, cfg.iterations,
+                     keep_pheromone=cfg.keep_pheromone, hook=colony.hook is not None, penalty=cfg.penalise,
+                     alert=cfg.dead_end == "alert", jax_walk=walk_backend(colony, cfg) == "jax")
+    check_memory(est, f"planner {name!r} with {cfg.colonies * cfg.ants} ants on a {grid.shape[0]}x{grid.shape[1]} map",
+                 unit="runs (scenarios x seeds)" + (" per device" if devices > 1 else ""))
+    gt = goal_tables(grid, starts, goals, connectivity, vh, geodesic=cfg.heuristic == "geodesic")
+    if mesh is not None:
+        gt = pad_leading(gt, padded_size(N, mesh))  # copies of the last scenario, sliced off below
+    fn, compile_s = compiled(colony, cfg, tables, gt, params, keys, mesh)
     t0 = time.perf_counter()
     out = jax.block_until_ready(fn(tables, gt, params, keys))
+    if mesh is not None:
+        out = jax.tree_util.tree_map(lambda a: a[:N], out)
     return out, time.perf_counter() - t0, compile_s, grid.width
 
 
@@ -296,6 +328,8 @@ def plan_batch(
     goals: ArrayLike,
     planner: str = "aco",
     seeds=range(1),
+    *,
+    mesh: Mesh | None = None,
     **overrides: Any,
 ) -> BatchResult:
     """Runs ``planner`` on every scenario with every seed in one compiled call.
@@ -307,6 +341,10 @@ def plan_batch(
         scenario once and repeat it across seeds, since they ignore the seed; sampling
         planners run once per scenario and seed).
       seeds: iterable of non-negative integer seeds (R of them).
+      mesh: optional 1-D device mesh (`jaxplan.scale.batch_mesh`): an ACO planner's
+        scenarios are split over its devices (padded to a multiple of the device count with
+        copies of the last scenario, which are dropped again); the results equal the
+        single-device call's. Other planners ignore it.
       **overrides: planner parameters, as for `jaxplan.plan`.
 
     Returns:
@@ -315,7 +353,7 @@ def plan_batch(
     spec, p = resolve(planner, overrides)
     s, g = np.asarray(starts), np.asarray(goals)
     if planner in COLONIES:
-        out, dt, compile_s, width = _run_colony(planner, grid, s, g, seeds, p)
+        out, dt, compile_s, width = _run_colony(planner, grid, s, g, seeds, p, mesh=mesh)
         return _to_batch(planner, out, dt, compile_s, width)
     seed_list = [int(x) for x in seeds]
     R_ = len(_seed_keys(seed_list))

@@ -1,0 +1,14 @@
+"""Scale-out: device meshes for the batched entry points, memory estimates, multi-host runs.
+
+``jp.plan_batch(..., mesh=jaxplan.scale.batch_mesh())`` splits the scenarios of an ACO batch over
+every device (DESIGN §7); results equal the single-device call's. Before it allocates, `plan_batch`
+estimates its working memory (`aco_memory`) and refuses a batch above `memory_limit()`
+(``$JAXPLAN_MEMORY_LIMIT``, default 80 % of the available memory) with `MemoryLimitError`,
+naming the largest batch that fits.
+"""
+
+from jaxplan.scale._memory import MemoryEstimate, MemoryLimitError, aco_memory, check_memory, dwa_memory, memory_limit
+from jaxplan.scale._mesh import BATCH_AXIS, batch_mesh, check_mesh, pad_leading, padded_size
+
+__all__ = ["BATCH_AXIS", "batch_mesh", "check_mesh", "pad_leading", "padded_size", "MemoryEstimate",
+           "MemoryLimitError", "aco_memory", "check_memory", "dwa_memory", "memory_limit"]

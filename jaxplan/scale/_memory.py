@@ -1,0 +1,163 @@
+"""How many bytes a batched configuration needs, and a guard that refuses one that does not fit.
+
+A sweep of thousands of scenarios × seeds fails late and badly when it runs out of memory
+(the kernel kills the process, or XLA aborts mid-run). `plan_batch` therefore estimates the
+working memory of its compiled program from the configuration's sizes before it allocates
+anything, and refuses a batch above the limit with the largest batch that would fit.
+
+The estimate counts the arrays that scale with the batch (each with the number of copies the
+compiled program keeps alive at once, read off its buffer assignment) plus the per-map tables;
+it does not count the process itself (Python, JAX, numba and the compiled code: about 0.4 GB).
+Measured as the rise of the peak RSS during a run of an already compiled program, it was an upper
+bound within a factor of 1.2–2.3 (iaco with 1,024 ants on brc202d; iaco, praco and opt_ant with
+64 runs on 100x100); `tests/test_scale.py` checks the bound on real runs.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from typing import NamedTuple
+
+__all__ = ["MemoryEstimate", "MemoryLimitError", "aco_memory", "dwa_memory", "memory_limit", "check_memory"]
+
+_F32 = 4
+_I32 = 4
+# Live copies of a pheromone-sized [B, S, C, K] f32 array inside one iteration of the colony's
+# scan: six covers every case measured (the peak RSS of praco's five colonies on a 100x100 map
+# came to about six such arrays; tests/test_scale.py).
+_TAU_COPIES = 6
+# The walk's path buffers are produced and consumed inside one iteration; XLA keeps at most
+# two generations alive (this iteration's and the scan carry's best-so-far extraction).
+_PATH_COPIES = 2
+
+
+class MemoryEstimate(NamedTuple):
+    """Bytes a configuration needs: ``total`` and its ``parts`` (name -> bytes), plus the batch
+    (``runs`` = scenarios × seeds, or robots) it was computed for and the bytes per element."""
+
+    total: int
+    parts: dict
+    runs: int
+    per_run: float
+
+    def largest_batch(self, limit: int) -> int:
+        """The largest batch (same configuration) whose estimate stays within ``limit`` bytes."""
+        fixed = self.total - self.per_run * self.runs
+        return max(0, int((limit - fixed) // max(self.per_run, 1.0)))
+
+
+class MemoryLimitError(MemoryError):
+    """A batch whose estimated memory exceeds the limit (raised before anything is allocated)."""
+
+
+def aco_memory(cells: int, moves: int, runs: int, colonies: int, ants: int, max_steps: int, iterations: int,
+               *, keep_pheromone: bool = False, hook: bool = False, penalty: bool = False, alert: bool = False,
+               jax_walk: bool = False, threads: int = 2) -> MemoryEstimate:
+    """Estimated working memory (bytes) of one `plan_batch` call of an ACO planner.
+
+    Args:
+      cells, moves: C = H·W and K (8 or 16) of the map.
+      runs: B = scenarios × seeds; colonies, ants: S and m per run; max_steps: L; iterations: I.
+      keep_pheromone: the final ``[B, S, C, K]`` pheromone is returned.
+      hook: seed 002's walk hook (two ``[B·S·C, K]`` logit tables per iteration).
+      penalty: seed 004's per-edge retreat counts.
+      alert: seed 002's dead-end alert (``bool[B, C]`` marks).
+      jax_walk: the JAX step loop (bit-packed tabu per ant) instead of the numba walk
+        (one ``int32[C]`` stamp array per thread).
+      threads: the numba walk's threads.
+    """
+    B, S, m, C, K, L, I = runs, colonies, ants, cells, moves, max_steps, iterations
+    A = B * S * m
+    edge = B * S * C * K * _F32
+    parts = {
+        "pheromone": _TAU_COPIES * edge,
+        "heuristic": B * C * K * _F32 + 2 * B * C * _F32,  # log η per edge, goal distance per cell
+        "ant paths": _PATH_COPIES * A * ((L + 1) * _I32 + L + 12 * _I32),  # cells, moves, per-ant scalars/stats
+        "best paths": 2 * B * S * ((L + 1) * _I32 + L),
+        "history": 4 * B * I * _F32,
+        "map tables": C * K * (2 * _I32 + 1) + C * 12 * _F32,
+    }
+    if keep_pheromone:
+        parts["returned pheromone"] = edge
+    if hook:
+        parts["hook logits"] = 2 * edge
+    if penalty:
+        parts["retreat counts"] = edge
+    if alert:
+        parts["dead-end marks"] = 2 * B * C
+    parts["tabu"] = A * math.ceil(C / 32) * 4 if jax_walk else threads * C * _I32
+    total = int(sum(parts.values()))
+    fixed = parts["map tables"] + (0 if jax_walk else parts["tabu"])
+    return MemoryEstimate(total, parts, runs, (total - fixed) / max(runs, 1))
+
+
+def dwa_memory(robots: int, samples: int, steps: int, *, keep_rollouts: bool = False, obstacles: int = 0,
+               chunk: int | None = 128, map_cells: int = 0) -> MemoryEstimate:
+    """Estimated working memory (bytes) of one `dwa_control_batch` call.
+
+    Each robot's S samples carry a rotor, running clearance minima and critic values
+    (about 16 floats per sample); with ``keep_rollouts`` every ``[S, T, 3]`` pose is kept.
+    Robots are processed ``chunk`` at a time, so only a chunk's rollouts are live at once.
+    """
+    live = robots if chunk is None else min(robots, chunk)
+    per_sample = 16 * _F32 + obstacles * 4 * _F32
+    parts = {
+        "samples": live * samples * per_sample,
+        "outputs": robots * samples * 4 * _F32,
+        "map tables": 4 * map_cells * _F32,
+    }
+    if keep_rollouts:
+        parts["rollouts"] = robots * samples * steps * 3 * _F32
+    total = int(sum(parts.values()))
+    return MemoryEstimate(total, parts, robots, (total - parts["map tables"]) / max(robots, 1))
+
+
+def memory_limit() -> int:
+    """The byte limit for one batched call: ``$JAXPLAN_MEMORY_LIMIT`` (bytes, or with a K/M/G/T
+    suffix), else 80 % of the memory the system reports available now."""
+    raw = os.environ.get("JAXPLAN_MEMORY_LIMIT")
+    if raw:
+        return _parse_bytes(raw)
+    avail = _available_bytes()
+    return int(0.8 * avail) if avail else 2**62
+
+
+def _parse_bytes(text: str) -> int:
+    t = text.strip().upper().removesuffix("B")
+    scale = {"K": 2**10, "M": 2**20, "G": 2**30, "T": 2**40}.get(t[-1:], 1)
+    digits = t[:-1] if t[-1:] in "KMGT" else t
+    try:
+        value = float(digits) * scale
+    except ValueError:
+        raise ValueError(f"JAXPLAN_MEMORY_LIMIT must be a byte count such as 8G or 500M, got {text!r}") from None
+    if not value > 0 or not math.isfinite(value):
+        raise ValueError(f"JAXPLAN_MEMORY_LIMIT must be positive, got {text!r}")
+    return int(value)
+
+
+def _available_bytes() -> int:
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return 0
+
+
+def check_memory(estimate: MemoryEstimate, what: str, limit: int | None = None, unit: str = "runs") -> None:
+    """Raises `MemoryLimitError` naming the largest batch that fits if ``estimate`` exceeds ``limit``."""
+    limit = memory_limit() if limit is None else int(limit)
+    if estimate.total <= limit:
+        return
+    top = sorted(estimate.parts.items(), key=lambda kv: -kv[1])[:3]
+    biggest = ", ".join(f"{k} {v / 2**30:.2f} GiB" for k, v in top)
+    raise MemoryLimitError(
+        f"{what} needs about {estimate.total / 2**30:.2f} GiB ({biggest}) for {estimate.runs} {unit}, above the "
+        f"limit of {limit / 2**30:.2f} GiB; at most {estimate.largest_batch(limit)} {unit} fit. Split the batch, "
+        f"or raise the limit with JAXPLAN_MEMORY_LIMIT (e.g. 16G)")

@@ -1,0 +1,123 @@
+"""Scale-out: sharded batches equal single-device ones; the memory guard refuses what cannot fit."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+import jaxplan as jp
+from jaxplan.scale import MemoryLimitError, aco_memory, batch_mesh, check_memory, memory_limit, pad_leading
+
+
+def _child(code: str, devices: int = 1) -> dict:
+    """Runs ``code`` in a fresh interpreter (XLA's device count is fixed at start-up); its last stdout line is JSON."""
+    env = dict(os.environ, XLA_FLAGS=f"--xla_force_host_platform_device_count={devices}")
+    proc = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, env=env,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def test_plan_batch_on_four_devices_equals_one_device():
+    """5 scenarios (padded to 8) x 2 seeds over 4 host devices: every field identical, for a plain,
+    a multi-colony (praco) and a hooked, 16-direction (opt_ant) colony."""
+    out = _child("""
+        import json
+        import numpy as np, jax
+        import jaxplan as jp
+        from jaxplan.scale import batch_mesh
+        scene = jp.RandomMapGenerator(24, 24, 0.2)(1)
+        free = np.argwhere(np.asarray(scene.grid.free))[:, ::-1]
+        idx = np.random.default_rng(0).choice(len(free), (5, 2), replace=False)
+        starts, goals = free[idx[:, 0]], free[idx[:, 1]]
+        res = {"devices": len(jax.devices())}
+        for planner in ("iaco", "praco", "opt_ant"):
+            a = jp.plan_batch(scene.grid, starts, goals, planner=planner, seeds=[0, 3], ants=12, iterations=4)
+            b = jp.plan_batch(scene.grid, starts, goals, planner=planner, seeds=[0, 3], ants=12, iterations=4,
+                              mesh=batch_mesh())
+            res[planner] = [f for f in ("paths", "n_cells", "length", "cost", "turns", "success", "converged",
+                                        "history", "diversity", "successes")
+                            if not np.array_equal(getattr(a, f), getattr(b, f))]
+            res[planner + "_success"] = float(a.success.mean())
+        print(json.dumps(res))
+        """, devices=4)
+    assert out["devices"] == 4
+    for planner in ("iaco", "praco", "opt_ant"):
+        assert out[planner] == [], f"{planner}: fields differ between 1 and 4 devices: {out[planner]}"
+        assert out[planner + "_success"] > 0.5
+
+
+def test_mesh_helpers():
+    mesh = batch_mesh(1)
+    assert mesh.axis_names == ("batch",)
+    with pytest.raises(ValueError, match="devices must lie"):
+        batch_mesh(0)
+    with pytest.raises(ValueError, match="jax.sharding.Mesh"):
+        scene = jp.RandomMapGenerator(12, 12, 0.1)(0)
+        jp.plan_batch(scene.grid, [scene.start], [scene.goal], planner="aco", mesh="all", ants=4, iterations=2)
+    import jax.numpy as jnp
+
+    padded = pad_leading({"a": jnp.arange(3), "b": jnp.ones((3, 2))}, 4)
+    np.testing.assert_array_equal(padded["a"], [0, 1, 2, 2])
+    assert padded["b"].shape == (4, 2)
+
+
+def test_memory_guard_refuses_with_the_largest_batch_that_fits(monkeypatch):
+    big = jp.RandomMapGenerator(100, 100, 0.2)(0)
+    monkeypatch.setenv("JAXPLAN_MEMORY_LIMIT", "64M")
+    with pytest.raises(MemoryLimitError, match=r"at most (\d+) runs") as err:
+        jp.plan_batch(big.grid, [big.start] * 8, [big.goal] * 8, planner="praco", seeds=range(4), ants=16)
+    fits = int(err.value.args[0].split("at most ")[1].split(" ")[0])
+    assert 0 < fits < 32
+    # The named batch does fit under the same estimate, one more does not.
+    est = lambda runs: aco_memory(big.grid.n_cells, 8, runs, 5, 16, 400, 100, penalty=True)  # noqa: E731
+    assert est(fits).total <= 64 * 2**20 < est(fits + 1).total
+    for bad in ("lots", "-3G", "0"):
+        monkeypatch.setenv("JAXPLAN_MEMORY_LIMIT", bad)
+        with pytest.raises(ValueError, match="JAXPLAN_MEMORY_LIMIT"):
+            memory_limit()
+    monkeypatch.setenv("JAXPLAN_MEMORY_LIMIT", "1.5K")
+    assert memory_limit() == 1536
+    check_memory(est(1), "one run", limit=2**40)  # fits: no error
+
+
+def test_memory_estimate_bounds_the_measured_peak():
+    """The estimate is an upper bound of a run's peak RSS rise, and not wildly pessimistic (< 3x)."""
+    out = _child("""
+        import gc, json
+        import numpy as np
+        import jaxplan as jp
+        from jaxplan.aco._planners import _run_colony, split_params
+        from jaxplan.registry import resolve
+        from jaxplan.scale import aco_memory
+
+        def status(key):
+            for line in open("/proc/self/status"):
+                if line.startswith(key):
+                    return int(line.split()[1]) * 1024
+
+        s = jp.RandomMapGenerator(100, 100, 0.2)(0)
+        fr = np.argwhere(s.grid.free)[:, ::-1]
+        i = np.random.default_rng(0).choice(len(fr), (16, 2))
+        res = {}
+        for planner, ants in (("iaco", 64), ("praco", 16)):
+            _, p = resolve(planner, dict(ants=ants, iterations=3))
+            _run_colony(planner, s.grid, fr[i[:, 0]], fr[i[:, 1]], range(4), p)  # compiles
+            gc.collect()
+            base = status("VmRSS:")
+            open("/proc/self/clear_refs", "w").write("5")  # resets the peak (VmHWM) to the current RSS
+            _run_colony(planner, s.grid, fr[i[:, 0]], fr[i[:, 1]], range(4), p)
+            cfg, _, _, _ = split_params(s.grid, p)
+            est = aco_memory(s.grid.n_cells, 8, 64, cfg.colonies, cfg.ants, cfg.max_steps, cfg.iterations,
+                             penalty=cfg.penalise)
+            res[planner] = [status("VmHWM:") - base, est.total]
+        print(json.dumps(res))
+        """)
+    for planner, (measured, estimate) in out.items():
+        assert measured <= estimate < 3 * max(measured, 1), (planner, measured / 2**20, estimate / 2**20)
