@@ -121,3 +121,63 @@ def test_memory_estimate_bounds_the_measured_peak():
         """)
     for planner, (measured, estimate) in out.items():
         assert measured <= estimate < 3 * max(measured, 1), (planner, measured / 2**20, estimate / 2**20)
+
+
+def test_host_shares_cover_the_batch_and_shards_merge(tmp_path):
+    from jaxplan.scale import host_share, merge_shards, write_shard
+
+    for n, hosts in ((10, 3), (2, 4), (0, 2), (7, 1)):
+        shares = [host_share(n, k, hosts) for k in range(hosts)]
+        assert [i for s in shares for i in range(n)[s]] == list(range(n))
+        assert max(len(range(n)[s]) for s in shares) - min(len(range(n)[s]) for s in shares) <= 1
+    with pytest.raises(ValueError, match="process_id"):
+        host_share(4, 2, 2)
+    data = np.arange(20.0).reshape(10, 2)
+    for k in range(3):
+        write_shard(tmp_path, "sweep", {"x": data[host_share(10, k, 3)]}, k, 3)
+    np.testing.assert_array_equal(merge_shards(tmp_path, "sweep", 3)["x"], data)
+    with pytest.raises(FileNotFoundError, match="host 0 of 4"):
+        merge_shards(tmp_path, "sweep", 4)
+    assert not list(tmp_path.glob("*.tmp"))
+
+
+def test_importing_jaxplan_leaves_the_backend_alone():
+    """jax.distributed.initialize must come before any backend use, so the import may not start XLA."""
+    out = _child("""
+        import json
+        import jax._src.xla_bridge as xb
+        import jaxplan, jaxplan.scale
+        print(json.dumps({"backends": sorted(xb._backends)}))
+        """)
+    assert out["backends"] == []
+
+
+@pytest.mark.slow
+def test_two_hosts_on_localhost_merge_to_the_single_host_result(tmp_path):
+    """scripts/sweep_hosts.py on two processes joined by jax.distributed (gloo on loopback), then merged."""
+    import socket
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    data = root.parent / "shared" / "benchmarks" / "movingai"
+    m, s = data / "warehouse-10-20-10-2-1.map", data / "warehouse-10-20-10-2-1-random-1.scen"
+    if not m.exists():
+        pytest.skip(f"{m} not found")
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    args = [sys.executable, str(root / "scripts" / "sweep_hosts.py"), str(m), str(s), "--count", "5", "--seeds", "2",
+            "--ants", "10", "--iterations", "3", "--out", str(tmp_path)]
+    procs = [subprocess.Popen(args, env=dict(os.environ, JAXPLAN_COORDINATOR=f"127.0.0.1:{port}",
+                                             JAXPLAN_NUM_PROCESSES="2", JAXPLAN_PROCESS_ID=str(k)),
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for k in range(2)]
+    for p in procs:
+        _, err = p.communicate(timeout=600)
+        assert p.returncode == 0, err[-2000:]
+    subprocess.run(args[:4] + ["--out", str(tmp_path), "--merge", "2"], check=True)
+    merged = np.load(tmp_path / "sweep.npz")
+    grid = jp.load_map(m)
+    scen = jp.load_scenarios(s, grid=grid)
+    ref = jp.plan_batch(grid, scen.starts[:5], scen.goals[:5], planner="iaco", seeds=range(2), ants=10, iterations=3)
+    np.testing.assert_array_equal(merged["length"], ref.length)
+    np.testing.assert_array_equal(merged["history"], ref.history)

@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 
 import jax.numpy as jnp
+import numpy as np
 from jax import lax
 
 __all__ = ["MOVES", "distance_field", "descend", "turn_vertices", "path_blocked", "disc_cells"]
@@ -30,7 +31,7 @@ __all__ = ["MOVES", "distance_field", "descend", "turn_vertices", "path_blocked"
 MOVES = ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1))
 """The 8 grid moves ``(dx, dy)``: four straight, then four diagonal."""
 
-_COST = jnp.asarray([1.0] * 4 + [math.sqrt(2.0)] * 4, jnp.float32)
+_COST = np.asarray([1.0] * 4 + [math.sqrt(2.0)] * 4, np.float32)  # numpy: no device array at import
 _SWEEPS_PER_ITERATION = 4  # the convergence test costs about as much as a sweep
 
 

@@ -4,11 +4,15 @@
 every device (DESIGN §7); results equal the single-device call's. Before it allocates, `plan_batch`
 estimates its working memory (`aco_memory`) and refuses a batch above `memory_limit()`
 (``$JAXPLAN_MEMORY_LIMIT``, default 80 % of the available memory) with `MemoryLimitError`,
-naming the largest batch that fits.
+naming the largest batch that fits. Multi-host sweeps: `initialize` (`jax.distributed`), each
+host's `host_share` of the batch, `write_shard` and `merge_shards` (recipe in
+``scripts/sweep_hosts.py``).
 """
 
+from jaxplan.scale._hosts import host_share, initialize, merge_shards, shard_path, write_shard
 from jaxplan.scale._memory import MemoryEstimate, MemoryLimitError, aco_memory, check_memory, dwa_memory, memory_limit
 from jaxplan.scale._mesh import BATCH_AXIS, batch_mesh, check_mesh, pad_leading, padded_size
 
 __all__ = ["BATCH_AXIS", "batch_mesh", "check_mesh", "pad_leading", "padded_size", "MemoryEstimate",
-           "MemoryLimitError", "aco_memory", "check_memory", "dwa_memory", "memory_limit"]
+           "MemoryLimitError", "aco_memory", "check_memory", "dwa_memory", "memory_limit", "host_share", "initialize",
+           "merge_shards", "shard_path", "write_shard"]

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from jaxplan.grid._collision import CollisionMap, polyline_free, segment_free
 from jaxplan.smooth._result import Smoothed, compact, drop_repeats
@@ -23,8 +24,9 @@ from jaxplan.metrics._path import count_sharp_turns_padded as sharp_turn_count
 __all__ = ["bspline"]
 
 _REACH = 0.5  # cells of chord-deviation margin the window covers
-# Basis matrix taking a uniform cubic B-spline span to its Bezier control points.
-_TO_BEZIER = jnp.array([[1, 4, 1, 0], [0, 4, 2, 0], [0, 2, 4, 0], [0, 1, 4, 1]], jnp.float32) / 6.0
+# Basis matrix taking a uniform cubic B-spline span to its Bezier control points (numpy: a JAX
+# array at import would start the XLA backend, which must wait for jax.distributed.initialize).
+_TO_BEZIER = np.array([[1, 4, 1, 0], [0, 4, 2, 0], [0, 2, 4, 0], [0, 1, 4, 1]], np.float32) / np.float32(6.0)
 
 
 def _curve(points, n, mult, spacing, K: int):

@@ -9,6 +9,8 @@ output segment is checked against the map with the exact segment test of
 
 from __future__ import annotations
 
+import math
+
 import jax
 import jax.numpy as jnp
 
@@ -68,7 +70,7 @@ def los_prune(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, radius: f
     return _prune(cmap, points, n, radius, None)
 
 
-def key_nodes(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, threshold: float = jnp.deg2rad(20.0),
+def key_nodes(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, threshold: float = math.radians(20.0),
               radius: float = 0.0) -> Smoothed:
     """Key-node guidance (seed 001): keeps the vertices where the path turns by ``threshold`` or more.
 
