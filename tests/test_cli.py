@@ -1,16 +1,8 @@
-"""The command line: demo writes its figure; errors exit 2 with a message."""
+"""The command line: plan prints its table; errors exit 2 with a message (the demo: tests/test_demo.py)."""
 
 from __future__ import annotations
 
 from jaxplan.cli import main
-
-
-def test_demo_writes_figure_and_table(tmp_path, capsys):
-    out = tmp_path / "demo.png"
-    assert main(["demo", "--out", str(out)]) == 0
-    assert out.stat().st_size > 10_000
-    text = capsys.readouterr().out
-    assert "length (m)" in text and "success" in text and "True" in text
 
 
 def test_plan_reports_bad_start(movingai, capsys):

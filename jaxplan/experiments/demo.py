@@ -1,0 +1,226 @@
+"""`jaxplan demo`: seed 000's IACO-DWA beside its ACO-DWA baseline among moving obstacles, with no data.
+
+Both pipelines drive the same robot from the same start to the same goal on the built-in
+48x32 warehouse (`jaxplan.demo_warehouse`) among the same moving discs (random routes
+that keep clear of the start and goal). The table compares the episodes; ``demo.png``
+shows the executed trajectories over their global paths and the speed profiles, and
+``demo.gif`` animates both robots with the discs (matplotlib's pillow writer).
+
+Speed. Each pipeline compiles its global planner and its episode program once (most of
+the demo's time); the settings below keep the demo near a minute on two busy CPU cores:
+in-episode re-planning off (it would compile a second planner program), a 10 x 20 velocity
+window without unrolling, colonies of 20 ants x 20 iterations. `jaxplan demo` also keeps
+JAX's persistent compilation cache (``~/.cache/jaxplan/jax``), so later runs skip most of it. ``quick=True`` (tests) uses a generated
+14x10 warehouse, a 5 x 9 window, small colonies and a 30 s limit.
+
+Min clearance is the smallest gap (m) over the executed steps between the robot's disc
+footprint and the nearest blocked square or moving disc (negative: overlap); it is a
+display quantity of this demo (`min_clearance`), from the executed positions, the blocked
+squares and the episode's obstacle positions.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from jaxplan.experiments import plots
+
+__all__ = ["DemoResult", "run_demo", "demo_table", "ROWS", "PIPELINES"]
+
+plt = plots.plt
+
+PIPELINES = ("iaco_dwa", "aco_dwa")
+"""The compared pipelines: seed 000's IACO-DWA and its Ant System + weighted-DWA baseline."""
+
+ROWS = ("success", "time to goal (s)", "path length (m)", "collisions", "min clearance (m)", "max curvature (1/m)",
+        "energy (J)", "planning time (ms)", "wall time (s)")
+
+
+@dataclass(frozen=True)
+class DemoResult:
+    """The demo's scene, episodes (pipeline -> `Episode`), table columns, wall times and files written."""
+
+    scene: Any
+    episodes: dict
+    columns: dict
+    wall_s: dict
+    files: tuple[str, ...]
+
+
+def _settings(quick: bool):
+    """(scene, NavConfig, planner overrides, obstacle settings)."""
+    import jaxplan as jp
+    from jaxplan.nav import NavConfig
+
+    base = NavConfig()
+    if quick:
+        scene = jp.WarehouseGenerator(width=14, height=10, shelf_length=4, shelf_depth=2, aisle=1, cross_aisle=2)(0)
+        dwa = dataclasses.replace(base.dwa, n_v=5, n_omega=9)
+        return scene, dataclasses.replace(base, replan=False, max_time=30.0, dwa=dwa), \
+            {"ants": 8, "iterations": 5}, {"n": 2, "speed": 0.4, "radius": 0.2}
+    dwa = dataclasses.replace(base.dwa, n_v=10, n_omega=20, unroll=1)  # unroll 1: ~2 s less compilation each
+    return jp.demo_warehouse(), dataclasses.replace(base, replan=False, max_time=150.0, dwa=dwa), \
+        {"ants": 20, "iterations": 20}, {"n": 4, "speed": 0.5, "radius": 0.25}
+
+
+def min_clearance(grid, ep, robot_radius: float, window: int = 3) -> float:
+    """Smallest gap (m) between the robot's footprint and any blocked square or moving disc over the episode.
+
+    The static part is the exact distance from each executed position to the blocked unit squares
+    (outside the map counts as blocked) within ``window`` cells; farther squares are not looked at,
+    so a gap above ``window`` cells is reported as ``window`` cells (numpy: no compilation).
+    """
+    res = float(grid.resolution)
+    free = np.asarray(grid.free)
+    H, W = free.shape
+    pos = np.asarray(ep.trajectory[:, :2], np.float64)
+    p = pos / res - 0.5  # cell coordinates: cell (x, y) is the unit square centred on (x, y)
+    off = np.stack(np.meshgrid(np.arange(-window, window + 1), np.arange(-window, window + 1)), -1).reshape(-1, 2)
+    cells = np.round(p).astype(np.int64)[:, None, :] + off[None]  # [T, K, 2]
+    inside = (cells[..., 0] >= 0) & (cells[..., 0] < W) & (cells[..., 1] >= 0) & (cells[..., 1] < H)
+    blocked = ~inside | ~free[np.clip(cells[..., 1], 0, H - 1), np.clip(cells[..., 0], 0, W - 1)]
+    d = np.hypot(*np.maximum(np.abs(p[:, None, :] - cells) - 0.5, 0.0).transpose(2, 0, 1))
+    static = np.where(blocked, d, float(window)).min(axis=1) * res
+    gap = float(static.min()) if static.size else np.inf
+    op = np.asarray(ep.obstacle_positions, np.float64)
+    if op.size:
+        radii = np.asarray(ep.obstacles.radii, np.float64)
+        dd = np.hypot(*(op - pos[:, None, :]).transpose(2, 0, 1)) - radii[None, :]
+        gap = min(gap, float(dd.min()))
+    return gap - robot_radius
+
+
+def _column(grid, ep, robot_radius: float, wall: float) -> list[str]:
+    m = ep.metrics
+    arrival = f"{ep.time_s:.1f}" if ep.success else f"- ({ep.reason})"
+    return [str(bool(ep.success)), arrival, f"{m['path_length']:.2f}", str(int(ep.collisions)),
+            f"{min_clearance(grid, ep, robot_radius):.3f}", f"{m['max_curvature']:.3f}", f"{m['energy']:.1f}",
+            f"{m['plan_time_s'] * 1e3:.1f}", f"{wall:.1f}"]
+
+
+def demo_table(result: DemoResult) -> str:
+    """The comparison as a text table (rows `ROWS`, one column per pipeline)."""
+    from jaxplan.cli import _table
+
+    return _table(list(result.columns.items()), list(ROWS),
+                  f"{result.scene.name}: two-level navigation among {result.episodes[PIPELINES[0]].obstacles.count} "
+                  "moving discs (same start, goal, discs and seed)")
+
+
+def _figure(result: DemoResult, grid, path: Path) -> list[str]:
+    fig, (a, b) = plt.subplots(1, 2, figsize=(13, 4.8), gridspec_kw={"width_ratios": [1.6, 1]},
+                               constrained_layout=True)
+    plots.plot_map(a, grid, title="executed trajectories (solid) over global paths (dashed)")
+    res = float(grid.resolution)
+    for k, (name, ep) in enumerate(result.episodes.items()):
+        c = f"C{k}"
+        if len(ep.plan):
+            pl = (np.asarray(ep.plan) + 0.5) * res
+            a.plot(pl[:, 0], pl[:, 1], ls="--", lw=1.0, color=c)
+        a.plot(ep.trajectory[:, 0], ep.trajectory[:, 1], lw=2.0, color=c,
+               label=f"{name}: {'goal' if ep.success else ep.reason}")
+        b.plot(ep.times[:-1], ep.controls[:, 0], color=c, lw=1.3, label=f"{name} v")
+    op = np.asarray(result.episodes[PIPELINES[0]].obstacle_positions)
+    for j in range(op.shape[1]):
+        a.plot(op[:, j, 0], op[:, j, 1], ":", color="0.4", lw=0.9, label="moving discs" if j == 0 else None)
+    ep0 = result.episodes[PIPELINES[0]]
+    a.plot(*ep0.trajectory[0, :2], "o", color="tab:green", ms=10, mec="k", label="start")
+    a.plot(*ep0.trajectory[-1, :2] if ep0.success else ep0.waypoints[-1], "*", color="tab:red", ms=13, mec="k",
+           label="goal")
+    a.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    b.set_xlabel("time (s)")
+    b.set_ylabel("linear velocity v (m/s)")
+    b.set_title("speed profiles")
+    b.legend(fontsize=8)
+    written = plots.save_figure(fig, str(path))
+    plt.close(fig)
+    return written
+
+
+def _animation(result: DemoResult, grid, path: Path, frames: int) -> list[str]:
+    from matplotlib.animation import FuncAnimation, PillowWriter
+
+    eps = list(result.episodes.items())
+    T = max(len(ep.trajectory) for _, ep in eps)
+    idx = np.unique(np.linspace(0, T - 1, frames).round().astype(int))
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    plots.plot_map(ax, grid, colorbar=False)
+    op_all = [np.asarray(ep.obstacle_positions) for _, ep in eps]
+    radii = np.asarray(eps[0][1].obstacles.radii)
+    discs = [plt.Circle((0, 0), float(r), color="tab:red", alpha=0.6) for r in radii]
+    for d in discs:
+        ax.add_patch(d)
+    trails, robots = [], []
+    for k, (name, ep) in enumerate(eps):
+        (tr,) = ax.plot([], [], color=f"C{k}", lw=1.6, label=name)
+        (rb,) = ax.plot([], [], "o", color=f"C{k}", ms=7, mec="k")
+        trails.append(tr)
+        robots.append(rb)
+    ax.legend(fontsize=8, loc="upper right")
+    title = ax.set_title("")
+    period = float(eps[0][1].times[1] - eps[0][1].times[0]) if len(eps[0][1].times) > 1 else 0.2
+
+    def draw(t):
+        for (name, ep), tr, rb in zip(eps, trails, robots):
+            s = min(t, len(ep.trajectory) - 1)
+            tr.set_data(ep.trajectory[:s + 1, 0], ep.trajectory[:s + 1, 1])
+            rb.set_data([ep.trajectory[s, 0]], [ep.trajectory[s, 1]])
+        op = op_all[0]  # the discs move the same in both episodes
+        s = min(t, len(op) - 1)
+        for j, d in enumerate(discs):
+            d.center = tuple(op[s, j])
+        title.set_text(f"t = {t * period:5.1f} s")
+        return trails + robots + discs + [title]
+
+    anim = FuncAnimation(fig, draw, frames=list(idx), blit=False)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.stem + ".tmp" + path.suffix)
+    anim.save(str(tmp), writer=PillowWriter(fps=10), dpi=64)
+    tmp.replace(path)
+    plt.close(fig)
+    return [str(path)]
+
+
+def run_demo(out_dir: str | Path = "figures", *, seed: int = 0, quick: bool = False, gif: bool = True,
+             frames: int = 30) -> DemoResult:
+    """Runs both pipelines and writes ``OUT/demo.png`` (and ``demo.gif``); see the module docstring.
+
+    Args:
+      out_dir: where the figures go.
+      seed: the colonies' seed and the discs' draw.
+      quick: the small test variant (a generated 14x10 warehouse).
+      gif: write the animation.
+      frames: animation frames (evenly spaced over the longer episode).
+    """
+    import jaxplan as jp
+
+    scene, cfg, overrides, o = _settings(quick)
+    grid = scene.grid
+    res = float(grid.resolution)
+    avoid = (np.stack([np.asarray(scene.start), np.asarray(scene.goal)]) + 0.5) * res
+    obs = jp.random_obstacles(grid, n=o["n"], speed=o["speed"], radius=o["radius"], seed=seed, avoid=avoid,
+                              avoid_radius=1.5)
+    episodes, wall = {}, {}
+    for name in PIPELINES:
+        t0 = time.perf_counter()
+        episodes[name] = jp.navigate(grid, scene.start, scene.goal, pipeline=name, seed=seed, obstacles=obs,
+                                     config=cfg, **overrides)
+        wall[name] = time.perf_counter() - t0
+    radius = float(cfg.dwa.robot.footprint.radius)
+    columns = {name: _column(grid, ep, radius, wall[name]) for name, ep in episodes.items()}
+    result = DemoResult(scene, episodes, columns, wall, ())
+    out = Path(out_dir)
+    t0 = time.perf_counter()
+    files = _figure(result, grid, out / "demo.png")
+    wall["figure"] = time.perf_counter() - t0
+    if gif:
+        t0 = time.perf_counter()
+        files += _animation(result, grid, out / "demo.gif", frames)
+        wall["animation"] = time.perf_counter() - t0
+    return dataclasses.replace(result, files=tuple(files))
