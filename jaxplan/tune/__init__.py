@@ -7,7 +7,7 @@ from jaxplan.tune._gradients import (
 )
 from jaxplan.tune._objective import (
     ACO_METRICS, DWA_METRICS, DWAEpisodes, Evaluation, Objective, Split, aco_objective, dwa_episodes, dwa_objective,
-    dwa_scenarios,
+    dwa_scenarios, function_objective,
 )
 from jaxplan.tune._config import TuneConfig, apply_tune_quick, load_tune_config, parse_tune_config
 from jaxplan.tune._workflow import TuneResult, build_objective, compare, fragment_toml, plot_tuning, run_tuning, tune_loop
@@ -18,7 +18,7 @@ __all__ = [
     "STRATEGIES", "Strategy", "cma_es", "grid_search", "make_strategy", "random_search", "sanitize", "snes",
     "RelaxedResult", "quadratic_features", "reinforce", "relaxed_dwa", "relaxed_dwa_loss", "score_function_grad",
     "surrogate", "ACO_METRICS", "DWA_METRICS", "DWAEpisodes", "Evaluation", "Objective", "Split", "aco_objective",
-    "dwa_episodes", "dwa_objective", "dwa_scenarios",
+    "dwa_episodes", "dwa_objective", "dwa_scenarios", "function_objective",
     "TuneConfig", "apply_tune_quick", "load_tune_config", "parse_tune_config", "TuneResult", "build_objective",
     "compare", "fragment_toml", "plot_tuning", "run_tuning", "tune_loop",
     "SparrowState", "adaptive_weight", "issa", "levy", "ssa",

@@ -41,7 +41,7 @@ import numpy as np
 
 from jaxplan.tune._bounds import Bounds, make_bounds
 
-__all__ = ["Split", "Evaluation", "Objective", "aco_objective", "dwa_objective", "DWAEpisodes", "dwa_episodes",
+__all__ = ["Split", "Evaluation", "Objective", "aco_objective", "dwa_objective", "function_objective", "DWAEpisodes", "dwa_episodes",
            "dwa_scenarios", "ACO_METRICS", "DWA_METRICS", "FAIL_GAP"]
 
 ACO_METRICS = ("gap", "failure", "turns", "roughness", "clearance")
@@ -458,3 +458,30 @@ def dwa_objective(grid, train: Split, test: Split, evaluator: str = "weighted", 
     object.__setattr__(obj, "_dwa", dict(table=table, config=config, steps=steps, episodes=eps, slots=slots,
                                           base=base_j, tolerance=tolerance, radius=radius))
     return obj
+
+
+# ---------------------------------------------------------------------------------------------
+# Any function
+
+
+def function_objective(fn: Callable, space: Mapping | Bounds, defaults=None, train_seeds: Sequence[int] = (0,),
+                       test_seeds: Sequence[int] = (1,), name: str = "function") -> Objective:
+    """An `Objective` from a pure function ``fn(x f32[D], seed i32[]) -> f32[]`` (one scenario):
+    for tests, toy problems and custom pipelines. Evaluated as one ``vmap`` over population × seeds."""
+    bounds = space if isinstance(space, Bounds) else make_bounds(space)
+    defaults = np.asarray((bounds.low + bounds.high) / 2 if defaults is None else defaults, np.float32)
+    seeds = {"train": jnp.asarray(train_seeds, jnp.int32), "test": jnp.asarray(test_seeds, jnp.int32)}
+
+    def program(split_name):
+        s = seeds[split_name]
+
+        def run(pop):
+            cost = jax.vmap(lambda x: jax.vmap(lambda k: fn(x, k))(s))(pop)[:, None, :]  # [P, 1, R]
+            return cost, {"cost": cost}
+
+        return run
+
+    dummy = Split(np.zeros((1, 2), np.int64), np.zeros((1, 2), np.int64), np.ones(1), tuple(train_seeds))
+    test = dummy._replace(seeds=tuple(test_seeds))
+    return Objective(name, "function", name, bounds, np.clip(defaults, bounds.low, bounds.high), {"cost": 1.0},
+                     {"train": dummy, "test": test}, program, {n: np.asarray(v) for n, v in zip(bounds.names, defaults)})
