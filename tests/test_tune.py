@@ -53,15 +53,25 @@ def test_bounds_names_vector_weights(box):
 # Strategies: one interface, every optimiser
 
 
+_COMPILED: dict = {}
+
+
+def compiled(name: str):
+    """One strategy per name (P = 8, G = 20) with its jitted ask/tell, shared by the tests (compile once)."""
+    if name not in _COMPILED:
+        s = make_strategy(name, 8, 20)
+        _COMPILED[name] = (s, jax.jit(s.ask), jax.jit(s.tell))
+    return _COMPILED[name]
+
+
 @pytest.mark.parametrize("name", STRATEGIES)
 def test_strategy_stays_in_the_box_and_improves(name, box):
-    s = make_strategy(name, 16, 20)
+    s, ask, tell = compiled(name)
     state = s.init(jax.random.key(0), box)
-    ask, tell = jax.jit(s.ask), jax.jit(s.tell)
     first = None
     for g in range(20):
         pop = ask(jax.random.fold_in(jax.random.key(1), g), state)
-        assert pop.shape == (16, 3)
+        assert pop.shape == (8, 3)
         assert box.contains(np.asarray(pop)).all(), name
         f = sphere(pop)
         state = tell(state, pop, f)
@@ -69,12 +79,12 @@ def test_strategy_stays_in_the_box_and_improves(name, box):
     assert np.isfinite(float(state.best_f))
     assert float(state.best_f) <= first
     assert float(state.best_f) == pytest.approx(float(sphere(state.best_x)), rel=1e-5)
-    assert float(state.best_f) < 1.5, (name, float(state.best_f))  # uniform sampling alone reaches ~1
+    assert float(state.best_f) < 2.5, (name, float(state.best_f))  # 160 uniform samples reach ~1-2
 
 
 @pytest.mark.parametrize("name", STRATEGIES)
 def test_strategy_runs_inside_lax_scan_as_in_a_python_loop(name, box):
-    s = make_strategy(name, 8, 5)
+    s, ask, tell = compiled(name)
     state0 = s.init(jax.random.key(0), box)
 
     def gen(state, g):
@@ -84,7 +94,8 @@ def test_strategy_runs_inside_lax_scan_as_in_a_python_loop(name, box):
     scanned, _ = jax.jit(lambda st: jax.lax.scan(gen, st, jnp.arange(5)))(state0)
     looped = state0
     for g in range(5):
-        looped, _ = jax.jit(gen)(looped, g)
+        pop = ask(jax.random.fold_in(jax.random.key(1), g), looped)
+        looped = tell(looped, pop, sphere(pop))
     np.testing.assert_allclose(scanned.best_x, looped.best_x, rtol=1e-5, atol=1e-6)
 
 
@@ -98,9 +109,8 @@ def test_sanitize_turns_nan_and_inf_into_the_worst_value():
 
 @pytest.mark.parametrize("name", STRATEGIES)
 def test_nan_fitness_never_breaks_a_strategy(name, box):
-    s = make_strategy(name, 8, 6)
+    s, ask, tell = compiled(name)
     state = s.init(jax.random.key(0), box)
-    ask, tell = jax.jit(s.ask), jax.jit(s.tell)
     for g in range(6):
         pop = ask(jax.random.fold_in(jax.random.key(2), g), state)
         f = jnp.where(pop[:, 0] > 0.0, jnp.nan, sphere(pop))  # half the box "fails"
@@ -116,16 +126,19 @@ def test_issa_rules():
     step = np.asarray(levy(jax.random.key(0), (20000,)))
     assert abs(np.median(step)) < 0.05 and np.mean(np.abs(step) > 5) > 0.005  # symmetric, heavy-tailed
     # generation 1 of ISSA evaluates the quasi-opposition points of generation 0 (Eq. 5).
-    b = make_bounds({"x": (0.0, 1.0), "y": (0.0, 1.0)})
-    s = make_strategy("issa", 64, 10)
-    ask, tell = jax.jit(s.ask), jax.jit(s.tell)
-    st = s.init(jax.random.key(0), b)
-    p0 = ask(jax.random.key(1), st)
-    st = tell(st, p0, jnp.sum(p0, 1))
-    p1 = ask(jax.random.key(2), st)
-    # the opposite of a point near a corner lies on the other side of the centre (before the Cauchy step)
-    far = np.asarray(p0)[:, 0] < 0.2
-    assert np.median(np.asarray(p1)[far, 0]) > 0.45
+    b = make_bounds({"x": (0.0, 1.0), "y": (0.0, 1.0), "z": (0.0, 1.0)})
+    s, ask, tell = compiled("issa")
+    p0s, p1s = [], []
+    for r in range(12):
+        st = s.init(jax.random.key(r), b)
+        p0 = ask(jax.random.key(100 + r), st)
+        st = tell(st, p0, jnp.sum(p0, 1))
+        p0s.append(np.asarray(p0))
+        p1s.append(np.asarray(ask(jax.random.key(200 + r), st)))
+    p0, p1 = np.concatenate(p0s), np.concatenate(p1s)
+    # the opposite of a point near a face lies on the other side of the centre (the Cauchy step aside)
+    far = p0[:, 0] < 0.2
+    assert far.sum() >= 5 and np.median(p1[far, 0]) > 0.45
 
 
 # ---------------------------------------------------------------------------------------------
