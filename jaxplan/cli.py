@@ -1,4 +1,4 @@
-"""Command line: ``jaxplan demo | plan | run | figures``.
+"""Command line: ``jaxplan demo | plan | run | figures | reproduce``.
 
 Subcommands for experiments, tuning, figures and benchmarks join as they are built.
 """
@@ -117,6 +117,36 @@ def cmd_figures(args: argparse.Namespace) -> int:
     return 0 if not problems else 1
 
 
+def cmd_reproduce(args: argparse.Namespace) -> int:
+    """``jaxplan reproduce [--quick]``: every ``configs/seed*.toml`` run (or resumed), then its figures."""
+    import time
+
+    from jaxplan.experiments.reproduce import reproduce, reproduction_configs
+
+    if not args.no_cache:
+        _compilation_cache()
+    configs = reproduction_configs(args.configs, args.pattern)
+    t0 = time.perf_counter()
+    done = reproduce(configs, args.out, args.figures, quick=args.quick, data_dir=args.data_dir,
+                     progress=not args.no_progress)
+    rows = [(r.config.name, r.run_dir.name if r.run_dir else "FAILED", f"{r.run_s:.1f}", f"{r.figures_s:.1f}",
+             str(r.figures)) for r in done]
+    heads = ("config", "run folder", "run (s)", "figures (s)", "figures")
+    widths = [max(len(h), *(len(r[j]) for r in rows)) for j, h in enumerate(heads)]
+    print("  ".join(h.ljust(w) for h, w in zip(heads, widths)))
+    for r in rows:
+        print("  ".join(c.ljust(w) for c, w in zip(r, widths)))
+    print(f"total {time.perf_counter() - t0:.1f} s; figures in {args.figures}/index.md")
+    bad = 0
+    for r in done:
+        if r.error:
+            bad += 1
+            print(f"jaxplan: error: {r.config.name}: {r.error}", file=sys.stderr)
+        for p in r.problems:
+            print(f"  {r.config.name}: not drawn: {p}", file=sys.stderr)
+    return 2 if bad else 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="jaxplan", description="Grid path planning for warehouse robots, in JAX.")
     sub = p.add_subparsers(dest="command", required=True)
@@ -151,6 +181,16 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--out", default="figures", help="figure root (default: figures; files go to OUT/RUN/)")
     f.add_argument("--data-dir", default=None, help="folder that the config's map paths are relative to")
     f.set_defaults(func=cmd_figures)
+    g = sub.add_parser("reproduce", help="run every reproduction config (configs/seed*.toml), then draw its figures")
+    g.add_argument("--quick", action="store_true", help="the configs' [experiment.quick] smoke runs (CI)")
+    g.add_argument("--configs", default="configs", help="folder of the configs (default: configs)")
+    g.add_argument("--pattern", default="seed*.toml", help="which configs (glob; default: seed*.toml)")
+    g.add_argument("--out", default="runs", help="parent folder of the run folders (default: runs)")
+    g.add_argument("--figures", default="figures", help="figure root (default: figures)")
+    g.add_argument("--data-dir", default=None, help="folder that map paths are relative to")
+    g.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
+    g.add_argument("--no-cache", action="store_true", help="do not use JAX's persistent compilation cache")
+    g.set_defaults(func=cmd_reproduce)
     return p
 
 

@@ -23,6 +23,8 @@ Schema (every key shown; ``#`` marks defaults and alternatives)::
     chunk = 3
     overrides = { ants = 8, iterations = 5 }   # given to every planner that accepts the key
     nav = { max_time = 40.0 }   # NavConfig fields for every navigate planner
+    planners = ["IACO"]         # only these planner labels run (default all; each pipeline compiles once)
+    maps = ["wh20"]             # only these maps run (default all)
 
     [[maps]]                    # a MovingAI map, by path relative to the data dir (or absolute)
     name = "warehouse"          # label in tables (default: the file's stem or the generator's name)
@@ -33,6 +35,7 @@ Schema (every key shown; ``#`` marks defaults and alternatives)::
     [[maps]]                    # or a generator of jaxplan.grid._generators (see `GENERATORS`)
     name = "wh20"
     generator = "warehouse"     # warehouse | random | urban | mountain | warehouse_seed003 | warehouse_seed004 | demo_warehouse
+                                # | warehouse_seed003_risk (params = { lam = 1.0 }: seed 003's Poisson risk layer)
     seed = 0                    # the generator's key (>= 0)
     params = { width = 20, height = 20, missing_prob = 0.1 }   # the generator's own settings
     resolution = 1.0
@@ -212,12 +215,25 @@ def _generators() -> dict[str, tuple[Callable[..., Any], bool]]:
         "warehouse_seed003": (G.warehouse_seed003, False),
         "warehouse_seed004": (G.warehouse_seed004, False),
         "demo_warehouse": (G.demo_warehouse, False),
+        "warehouse_seed003_risk": (_seed003_risk, False),
     }
 
 
-GENERATORS = ("warehouse", "random", "urban", "mountain", "warehouse_seed003", "warehouse_seed004", "demo_warehouse")
+def _seed003_risk(key: int = 0, lam: float = 1.0):
+    """Seed 003's Case 1 map with its unknown-factor layer: Poisson(λ = ``lam``) risk per free cell (§II, Fig. 8).
+
+    The layer's key is the map key + 1, so the shelves stay those of `warehouse_seed003(key)` for every λ."""
+    from jaxplan.grid import _generators as G
+
+    scene = G.warehouse_seed003(key)
+    return scene._replace(grid=G.poisson_risk(scene.grid, int(key) + 1, lam=float(lam)))
+
+
+GENERATORS = ("warehouse", "random", "urban", "mountain", "warehouse_seed003", "warehouse_seed004", "demo_warehouse",
+              "warehouse_seed003_risk")
 """Generator names a map may use (`jaxplan.grid._generators`)."""
-_FUNCTION_PARAMS = {"warehouse_seed003": (), "warehouse_seed004": ("size",), "demo_warehouse": ()}
+_FUNCTION_PARAMS = {"warehouse_seed003": (), "warehouse_seed004": ("size",), "demo_warehouse": (),
+                    "warehouse_seed003_risk": ("lam",)}
 
 SCENARIO_SOURCES = ("scen", "random", "scene")
 SPREADS = ("first", "even", "random")
@@ -384,6 +400,8 @@ class QuickSpec:
     chunk: int | None = None
     overrides: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
     nav: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
+    planners: tuple[str, ...] | None = None  # labels kept by --quick (default all): CI time is compile time
+    maps: tuple[str, ...] | None = None  # map names kept by --quick (default all)
 
 
 @dataclass(frozen=True)
@@ -562,13 +580,15 @@ def _read_experiment(r: _Reader, raw: dict) -> dict:
         "seeds": r.seeds(t, "experiment", "seeds", tuple(range(30))),
         "chunk": r.get(t, "experiment", "chunk", "int", 16, lo=1),
     }
-    q = r.table(t.get("quick"), "experiment.quick", ("seeds", "count", "chunk", "overrides", "nav"))
+    q = r.table(t.get("quick"), "experiment.quick", ("seeds", "count", "chunk", "overrides", "nav", "planners", "maps"))
     out["quick_raw"] = {
         "seeds": r.seeds(q, "experiment.quick", "seeds"),
         "count": r.get(q, "experiment.quick", "count", "int", None, lo=1),
         "chunk": r.get(q, "experiment.quick", "chunk", "int", None, lo=1),
         "overrides": r.table(q.get("overrides"), "experiment.quick.overrides", tuple(q.get("overrides") or {})),
         "nav": r.table(q.get("nav"), "experiment.quick.nav", tuple(q.get("nav") or {})),
+        "planners": r.str_list(q, "experiment.quick", "planners"),
+        "maps": r.str_list(q, "experiment.quick", "maps"),
     }
     return out
 
@@ -1005,7 +1025,8 @@ def _read_paper(r: _Reader, raw: dict, metrics: tuple, maps: set, labels: set) -
     return source, tuple(out)
 
 
-def _read_quick(r: _Reader, q: dict, planners: tuple[PlannerConfig, ...]) -> QuickSpec:
+def _read_quick(r: _Reader, q: dict, planners: tuple[PlannerConfig, ...], map_names: list[str] | None = None
+                ) -> QuickSpec:
     """Quick overrides: each key must be accepted by at least one planner, and valid for each that accepts it."""
     import jaxplan as jp
     from jaxplan.nav import get_pipeline
@@ -1031,7 +1052,13 @@ def _read_quick(r: _Reader, q: dict, planners: tuple[PlannerConfig, ...]) -> Qui
         for k in q["nav"]:
             if k not in fields:
                 r.bad(f"experiment.quick.nav.{k}", "unknown NavConfig field" + _close(k, list(fields)))
-    return QuickSpec(q["seeds"], q["count"], q["chunk"], _frozen(q["overrides"]), _frozen(q["nav"]))
+    labels, names = [pc.label for pc in planners], map_names
+    for key, known in (("planners", labels), ("maps", names)):
+        for j, x in enumerate(q.get(key) or []):
+            if known is not None and x not in known:
+                r.bad(f"experiment.quick.{key}[{j}]", f"unknown {key[:-1]} {x!r} (configured: {', '.join(known)})")
+    return QuickSpec(q["seeds"], q["count"], q["chunk"], _frozen(q["overrides"]), _frozen(q["nav"]),
+                     tuple(q["planners"]) if q.get("planners") else None, tuple(q["maps"]) if q.get("maps") else None)
 
 
 def _global(pc: PlannerConfig) -> str | None:
@@ -1079,7 +1106,7 @@ def parse_config(text: str, *, data_dir: str | os.PathLike | None = None, source
     map_names, labels = {m.name for m in maps}, {p.label for p in planners}
     figures = _read_figures(r, raw, metrics, map_names, labels)
     paper_source, paper = _read_paper(r, raw, metrics, map_names, labels)
-    quick = _read_quick(r, exp["quick_raw"], planners)
+    quick = _read_quick(r, exp["quick_raw"], planners, sorted(map_names))
     if r.problems:
         raise ConfigError(r.problems, source)
     return ExperimentConfig(
@@ -1116,5 +1143,9 @@ def apply_quick(cfg: ExperimentConfig) -> ExperimentConfig:
         extra = {k: v for k, v in q.overrides.items() if k in accepted}
         nav = {**dict(pc.nav), **dict(q.nav)} if pc.kind == "navigate" else dict(pc.nav)
         planners.append(dataclasses.replace(pc, overrides=_frozen({**dict(pc.overrides), **extra}), nav=_frozen(nav)))
+    if q.planners:
+        planners = [pc for pc in planners if pc.label in q.planners]
+    if q.maps:
+        maps = tuple(m for m in maps if m.name in q.maps)
     return cfg.replace(seeds=q.seeds or cfg.seeds, chunk=q.chunk or cfg.chunk, maps=maps, planners=tuple(planners),
                        is_quick=True)

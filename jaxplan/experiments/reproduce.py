@@ -1,0 +1,71 @@
+"""`reproduce`: every reproduction config (``configs/seed*.toml``) run, then its figures drawn.
+
+One process runs them all in file-name order, so compiled programs that two configs share
+(the same planner on maps of the same shape) are built once. Each config's run folder is
+``OUT/NAME`` (``OUT/NAME-quick`` with ``quick``), resumable as any run; its figures go to
+``FIGURES/NAME[-quick]/`` with an index page, and ``FIGURES/index.md`` lists them all.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Sequence
+
+__all__ = ["Reproduced", "reproduction_configs", "reproduce"]
+
+
+@dataclass(frozen=True)
+class Reproduced:
+    """One config's outcome: run folder, wall times (s) of the run and of its figures, figure problems."""
+
+    config: Path
+    run_dir: Path | None
+    run_s: float
+    figures_s: float
+    figures: int
+    problems: tuple[str, ...]
+    error: str | None = None
+
+
+def reproduction_configs(config_dir: str | os.PathLike = "configs", pattern: str = "seed*.toml") -> list[Path]:
+    """The reproduction configs in ``config_dir`` (sorted by name).
+
+    Raises:
+      FileNotFoundError: no such folder, or no config matches.
+    """
+    d = Path(config_dir)
+    if not d.is_dir():
+        raise FileNotFoundError(f"config folder {d} not found (pass --configs)")
+    found = sorted(d.glob(pattern))
+    if not found:
+        raise FileNotFoundError(f"no config matches {d / pattern}")
+    return found
+
+
+def reproduce(configs: Sequence[str | os.PathLike], out: str | os.PathLike = "runs",
+              figures: str | os.PathLike = "figures", *, quick: bool = False,
+              data_dir: str | os.PathLike | None = None, progress: bool = True) -> list[Reproduced]:
+    """Runs each config (resuming finished chunks) and draws its figures; one failing config does not stop the rest.
+
+    Returns:
+      One `Reproduced` per config, in order (``error`` set when the run itself failed).
+    """
+    from jaxplan.experiments.config import ConfigError
+    from jaxplan.experiments.figures import draw_figures
+    from jaxplan.experiments.runner import RunFolderError, run_experiment
+
+    done = []
+    for cfg in map(Path, configs):
+        t0 = time.perf_counter()
+        try:
+            run_dir = run_experiment(cfg, out, quick=quick, data_dir=data_dir, progress=progress)
+        except (ConfigError, RunFolderError, ValueError, FileNotFoundError) as e:
+            done.append(Reproduced(cfg, None, time.perf_counter() - t0, 0.0, 0, (), str(e)))
+            continue
+        t1 = time.perf_counter()
+        drawn, problems = draw_figures(run_dir, figures, data_dir=data_dir)
+        done.append(Reproduced(cfg, run_dir, t1 - t0, time.perf_counter() - t1, len(drawn), tuple(problems)))
+    return done
