@@ -1,4 +1,21 @@
-"""Tuning the planners' weights (DESIGN §7): objectives over scenario batches, gradient-free and differentiable optimisers."""
+"""Tuning the planners' weights (DESIGN §7): objectives over scenario batches, gradient-free and differentiable optimisers.
+
+* `_bounds`: the search box (`make_bounds`, validated: finite, low < high, named dimensions).
+* `_objective`: `Objective` — a population ``f32[P, D]`` of weight vectors evaluated over a
+  training split of scenarios × seeds in ONE compiled call (`aco_objective`, `dwa_objective`,
+  `function_objective`); a held-out test split kept apart.
+* `_strategies`, `_sparrow`, `_gradients`: one `Strategy` interface (``init/ask/tell``) for grid
+  and random search, CMA-ES and SNES (evosax), seed 001's ISSA and the plain SSA, the
+  score-function (REINFORCE) and surrogate routes; `relaxed_dwa` differentiates softmax-DWA
+  episodes through `lax.scan` with optax.
+* `_config`, `_workflow`: TOML tuning configs and `run_tuning` (progress, CSV log, orbax
+  checkpoints with exact resume, best weights as a ``[[planners]]`` fragment, convergence figure).
+
+Example::
+
+    from jaxplan.tune import make_strategy, run_tuning, tune_loop
+    run_dir = run_tuning("configs/tune_iaco.toml", out="runs", quick=True)
+"""
 
 from jaxplan.tune._bounds import Bounds, clip, from_unit, make_bounds, reflect, to_unit
 from jaxplan.tune._strategies import STRATEGIES, Strategy, cma_es, grid_search, make_strategy, random_search, sanitize, snes
