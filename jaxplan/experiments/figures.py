@@ -128,6 +128,9 @@ def _selected(run: RunData, spec: FigureSpec, kind: str | None = None) -> tuple[
     labels = spec.params.get("planners") or [p.label for p in cfg.planners]
     mi = [i for i, m in enumerate(run.prep.maps) if m.spec.name in maps]
     pi = [i for i, p in enumerate(cfg.planners) if p.label in labels and (kind is None or p.kind == kind)]
+    if not mi or not pi:  # e.g. a --quick run that keeps none of the figure's maps or planners
+        what = "map" if not mi else (f"{kind} planner" if kind else "planner")
+        raise ValueError(f"figure {spec.name!r}: no {what} of this run selected")
     return mi, pi
 
 
@@ -192,9 +195,9 @@ def _obstacles(run: RunData, m: int, p: int, sc: int, seed: int):
 
 def _disc_positions(obs, times: np.ndarray) -> np.ndarray:
     """``f64[len(times), M, 2]`` disc centres (m) at ``times`` (s)."""
-    from jaxplan.nav import discs_at
+    from jaxplan.nav import trajectories
 
-    return np.stack([np.asarray(discs_at(obs, float(t)).positions, np.float64) for t in times])
+    return np.asarray(trajectories(obs, np.asarray(times, np.float32)), np.float64)  # one vmapped call
 
 
 # ---------------------------------------------------------------------------------------------
@@ -295,7 +298,8 @@ def _bar(run, spec):
         ax.set_xticks(xs, labels, rotation=30)
         ax.set_ylabel(_metric_label(metric))
         ax.set_title(name)
-        ax.legend(fontsize=8)
+        if ax.get_legend_handles_labels()[1]:
+            ax.legend(fontsize=8)
     fig.suptitle(_title(spec, f"{metric}: mean ± sd over seeds"))
     cap = f"Mean ± sd over seeds of the per-seed means of {metric}"
     if any_paper:
@@ -344,7 +348,8 @@ def _sweep(run, spec):
             ax.plot(xs[order], pap, ls="--", marker="s", mfc="none", color=line.get_color(), label=f"{label} (paper)")
     ax.set_xlabel(xlabel)
     ax.set_ylabel(_metric_label(metric))
-    ax.legend(fontsize=8)
+    if ax.get_legend_handles_labels()[1]:
+        ax.legend(fontsize=8)
     ax.set_title(_title(spec, f"{metric} against {xlabel}"))
     cap = f"{metric} against {xlabel}: mean ± sd over seeds"
     if any_paper:
@@ -545,7 +550,8 @@ def _fan(run, spec):
             ax.set_xlim(c[0] - span, c[0] + span)
             ax.set_ylim(c[1] + span, c[1] - span)  # row 0 at the top, as plot_map draws it
     fig.suptitle(_title(spec, "DWA trajectory fans"))
-    return fig, (f"Dynamic-window rollouts at control steps {spec.params.get('steps') or 'mid-episode'} "
+    steps_text = ", ".join(str(int(v)) for v in spec.params["steps"]) if spec.params.get("steps") else "mid-episode"
+    return fig, (f"Dynamic-window rollouts at control steps {steps_text} "
                  f"(scenario {sc}, seed {seed}): feasible blue, infeasible red, chosen black, sub-goal star; "
                  "recomputed with jaxplan.dwa_step at the stored robot states.")
 
