@@ -54,3 +54,43 @@ def test_quick_keeps_only_the_named_planners_and_maps():
         parse_config(bad)
     assert "experiment.quick.maps[0]: unknown map 'map31'" in str(e.value)
     assert "experiment.quick.planners[0]: unknown planner 'PRACO'" in str(e.value)
+
+
+def test_hausdorff_to_the_exact_path_is_zero_for_astar(tmp_path):
+    import numpy as np
+
+    from jaxplan.experiments.runner import run_experiment
+    from jaxplan.experiments.stats import read_trials
+
+    cfg = tmp_path / "h.toml"
+    cfg.write_text("""
+metrics = ["success", "length", "hausdorff"]
+[experiment]
+name = "h"
+seeds = 2
+chunk = 2
+[[maps]]
+name = "wh"
+generator = "warehouse"
+seed = 0
+params = { width = 14, height = 10, shelf_length = 4, shelf_depth = 2, aisle = 1, cross_aisle = 2 }
+[scenarios]
+source = "random"
+count = 2
+seed = 3
+min_distance = 5.0
+[[planners]]
+label = "A*"
+kind = "plan"
+name = "astar"
+[[planners]]
+label = "AS"
+kind = "plan"
+name = "aco"
+overrides = { ants = 6, iterations = 3, dead_end = "retreat" }
+""")
+    t = read_trials(run_experiment(cfg, tmp_path / "runs", progress=False) / "trials.csv")
+    astar = t["planner"] == "A*"
+    assert np.all(t["hausdorff"][astar] == 0.0)
+    h = t["hausdorff"][~astar & (t["success"] == 1)]
+    assert h.size and np.all(np.isfinite(h) & (h >= 0))

@@ -173,6 +173,7 @@ METRICS: Mapping[str, Metric] = MappingProxyType({m.name: m for m in (
     Metric("min_clearance", _P, "m", "smallest vertex clearance"),
     Metric("mean_clearance", _P, "m", "mean vertex clearance"),
     Metric("max_curvature", _B, "1/m", "plan: Menger curvature at path vertices; navigate: executed |omega|/v"),
+    Metric("hausdorff", _B, "m", "Hausdorff distance of the global path to the exact A* path (seed 000 Fig. 9)"),
     Metric("cost", _P, "", "the planner's own objective"),
     Metric("converged_iteration", _P, "", "first iteration within 0.1 % of the final best cost"),
     Metric("collisions", _N, "", "contacts with the map or moving discs"),

@@ -322,6 +322,22 @@ _PATH_KEYS = ("length", "optimality_gap", "turns", "sharp_turns", "smoothness", 
 _INT_METRICS = ("turns", "sharp_turns", "converged_iteration", "collisions", "recoveries", "replans")
 
 
+def _hausdorff(mw: MapWork, idx: np.ndarray, paths: np.ndarray, n_cells: np.ndarray) -> np.ndarray:
+    """``f64[n, R]`` Hausdorff distance (m) of each trial's global path ``[n, R, P, 2]`` (cells, ``n_cells``
+    valid points) to the scenario's exact A* path (deterministic; nan where a path is empty)."""
+    import jaxplan as jp
+
+    ref = jp.plan_batch(mw.grid, mw.starts[idx], mw.goals[idx], planner="astar", seeds=[0])
+    n, R, P = paths.shape[:3]
+    rp = np.repeat(np.asarray(ref.paths[:, 0]), R, axis=0)
+    rn = np.repeat(np.asarray(ref.n_cells[:, 0]), R, axis=0)
+    nc = np.asarray(n_cells).reshape(-1)
+    ok = (nc > 0) & (rn > 0)
+    pm = jp.path_metrics(np.asarray(paths, np.float64).reshape(n * R, P, 2), mw.grid, reference=rp.astype(np.float64),
+                         n=np.maximum(nc, 1), reference_n=np.maximum(rn, 1))
+    return np.where(ok, np.asarray(pm["hausdorff"], np.float64), np.nan).reshape(n, R)
+
+
 def _run_plan(mw: MapWork, pc: PlannerConfig, idx: np.ndarray, seeds: tuple[int, ...], chunk: int,
               metrics: Sequence[str]) -> tuple[dict, dict, dict]:
     """Metric arrays ``[n, R]``, arrays to keep, and timings of one plan chunk (one `plan_batch` call)."""
@@ -343,6 +359,8 @@ def _run_plan(mw: MapWork, pc: PlannerConfig, idx: np.ndarray, seeds: tuple[int,
             if k in metrics:
                 v = np.asarray(pm[k], np.float64).reshape(n, R)
                 out[k] = np.where(ok, v, np.nan)
+    if "hausdorff" in metrics:
+        out["hausdorff"] = np.where(ok, _hausdorff(mw, idx, br.paths[:n], br.n_cells[:n]), np.nan)
     if "cost" in metrics:
         out["cost"] = np.where(ok, br.cost[:n], np.nan)
     if "converged_iteration" in metrics:
@@ -396,6 +414,8 @@ def _run_navigate(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, seeds
             v = getattr(eb, k)[:n, :, 0]
             out[k] = v.astype(np.int64) if k in ("success", "collisions", "recoveries", "replans") else \
                 np.asarray(v, np.float64)
+    if "hausdorff" in metrics:
+        out["hausdorff"] = _hausdorff(mw, idx, eb.plans[:n, :, 0], eb.n_plan[:n, :, 0])
     out["reason"] = eb.reason[:n, :, 0]
     T = int(eb.steps[:n].max()) + 1
     # states (x, y, theta, v, omega) feed the velocity traces and the DWA fans of `jaxplan figures`.
