@@ -264,10 +264,10 @@ def _box(run, spec):
 
 
 def _paper_value(cfg: ExperimentConfig, map_: str, label: str, metric: str):
-    for v in cfg.paper:
-        if v.planner == label and v.metric == metric and v.map in (None, map_):
-            return v
-    return None
+    """The paper's value for (map, planner, metric), as the summary tables pick it (`stats._paper`)."""
+    from jaxplan.experiments.stats import _paper
+
+    return _paper(cfg, map_, label, metric)
 
 
 def _bar(run, spec):
@@ -516,7 +516,6 @@ def _fan(run, spec):
         obs = _obstacles(run, m, p, sc, seed)
         ax.plot(pos[:, 0], pos[:, 1], color="0.3", lw=1.0, label="executed")
         ax.plot(plan[:, 0], plan[:, 1], color="C2", lw=1.0, ls="--", label="global path")
-        lo, hi = pos.min(0), pos.max(0)
         for s in wanted:
             s = min(int(s), steps)
             state = states[s]
@@ -542,7 +541,6 @@ def _fan(run, spec):
             ch = int(info.chosen)
             ax.plot(ro[ch, :, 0], ro[ch, :, 1], color="k", lw=2.0)
             ax.plot(*subgoal, "*", color="C1", ms=9)
-            lo, hi = np.minimum(lo, ro[..., :2].reshape(-1, 2).min(0)), np.maximum(hi, ro[..., :2].reshape(-1, 2).max(0))
         ax.legend(fontsize=7, loc="best")
         if len(wanted) == 1:  # zoom on the fan
             c = states[min(int(wanted[0]), steps), :2]
