@@ -387,15 +387,11 @@ def _paths(run, spec):
 
 def _pheromone(run, spec):
     import jaxplan as jp
+    from jaxplan.aco._planners import COLONIES  # the ant colony planners (as the runner tells them apart)
 
     mi, pi = _selected(run, spec, "plan")
     sc, seed, _ = _scenario_seed(run, spec)
-    todo = []
-    for m in mi:
-        for p in pi:
-            pc = run.config.planners[p]
-            if pc.name in jp.planners() and "rho" in jp.planners()[pc.name].defaults:
-                todo.append((m, p))
+    todo = [(m, p) for m in mi for p in pi if run.config.planners[p].name in COLONIES]
     if not todo:
         raise ValueError(f"figure {spec.name!r}: no ant colony planner selected")
     fig, axes = _panels(len(todo), w=5.5, h=4.4)
