@@ -574,7 +574,7 @@ def write_index(out: Path, run_name: str, title: str, drawn: Sequence[Drawn], pr
     runs = sorted(p.parent.name for p in out.glob("*/index.md"))
     top = ["# Figures", "", "One page per run folder (`jaxplan figures RUN`).", ""]
     top += [f"- [{r}]({r}/index.md)" for r in runs]
-    extra = sorted(p.name for p in out.glob("*.png"))
+    extra = sorted(p.name for ext in ("png", "gif") for p in out.glob(f"*.{ext}"))  # e.g. jaxplan demo's
     if extra:
         top += ["", "Other figures:", ""] + [f"- [{x}]({x})" for x in extra]
     (out / "index.md").write_text("\n".join(top) + "\n")
