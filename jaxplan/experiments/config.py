@@ -53,6 +53,7 @@ Schema (every key shown; ``#`` marks defaults and alternatives)::
     min_optimal = 0.0           # metres (the exact octile optimum on the map)
     max_optimal = 1e9
     min_distance = 5.0          # source = "random": straight-line start-goal distance in metres
+    min_clearance = 0.6         # source = "random": start and goal cells this far (m) from any obstacle
 
     [[planners]]                # a registered global planner, `jaxplan.planners()`
     label = "IACO"              # column label (default: name); unique
@@ -272,6 +273,8 @@ class ScenarioSpec:
       min_bucket, max_bucket: inclusive scen bucket filter (None: open).
       min_optimal, max_optimal: inclusive filter on the exact optimum (m; None: open).
       min_distance: straight-line start-goal distance (m) of random pairs.
+      min_clearance: random pairs only: start and goal cells at least this far (m, cell centre to the
+        nearest blocked square) from obstacles, so a robot with a footprint and safety distance fits there.
     """
 
     source: str = "scen"
@@ -283,6 +286,7 @@ class ScenarioSpec:
     min_optimal: float | None = None
     max_optimal: float | None = None
     min_distance: float = 0.0
+    min_clearance: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -595,7 +599,7 @@ def _read_experiment(r: _Reader, raw: dict) -> dict:
 
 
 _SCEN_KEYS = ("source", "count", "spread", "seed", "min_bucket", "max_bucket", "min_optimal", "max_optimal",
-              "min_distance")
+              "min_distance", "min_clearance")
 
 
 def _read_scenarios(r: _Reader, t: dict, path: str, is_file: bool) -> ScenarioSpec:
@@ -614,6 +618,7 @@ def _read_scenarios(r: _Reader, t: dict, path: str, is_file: bool) -> ScenarioSp
         min_optimal=r.get(t, path, "min_optimal", "float", None, lo=0),
         max_optimal=r.get(t, path, "max_optimal", "float", None, lo=0),
         min_distance=r.get(t, path, "min_distance", "float", 0.0, lo=0),
+        min_clearance=r.get(t, path, "min_clearance", "float", 0.0, lo=0),
     )
     if spec.min_bucket is not None and spec.max_bucket is not None and spec.min_bucket > spec.max_bucket:
         r.bad(path, f"min_bucket {spec.min_bucket} > max_bucket {spec.max_bucket}")
@@ -623,6 +628,8 @@ def _read_scenarios(r: _Reader, t: dict, path: str, is_file: bool) -> ScenarioSp
         for k in ("min_bucket", "max_bucket", "spread"):
             if k in t:
                 r.bad(_join(path, k), f"only applies to source = 'scen', not {source!r}")
+    if source != "random" and "min_clearance" in t:
+        r.bad(_join(path, "min_clearance"), f"only applies to source = 'random', not {source!r}")
     if source == "scene" and spec.count not in (None, 1):
         r.bad(_join(path, "count"), "source = 'scene' gives exactly one scenario")
     return spec

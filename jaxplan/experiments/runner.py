@@ -173,13 +173,21 @@ def _choose(n: int, count: int | None, spread: str, seed: int) -> np.ndarray:
     return np.sort(np.random.default_rng(seed).choice(n, size=count, replace=False))
 
 
-def _random_pairs(grid, count: int, seed: int, min_distance: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``count`` connected (start, goal) pairs of free cells at least ``min_distance`` m apart (straight line)."""
+def _random_pairs(grid, count: int, seed: int, min_distance: float,
+                  min_clearance: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``count`` connected (start, goal) pairs of free cells at least ``min_distance`` m apart (straight line),
+    each cell at least ``min_clearance`` m from the nearest blocked square."""
     from jaxplan.search import shortest_lengths
 
-    free = np.argwhere(np.asarray(grid.free))[:, ::-1]  # (x, y)
+    ok_cells = np.asarray(grid.free)
+    if min_clearance > 0:
+        from jaxplan.grid import clearance_field
+
+        ok_cells = ok_cells & (np.asarray(clearance_field(grid)) >= min_clearance)
+    free = np.argwhere(ok_cells)[:, ::-1]  # (x, y)
     if len(free) < 2:
-        raise ValueError("the map has fewer than two free cells")
+        raise ValueError("the map has fewer than two free cells" + (
+            f" at least {min_clearance} m from obstacles" if min_clearance > 0 else ""))
     rng = np.random.default_rng(seed)
     S, G, L = [], [], []
     for _ in range(50):
@@ -214,7 +222,7 @@ def _scenarios(spec: MapSpec, grid, start0, goal0) -> tuple[np.ndarray, np.ndarr
             raise ValueError("the generator's start and goal are not connected")
         return s, g, opt, np.full(1, -1, np.int64)
     if sc.source == "random":
-        s, g, opt = _random_pairs(grid, sc.count or 10, sc.seed, sc.min_distance)
+        s, g, opt = _random_pairs(grid, sc.count or 10, sc.seed, sc.min_distance, sc.min_clearance)
         return s, g, opt, np.full(len(s), -1, np.int64)
     scen = jp.load_scenarios(spec.scen, grid=grid)
     keep = np.ones(len(scen.starts), bool)
