@@ -1,4 +1,4 @@
-"""Command line: ``jaxplan demo | plan | run | figures | reproduce``.
+"""Command line: ``jaxplan demo | plan | run | figures | reproduce | tune | bench``.
 
 Subcommands for experiments, tuning, figures and benchmarks join as they are built.
 """
@@ -147,6 +147,39 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     return 2 if bad else 0
 
 
+def cmd_tune(args: argparse.Namespace) -> int:
+    """``jaxplan tune CONFIG``: run (or resume) a tuning config; writes OUT/NAME/ with the best weights."""
+    from jaxplan.experiments.config import ConfigError
+    from jaxplan.experiments.runner import RunFolderError
+    from jaxplan.tune import run_tuning
+
+    try:
+        run_dir = run_tuning(args.config, out=args.out, quick=args.quick, data_dir=args.data_dir,
+                             progress=not args.no_progress, resume=not args.no_resume)
+    except ConfigError as e:
+        print(f"jaxplan: error: invalid config {e}", file=sys.stderr)
+        return 2
+    except RunFolderError as e:
+        print(f"jaxplan: error: {e}", file=sys.stderr)
+        return 2
+    print(f"wrote {run_dir}/ (generations.csv, summary.json, best.toml: a [[planners]] entry for `jaxplan run`, "
+          f"convergence.png)")
+    return 0
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    """``jaxplan bench``: the checkout's benchmarks/run_all.py (every benchmark, one table, JSON)."""
+    import subprocess
+
+    script = Path(__file__).resolve().parents[1] / "benchmarks" / "run_all.py"
+    if not script.exists():
+        print(f"jaxplan: error: {script} not found: `jaxplan bench` runs from a source checkout "
+              f"(pip install -e .)", file=sys.stderr)
+        return 2
+    rest = args.rest[1:] if args.rest[:1] == ["--"] else args.rest
+    return subprocess.call([sys.executable, str(script), *rest])
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="jaxplan", description="Grid path planning for warehouse robots, in JAX.")
     sub = p.add_subparsers(dest="command", required=True)
@@ -191,6 +224,18 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
     g.add_argument("--no-cache", action="store_true", help="do not use JAX's persistent compilation cache")
     g.set_defaults(func=cmd_reproduce)
+    t = sub.add_parser("tune", help="tune a planner's weights from a TOML config (resumable); writes OUT/NAME/")
+    t.add_argument("config", help="tuning config (TOML; schema: jaxplan.tune._config)")
+    t.add_argument("--quick", action="store_true", help="apply the config's [tune.quick] changes (OUT/NAME-quick/)")
+    t.add_argument("--out", default="runs", help="parent folder of the run folder (default: runs)")
+    t.add_argument("--data-dir", default=None, help="folder that map paths are relative to")
+    t.add_argument("--no-resume", action="store_true", help="start afresh instead of resuming from the last checkpoint")
+    t.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
+    t.set_defaults(func=cmd_tune)
+    b = sub.add_parser("bench", help="every benchmark of the library in one table (benchmarks/run_all.py; "
+                                     "options after --, e.g. jaxplan bench -- --quick)")
+    b.add_argument("rest", nargs=argparse.REMAINDER, help="options of benchmarks/run_all.py")
+    b.set_defaults(func=cmd_bench)
     return p
 
 

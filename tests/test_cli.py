@@ -15,3 +15,14 @@ def test_plan_on_a_movingai_map(movingai, capsys):
     rc = main(["plan", str(movingai / "maze-32-32-2.map"), "--start", "15", "2", "--goal", "1", "27"])
     assert rc == 0
     assert "64.314" in capsys.readouterr().out  # the scenario file's optimum 64.31370850
+
+
+def test_tune_lists_every_config_problem_before_any_work(tmp_path, capsys):
+    from jaxplan.cli import main
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[tune]\nname = "x"\nkind = "nope"\n')
+    assert main(["tune", str(bad), "--out", str(tmp_path / "runs")]) == 2
+    err = capsys.readouterr().err
+    assert "tune.kind" in err and "tune.space" in err and "maps" in err
+    assert not (tmp_path / "runs").exists()
