@@ -86,19 +86,27 @@ def cmd_plan(args: argparse.Namespace) -> int:
     return 0 if res.success else 1
 
 
-def cmd_run(args: argparse.Namespace) -> int:
-    """``jaxplan run CONFIG``: validate the whole config, then run (or resume) it; exit 2 listing every problem."""
+def _config_run(call) -> Path | None:
+    """``call()``'s run folder, or None after printing a config's every problem (or a run-folder clash)."""
     from jaxplan.experiments.config import ConfigError
-    from jaxplan.experiments.runner import RunFolderError, run_experiment
+    from jaxplan.experiments.runner import RunFolderError
 
     try:
-        run_dir = run_experiment(args.config, args.out, quick=args.quick, data_dir=args.data_dir,
-                                 progress=not args.no_progress, chunk=args.chunk)
+        return call()
     except ConfigError as e:
         print(f"jaxplan: error: invalid config {e}", file=sys.stderr)
-        return 2
     except RunFolderError as e:
         print(f"jaxplan: error: {e}", file=sys.stderr)
+    return None
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    """``jaxplan run CONFIG``: validate the whole config, then run (or resume) it; exit 2 listing every problem."""
+    from jaxplan.experiments.runner import run_experiment
+
+    run_dir = _config_run(lambda: run_experiment(args.config, args.out, quick=args.quick, data_dir=args.data_dir,
+                                                 progress=not args.no_progress, chunk=args.chunk))
+    if run_dir is None:
         return 2
     print((run_dir / "summary.md").read_text())
     print(f"wrote {run_dir}/ (trials.csv, summary.csv, summary.md, report.md)")
@@ -149,18 +157,11 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 
 def cmd_tune(args: argparse.Namespace) -> int:
     """``jaxplan tune CONFIG``: run (or resume) a tuning config; writes OUT/NAME/ with the best weights."""
-    from jaxplan.experiments.config import ConfigError
-    from jaxplan.experiments.runner import RunFolderError
     from jaxplan.tune import run_tuning
 
-    try:
-        run_dir = run_tuning(args.config, out=args.out, quick=args.quick, data_dir=args.data_dir,
-                             progress=not args.no_progress, resume=not args.no_resume)
-    except ConfigError as e:
-        print(f"jaxplan: error: invalid config {e}", file=sys.stderr)
-        return 2
-    except RunFolderError as e:
-        print(f"jaxplan: error: {e}", file=sys.stderr)
+    run_dir = _config_run(lambda: run_tuning(args.config, out=args.out, quick=args.quick, data_dir=args.data_dir,
+                                             progress=not args.no_progress, resume=not args.no_resume))
+    if run_dir is None:
         return 2
     print(f"wrote {run_dir}/ (generations.csv, summary.json, best.toml: a [[planners]] entry for `jaxplan run`, "
           f"convergence.png)")
