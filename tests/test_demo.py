@@ -8,12 +8,14 @@ warehouse, which exercises the same code.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from PIL import Image
 
 from jaxplan.cli import main
 from jaxplan.experiments.demo import ROWS, min_clearance
 
 
+@pytest.mark.slow  # 18-38 s each on 2 cores; the suite must stay well under CI's 20 minutes
 def test_quick_demo_prints_the_table_and_writes_png_and_gif(tmp_path, capsys):
     assert main(["demo", "--quick", "--no-cache", "--out-dir", str(tmp_path)]) == 0
     out = capsys.readouterr().out

@@ -171,6 +171,7 @@ def test_plan_figures(plan_run, tmp_path):
     assert "paper's reported values (made-up numbers for the test), not ours" in bar.caption
 
 
+@pytest.mark.slow  # 18-38 s each on 2 cores; the suite must stay well under CI's 20 minutes
 def test_nav_figures_through_the_cli(nav_run, tmp_path, capsys):
     assert main(["figures", str(nav_run), "--out", str(tmp_path)]) == 0
     assert "wrote 4 figures" in capsys.readouterr().out

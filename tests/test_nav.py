@@ -133,6 +133,7 @@ def test_obstacle_starting_inside_the_robot_is_an_error(room):
         jp.navigate(room, (2, 2), (21, 8), global_planner="astar", obstacles=obs)
 
 
+@pytest.mark.slow  # 18-38 s each on 2 cores; the suite must stay well under CI's 20 minutes
 def test_replans_around_a_disc_parked_on_the_path(room):
     # The way from (11, 8) to (11, 2) is through the 2 m gap at x = 10..11 in row 5; a disc fills it.
     parked = jp.moving_obstacles([[[11.0, 5.5]]], speeds=0.0, radii=0.6)
@@ -147,6 +148,7 @@ def test_replans_around_a_disc_parked_on_the_path(room):
     assert len(crossing) and np.all((crossing[:, 0] < 3.0) | (crossing[:, 0] > 20.0))
 
 
+@pytest.mark.slow  # 18-38 s each on 2 cores; the suite must stay well under CI's 20 minutes
 def test_avoids_a_head_on_disc_in_the_open():
     free = np.ones((12, 30), bool)
     free[0, :] = free[-1, :] = free[:, 0] = free[:, -1] = False
@@ -160,6 +162,7 @@ def test_avoids_a_head_on_disc_in_the_open():
     assert np.abs(ep.trajectory[:, 1] - 6.5).max() > 0.3  # it stepped aside
 
 
+@pytest.mark.slow  # 18-38 s each on 2 cores; the suite must stay well under CI's 20 minutes
 def test_two_robots_cross_without_touching():
     free = np.ones((14, 14), bool)
     free[0, :] = free[-1, :] = free[:, 0] = free[:, -1] = False

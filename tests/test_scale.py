@@ -24,6 +24,7 @@ def _child(code: str, devices: int = 1) -> dict:
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.slow  # 18-38 s each on 2 cores; the suite must stay well under CI's 20 minutes
 def test_plan_batch_on_four_devices_equals_one_device():
     """5 scenarios (padded to 8) x 2 seeds over 4 host devices: every field identical, for a plain,
     a multi-colony (praco) and a hooked, 16-direction (opt_ant) colony."""
@@ -87,6 +88,7 @@ def test_memory_guard_refuses_with_the_largest_batch_that_fits(monkeypatch):
     check_memory(est(1), "one run", limit=2**40)  # fits: no error
 
 
+@pytest.mark.slow  # 18-38 s each on 2 cores; the suite must stay well under CI's 20 minutes
 def test_memory_estimate_bounds_the_measured_peak():
     """The estimate is an upper bound of a run's peak RSS rise, and not wildly pessimistic (< 3x)."""
     out = _child("""
