@@ -46,8 +46,8 @@ from jaxplan.grid._collision import PAD as CMAP_PAD
 from jaxplan.grid._collision import CollisionMap, point_clearance
 
 __all__ = [
-    "ClearanceTable", "clearance_table", "static_clearance", "static_clearance_parts", "finish_static",
-    "DiscObstacles", "no_obstacles", "disc_clearance", "HYBRID_EXACT_CELLS",
+    "ClearanceTable", "clearance_table", "static_clearance", "DiscObstacles", "no_obstacles", "disc_clearance",
+    "HYBRID_EXACT_CELLS",
 ]
 
 PAD = 3
@@ -161,54 +161,27 @@ def _near_squared(q, a, b) -> jnp.ndarray:
     return best
 
 
-def static_clearance_parts(table: ClearanceTable, x: jnp.ndarray, y: jnp.ndarray,
-                           mode: str = "hybrid") -> tuple[jnp.ndarray, ...]:
-    """The per-point pieces of `static_clearance` whose minimum over points is what counts.
-
-    Clearance (m) is a monotone function `finish_static` of these pieces, applied after taking
-    elementwise minima: min over points of the clearance = `finish_static` of the pieces' minima,
-    bit for bit. A rollout therefore carries the pieces' running minima and finishes once per
-    sample, which spares every trajectory point a square root, two selects and a multiply.
-
-    ``"hybrid"``: (squared exact distance to the nearest flagged square of the 4×4 window,
-    cells², or `_BIG`; bilinear interpolation, cells) — the hybrid clearance is
-    ``min(√near², max(bilinear, 1.5))`` cells: when the exact distance is below 1.5 the second
-    term cannot win, and beyond it the interpolation is kept inside [1.5, exact bound].
-    ``"bilinear"``: (bilinear interpolation, cells). ``"exact"``: (exact clearance, cells).
-    """
-    inv = table.inv_resolution  # a per-point divide costs ten multiplies
-    u = x * inv - 0.5  # world metres -> cell coordinates (cell centres at integers)
-    v = y * inv - 0.5
-    if mode == "exact":
-        return (point_clearance(table.cmap, jnp.stack([u, v], axis=-1)),)
-    q, a, b = _lookup(table, u, v)
-    bil = _bilinear(q, a, b)
-    if mode == "bilinear":
-        return (bil,)
-    if mode != "hybrid":
-        raise ValueError(f"unknown clearance mode {mode!r}; choose 'hybrid', 'bilinear' or 'exact'")
-    return _near_squared(q, a, b), bil
-
-
-def finish_static(table: ClearanceTable, parts: tuple[jnp.ndarray, ...], mode: str = "hybrid") -> jnp.ndarray:
-    """Clearance (m) from `static_clearance_parts` (or from their elementwise minima)."""
-    res = table.resolution
-    if mode == "exact":
-        return parts[0] * res
-    if mode == "bilinear":
-        return jnp.maximum(parts[0], 0.0) * res
-    near2, bil = parts
-    near = jnp.sqrt(jnp.maximum(near2, _EPS2))
-    return _min(near, jnp.where(bil > HYBRID_EXACT_CELLS, bil, HYBRID_EXACT_CELLS)) * res
-
-
 def static_clearance(table: ClearanceTable, x: jnp.ndarray, y: jnp.ndarray, mode: str = "hybrid") -> jnp.ndarray:
     """Clearance (m) of world points ``x, y [...]`` (m) from the map's blocked squares.
 
     ``mode`` (static) is ``"hybrid"``, ``"bilinear"`` or ``"exact"`` (module docstring).
     Points outside the map have clearance 0.
     """
-    return finish_static(table, static_clearance_parts(table, x, y, mode), mode)
+    res, inv = table.resolution, table.inv_resolution  # a per-point divide costs ten multiplies
+    u = x * inv - 0.5  # world metres -> cell coordinates (cell centres at integers)
+    v = y * inv - 0.5
+    if mode == "exact":
+        return point_clearance(table.cmap, jnp.stack([u, v], axis=-1)) * res
+    q, a, b = _lookup(table, u, v)
+    bil = _bilinear(q, a, b)
+    if mode == "bilinear":
+        return jnp.maximum(bil, 0.0) * res
+    if mode != "hybrid":
+        raise ValueError(f"unknown clearance mode {mode!r}; choose 'hybrid', 'bilinear' or 'exact'")
+    near = jnp.sqrt(jnp.maximum(_near_squared(q, a, b), _EPS2))
+    # Beyond the exact range the truth lies in [1.5, near]: keep the interpolation inside it.
+    far = _min(near, jnp.where(bil > HYBRID_EXACT_CELLS, bil, HYBRID_EXACT_CELLS))
+    return jnp.where(near < HYBRID_EXACT_CELLS, near, far) * res
 
 
 class DiscObstacles(NamedTuple):

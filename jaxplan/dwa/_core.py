@@ -37,7 +37,7 @@ import jax.numpy as jnp
 from jax import lax
 
 from jaxplan.dwa import _critics as C
-from jaxplan.dwa._clearance import ClearanceTable, DiscObstacles, disc_clearance, finish_static, static_clearance_parts
+from jaxplan.dwa._clearance import ClearanceTable, DiscObstacles, disc_clearance, static_clearance
 from jaxplan.dwa._config import DWAConfig, DWAParams
 from jaxplan.dwa._fuzzy import fuzzy_evaluate
 from jaxplan.dwa._robot import Disc, curvature_limit, footprint_offsets
@@ -143,11 +143,11 @@ def _recovery(config: DWAConfig, state: jnp.ndarray, subgoal: jnp.ndarray, windo
     return jnp.stack([v, jnp.clip(w, window.w_lo, window.w_hi)])
 
 
-def _current_clearance(clearance, finish, state: jnp.ndarray, footprint) -> jnp.ndarray:
+def _current_clearance(clearance, state: jnp.ndarray, footprint) -> jnp.ndarray:
     """Clearance (m) of the footprint at the current pose (time 0)."""
     x, y, th = state[0:1], state[1:2], state[2]
     offsets = (0.0,) if isinstance(footprint, Disc) else footprint_offsets(footprint)
-    c = [finish(clearance(x + o * jnp.cos(th), y + o * jnp.sin(th), 0.0)) for o in offsets]
+    c = [clearance(x + o * jnp.cos(th), y + o * jnp.sin(th), 0.0) for o in offsets]
     return jnp.min(jnp.concatenate(c)) if len(c) > 1 else c[0][0]
 
 
@@ -174,24 +174,17 @@ def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, sta
     window = dynamic_window(robot, state, config.period)
     v, w = sample_controls(robot, window, config.n_v, config.n_omega)
 
-    has_discs = obstacles is not None and obstacles.radii.shape[-1] > 0
-
-    # Min-composable pieces per point (static ones, then the discs' distance), finished once per
-    # sample after the minimum over the horizon (`static_clearance_parts`).
     def clearance(x, y, t):
-        parts = static_clearance_parts(table, x, y, config.clearance)
-        return parts + (disc_clearance(obstacles, x, y, t),) if has_discs else parts
-
-    def finish(parts):
-        if not has_discs:
-            return finish_static(table, parts, config.clearance)
-        return jnp.minimum(finish_static(table, parts[:-1], config.clearance), parts[-1])
+        c = static_clearance(table, x, y, config.clearance)
+        if obstacles is not None and obstacles.radii.shape[-1] > 0:
+            c = jnp.minimum(c, disc_clearance(obstacles, x, y, t))
+        return c
 
     ro = rollout(state, v, w, clearance, robot.footprint, steps, dt, keep=config.keep_rollouts,
-                 unroll=config.unroll, finish=finish)
+                 unroll=config.unroll)
     threshold = config.d_safe
     if config.escape:
-        threshold = jnp.minimum(threshold, _current_clearance(clearance, finish, state, robot.footprint) - ESCAPE_SLACK)
+        threshold = jnp.minimum(threshold, _current_clearance(clearance, state, robot.footprint) - ESCAPE_SLACK)
     feasible = ro.clearance >= threshold
     reach = jnp.maximum(jnp.abs(robot.v_min), robot.v_max) * (steps * dt)
     cr = C.critics(ro.end, ro.clearance, v, state, subgoal, robot, config.d_clip, config.path_clip, reach, path,

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 from typing import Callable, NamedTuple
 
-import jax
 import jax.numpy as jnp
 from jax import lax
 
@@ -36,7 +35,7 @@ from jaxplan.dwa._robot import Disc, Footprint, footprint_offsets
 
 __all__ = ["Rollouts", "rollout"]
 
-ClearanceFn = Callable[[jnp.ndarray, jnp.ndarray, jnp.ndarray], "jnp.ndarray | tuple[jnp.ndarray, ...]"]
+ClearanceFn = Callable[[jnp.ndarray, jnp.ndarray, jnp.ndarray], jnp.ndarray]
 
 
 class Rollouts(NamedTuple):
@@ -58,19 +57,14 @@ class Rollouts(NamedTuple):
 
 
 def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: ClearanceFn, footprint: Footprint,
-            steps: int, dt: float, keep: bool = False, unroll: int = 1,
-            finish: Callable[[tuple], jnp.ndarray] | None = None) -> Rollouts:
+            steps: int, dt: float, keep: bool = False, unroll: int = 1) -> Rollouts:
     """Rolls out S constant-velocity samples from ``state`` and tracks their clearance.
 
     Args:
       state: ``[5]`` (x, y, theta, v, omega); only the pose is used.
       v, w: ``[S]`` sampled linear (m/s) and angular (rad/s) velocities.
       clearance: ``clearance(x, y, t) -> [S]`` metres at points ``x, y [S]`` and time ``t``
-        (s after the current state): static map plus predicted moving discs. With ``finish``,
-        it returns a tuple of ``[S]`` pieces instead, and the clearance is
-        ``finish(pieces)``, a function monotone in each piece: the loop then carries the
-        pieces' running minima and finishes once per sample, not once per point
-        (`jaxplan.dwa._clearance.static_clearance_parts`).
+        (s after the current state): static map plus predicted moving discs.
       footprint: `Disc` (one lookup per point at the centre) or `Rectangle` (one per
         covering disc, centres placed along the heading at that point).
       steps: T, trajectory points per rollout (static).
@@ -89,8 +83,6 @@ def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: Clear
     disc = isinstance(footprint, Disc)
     if not disc:
         offsets = footprint_offsets(footprint)
-    parts = clearance if finish is not None else (lambda x, y, t: (clearance(x, y, t),))
-    minimum = lambda a, b: jax.tree_util.tree_map(jnp.minimum, a, b)  # noqa: E731
 
     def pose(q, k):
         """Position ``x, y [S]`` after ``k`` steps, ``q = e^{ikφ}``."""
@@ -104,30 +96,29 @@ def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: Clear
         x, y = pose(q, kf)
         t = kf * dt
         if disc:
-            return x, y, t, parts(x, y, t)
+            return x, y, t, clearance(x, y, t)
         h = e0 * q * q  # e^{i(θ0 + 2kφ)}: the heading at this point
         clr = None
         for j in range(offsets.shape[0]):
-            cj = parts(x + offsets[j] * h.real, y + offsets[j] * h.imag, t)
-            clr = cj if clr is None else minimum(clr, cj)
+            cj = clearance(x + offsets[j] * h.real, y + offsets[j] * h.imag, t)
+            clr = cj if clr is None else jnp.minimum(clr, cj)
         return x, y, t, clr
 
     # Both initial carries derive from the inputs (not constants), so that the loop also
     # works inside shard_map, where a carry must vary along the sharded axes like its update.
-    n_parts = len(jax.eval_shape(lambda: point(rot, jnp.int32(1))[3]))
-    init = (rot, tuple(v * 0.0 + jnp.inf for _ in range(n_parts)))
+    init = (rot, v * 0.0 + jnp.inf)
     if keep:
         def body(carry, k):
             q, m = carry  # q = e^{i(k+1)φ}: the rotor of this step's point
             x, y, t, clr = point(q, k + 1)
-            return (q * rot, minimum(m, clr)), jnp.stack([x, y, th0 + w * t], axis=-1)
+            return (q * rot, jnp.minimum(m, clr)), jnp.stack([x, y, th0 + w * t], axis=-1)
 
         (q, m), poses = lax.scan(body, init, jnp.arange(steps, dtype=jnp.int32), unroll=unroll)
         poses = jnp.swapaxes(poses, 0, 1)
     else:
         def body(k, carry):  # the loop counter itself gives k: no per-step index kernel
             q, m = carry
-            return q * rot, minimum(m, point(q, k + 1)[3])
+            return q * rot, jnp.minimum(m, point(q, k + 1)[3])
 
         q, m = lax.fori_loop(0, steps, body, init, unroll=unroll)
         poses = None
@@ -135,5 +126,4 @@ def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: Clear
     x, y = pose(q, jnp.asarray(steps, dtype))
     end = jnp.stack([x, y, th0 + w * (steps * dt)], axis=-1)
     h = e0 * q * q  # e^{i(θ0 + 2Tφ)}
-    m = finish(m) if finish is not None else m[0]
     return Rollouts(end, jnp.stack([h.real, h.imag], axis=-1), m, poses)
