@@ -71,6 +71,18 @@ class Evaluation(NamedTuple):
     compile_s: float
 
 
+def _metric_weights(who: str, weights: Mapping[str, float] | None, allowed: Sequence[str],
+                    default: Mapping[str, float]) -> dict:
+    """The objective's metric weights (``default`` when None), each a known metric with a finite weight >= 0."""
+    weights = dict(weights or default)
+    for k, v in weights.items():
+        if k not in allowed:
+            raise ValueError(f"{who}: unknown metric {k!r}; choose from {tuple(allowed)}")
+        if not math.isfinite(v) or v < 0:
+            raise ValueError(f"{who}: metric weight {k!r} must be a finite number >= 0, got {v!r}")
+    return weights
+
+
 def _slots(bounds: Bounds) -> list[tuple[str, int | None]]:
     out = []
     for n in bounds.names:
@@ -229,12 +241,7 @@ def aco_objective(grid, train: Split, test: Split, planner: str = "iaco", space:
         space = {"alpha": (0.5, 3.0), "beta": (1.0, 10.0)}
         if planner == "iaco":
             space["lambdas"] = [(0.0, 1.0)] * 3
-    weights = dict(weights or {"gap": 1.0, "failure": 1.0})
-    for k, v in weights.items():
-        if k not in ACO_METRICS:
-            raise ValueError(f"aco_objective: unknown metric {k!r}; choose from {ACO_METRICS}")
-        if not math.isfinite(v) or v < 0:
-            raise ValueError(f"aco_objective: metric weight {k!r} must be a finite number >= 0, got {v!r}")
+    weights = _metric_weights("aco_objective", weights, ACO_METRICS, {"gap": 1.0, "failure": 1.0})
     bounds = space if isinstance(space, Bounds) else make_bounds(space)
     _, p = resolve(planner, dict(overrides or {}))
     cfg, base, connectivity, vh = split_params(grid, p)
@@ -415,12 +422,7 @@ def dwa_objective(grid, train: Split, test: Split, evaluator: str = "weighted", 
     from jaxplan.grid._collision import collision_map
 
     space = space or {"heading": (0.01, 1.0), "velocity": (0.01, 1.0), "clearance": (0.01, 1.0)}
-    weights = dict(weights or {"time": 1.0, "failure": 1.0})
-    for k, v in weights.items():
-        if k not in DWA_METRICS:
-            raise ValueError(f"dwa_objective: unknown metric {k!r}; choose from {DWA_METRICS}")
-        if not math.isfinite(v) or v < 0:
-            raise ValueError(f"dwa_objective: metric weight {k!r} must be a finite number >= 0, got {v!r}")
+    weights = _metric_weights("dwa_objective", weights, DWA_METRICS, {"time": 1.0, "failure": 1.0})
     bounds = space if isinstance(space, Bounds) else make_bounds(space)
     base_p = default_params(evaluator)
     base = {k: np.asarray(v) for k, v in base_p._asdict().items()}
