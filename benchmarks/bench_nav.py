@@ -205,19 +205,20 @@ def measure_speed(d: Path, episodes: int) -> dict:
                success=float(b.success.mean()), robot_steps=int(b.steps.sum()), loop_steps=int(b.steps.max()))
     # One episode: the compiled episode call alone, median of repeats.
     captured = {}
-    real = F._RUN
+    real = F._compiled_episodes
 
-    class Spy:
-        def lower(self, *a):
-            captured["a"] = a
-            return real.lower(*a)
+    def spy(cfg, steps, mesh, args):  # keeps the compiled episode program and its arguments
+        fn, c = real(cfg, steps, mesh, args)
+        captured.update(fn=fn, a=args)
+        return fn, c
 
-    F._RUN = Spy()
-    one = jp.navigate_batch(grid, scen.starts[sel[:1]], scen.goals[sel[:1]], pipeline="iaco_dwa", seeds=[0])
-    F._RUN = real
-    a = captured["a"]
-    compiled = real.lower(*a).compile()
-    call = lambda: jax.block_until_ready(compiled(*a[2:]))  # noqa: E731
+    F._compiled_episodes = spy
+    try:
+        one = jp.navigate_batch(grid, scen.starts[sel[:1]], scen.goals[sel[:1]], pipeline="iaco_dwa", seeds=[0])
+    finally:
+        F._compiled_episodes = real
+    compiled, a = captured["fn"], captured["a"]
+    call = lambda: jax.block_until_ready(compiled(*a))  # noqa: E731
     call()
     t = median_time(call, 9)
     steps = int(one.steps.sum())

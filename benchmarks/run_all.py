@@ -48,8 +48,8 @@ Sections and rows (sizes: default / ``--quick``):
            loop alone (as bench_nav.py's speed section times it) against real time (1x); the
            episode call's compile time for both sizes, and the rest of the first call's one-off
            cost (compiling global planning and smoothing for the batch). `navigate_batch` lowers
-           and compiles its episode program on every call; `_MemoRun` keeps the compiled program
-           so that repeats do not recompile.
+           and compiles its episode program once per configuration and shapes (repeats reuse it);
+           `_LastProgram` records the program and arguments of the last call.
   tune     population evaluations/s of a `jaxplan.tune.aco_objective` (iaco weights α, β, λ;
            random 32x32 map with 20 % obstacles, 8 / 4 training scenarios x 2 seeds, 64 / 32 ants
            x 10 / 5 iterations): a population of 16 / 8 members in one compiled call
@@ -384,29 +384,18 @@ def section_metrics(args) -> list[Row]:
 # 5. Episodes
 
 
-class _MemoRun:
-    """Stands in for `jaxplan.nav._front._RUN` (the jitted episode program): `navigate_batch` lowers and
-    compiles it on every call, so repeats would recompile; this keeps one compiled program per static
-    configuration and argument shapes, and remembers the last call's arguments (to time the episode
-    call alone, as bench_nav.py's speed section does)."""
+class _LastProgram:
+    """Wraps `jaxplan.nav._front._compiled_episodes` (which keeps one compiled episode program per
+    configuration and shapes) to remember the last call's program and arguments, so that the
+    episode call alone can be timed, as bench_nav.py's speed section does."""
 
     def __init__(self, real) -> None:
-        self.real, self.cache, self.last = real, {}, None
+        self.real, self.last = real, None
 
-    def lower(self, *a):
-        import jax
-
-        key = (a[0], a[1], str(jax.tree_util.tree_map(lambda x: (np.shape(x), str(np.asarray(x).dtype)), a[2:])))
-        memo = self
-
-        class Lowered:
-            def compile(self):
-                if key not in memo.cache:
-                    memo.cache[key] = memo.real.lower(*a).compile()
-                memo.last = (memo.cache[key], a[2:])
-                return memo.cache[key]
-
-        return Lowered()
+    def __call__(self, cfg, steps, mesh, args):
+        fn, compile_s = self.real(cfg, steps, mesh, args)
+        self.last = (fn, args)
+        return fn, compile_s
 
 
 def section_episodes(args) -> list[Row]:
@@ -426,8 +415,8 @@ def section_episodes(args) -> list[Row]:
     sel = ok[np.arange(args.episodes) % len(ok)]
     S, G = scen.starts[sel], scen.goals[sel]
     E = len(sel)
-    memo = _MemoRun(F._RUN)
-    F._RUN = memo
+    memo = _LastProgram(F._compiled_episodes)
+    F._compiled_episodes = memo
     try:
         def batch(s, g):
             b = jp.navigate_batch(grid, s, g, pipeline="iaco_dwa", seeds=[0])
@@ -451,7 +440,7 @@ def section_episodes(args) -> list[Row]:
         n_loop = args.repeats + 4
         t_loop = median_time(call, n_loop)
     finally:
-        F._RUN = memo.real
+        F._compiled_episodes = memo.real
     sim = int(one.steps.sum()) * one.period
     return [rate_row("episodes", f"iaco_dwa static episodes, {E} in one call ({100 * b.success.mean():.0f} % ok)",
                      "episodes/s", E / t_batch, 1 / t_one,

@@ -11,6 +11,12 @@ The public names of DESIGN §3 are re-exported here::
 
 from importlib.metadata import PackageNotFoundError, version
 
+# First, before anything can start JAX's backend: one CPU host device per core (see
+# jaxplan.scale._host_devices for the measurement and $JAXPLAN_HOST_DEVICES to change it).
+from jaxplan.scale._host_devices import configure_host_devices as _configure_host_devices
+
+_configure_host_devices()
+
 from jaxplan.grid import (
     GridMap,
     Neighbours,

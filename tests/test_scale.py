@@ -15,9 +15,12 @@ import jaxplan as jp
 from jaxplan.scale import MemoryLimitError, aco_memory, batch_mesh, check_memory, memory_limit, pad_leading
 
 
-def _child(code: str, devices: int = 1) -> dict:
-    """Runs ``code`` in a fresh interpreter (XLA's device count is fixed at start-up); its last stdout line is JSON."""
-    env = dict(os.environ, XLA_FLAGS=f"--xla_force_host_platform_device_count={devices}")
+def _child(code: str, devices: int | None = 1) -> dict:
+    """Runs ``code`` in a fresh interpreter (XLA's device count is fixed at start-up); its last stdout line is JSON.
+    ``devices=None``: jaxplan's default (no XLA_FLAGS device count, no $JAXPLAN_HOST_DEVICES)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "JAXPLAN_HOST_DEVICES", "JAX_NUM_CPU_DEVICES")}
+    if devices is not None:
+        env["XLA_FLAGS"] = f"--xla_force_host_platform_device_count={devices}"
     proc = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, env=env,
                           timeout=600)
     assert proc.returncode == 0, proc.stderr[-3000:]
@@ -52,6 +55,89 @@ def test_plan_batch_on_four_devices_equals_one_device():
     for planner in ("iaco", "praco", "opt_ant"):
         assert out[planner] == [], f"{planner}: fields differ between 1 and 4 devices: {out[planner]}"
         assert out[planner + "_success"] > 0.5
+
+
+def test_navigate_batch_and_a_tuning_generation_on_four_devices_equal_one_device():
+    """Batched navigation among moving discs (re-planning per group of 2 episodes; 5 scenarios x 2 seeds
+    padded to 12 over 4 devices) and one tuning generation (7 members padded to 8): identical to one device
+    (the tuning metrics that are float sums over path points: to float32 rounding, see below)."""
+    out = _child("""
+        import json
+        import numpy as np, jax
+        import jaxplan as jp
+        from jaxplan.dwa import DWAConfig
+        from jaxplan.nav import NavConfig
+        from jaxplan.nav._front import planning_grid
+        from jaxplan.scale import batch_mesh
+        from jaxplan.tune import Split, aco_objective
+
+        res = {"devices": len(jax.devices())}
+        grid = jp.WarehouseGenerator()(0).grid
+        free = np.argwhere(np.asarray(planning_grid(grid, 0.3).free))[:, ::-1]
+        idx = np.random.default_rng(0).choice(len(free), (5, 2), replace=False)
+        s, g = free[idx[:, 0]], free[idx[:, 1]]
+        cfg = NavConfig(replan_group=2, max_time=25.0, dwa=NavConfig().dwa.replace(n_v=6, n_omega=11))
+        obs = lambda e, seed: jp.random_obstacles(grid, 3, speed=1.0, seed=seed * 100 + e,
+                                                  avoid=[(s[e] + 0.5) * grid.resolution])
+        kw = dict(pipeline="iaco_dwa", seeds=[0, 1], obstacles=obs, config=cfg, ants=12, iterations=4)
+        a = jp.navigate_batch(grid, s, g, mesh=None, **kw)
+        b = jp.navigate_batch(grid, s, g, mesh=batch_mesh(), **kw)
+        same = lambda x, y: np.array_equal(x, y, equal_nan=x.dtype.kind == "f")
+        res["nav"] = [f for f in a._fields if isinstance(getattr(a, f), np.ndarray) and not same(getattr(a, f), getattr(b, f))]
+        res["replans"] = int(a.replans.sum())
+        res["moved"] = float(np.mean(a.path_length > 1.0))
+
+        scene = jp.RandomMapGenerator(20, 20, 0.15)(2)
+        pts = np.argwhere(np.asarray(scene.grid.free))[:, ::-1]
+        j = np.random.default_rng(1).choice(len(pts), (4, 2), replace=False)
+        st, go = pts[j[:, 0]], pts[j[:, 1]]
+        opt = jp.shortest_lengths(scene.grid, st, go)
+        sp = Split(st, go, opt, (0, 1))
+        obj = aco_objective(scene.grid, sp, sp._replace(seeds=(2,)), "iaco", overrides=dict(ants=8, iterations=3))
+        pop = np.random.default_rng(0).uniform(obj.bounds.low, obj.bounds.high, (7, obj.bounds.dim))
+        e1 = obj.with_mesh(None).evaluate(pop)
+        e4 = obj.with_mesh(batch_mesh()).evaluate(pop)
+        res["tune"] = [k for k in ("fitness", "per_seed") if not np.array_equal(getattr(e1, k), getattr(e4, k))]
+        res["tune"] += [k for k in ("gap", "failure", "turns") if not np.array_equal(e1.metrics[k], e4.metrics[k])]
+        # Mean clearance and roughness are float sums over path points: XLA's CPU code for a batch of 7
+        # members and for one of 2 (a device's share) rounds them differently in the last bits — the
+        # same happens on ONE device between populations of 7 and 2 — so they agree to float32 rounding.
+        res["tune"] += [k for k in ("clearance", "roughness")
+                        if not np.allclose(e1.metrics[k], e4.metrics[k], rtol=1e-6, atol=0)]
+        res["finite"] = bool(np.isfinite(e1.fitness).all())
+        print(json.dumps(res))
+        """, devices=4)
+    assert out["devices"] == 4
+    assert out["nav"] == [], f"navigate_batch fields differ between 1 and 4 devices: {out['nav']}"
+    assert out["replans"] > 0 and out["moved"] > 0.5  # the comparison covers re-planning among moving discs
+    assert out["tune"] == [], f"tuning generation outputs differ between 1 and 4 devices: {out['tune']}"
+    assert out["finite"]
+
+
+def test_default_host_devices_and_auto_mesh(monkeypatch):
+    """One host device per core unless the user chose; "auto" shards only batches that fill the devices."""
+    from jaxplan.scale import auto_mesh, host_devices_setting
+
+    monkeypatch.delenv("JAXPLAN_HOST_DEVICES", raising=False)
+    assert host_devices_setting() == len(os.sched_getaffinity(0))
+    assert host_devices_setting("3") == 3 and host_devices_setting("off") is None
+    for bad in ("0", "-2", "many"):
+        with pytest.raises(ValueError, match="JAXPLAN_HOST_DEVICES"):
+            host_devices_setting(bad)
+    with pytest.raises(ValueError, match="'auto'"):
+        auto_mesh("all", 4)
+    assert auto_mesh(None, 100) is None
+    import jax
+
+    n = len(jax.local_devices())
+    assert auto_mesh("auto", max(n - 1, 1)) is None
+    m = auto_mesh("auto", 2 * n)
+    assert (m is None) == (n == 1)
+    out = _child("""
+        import json, jax, jaxplan
+        print(json.dumps({"devices": len(jax.devices())}))
+        """, devices=None)
+    assert out["devices"] == len(os.sched_getaffinity(0))
 
 
 def test_mesh_helpers():

@@ -36,11 +36,12 @@ from numpy.typing import ArrayLike
 from jaxplan.aco import _rules as R
 from jaxplan.aco._colony import Colony, RunConfig, run_batch, walk_backend
 from jaxplan.aco._context import GoalTables, MapTables, check_one, goal_tables, map_tables
-from jaxplan.aco._walk_numba import WALK_BACKENDS
+from jaxplan.aco._walk_numba import WALK_BACKENDS, sharing_cores
 from jaxplan.grid._gridmap import GridMap, passable
 from jaxplan.registry import register_planner, resolve
 from jaxplan.result import PlanResult
 from jaxplan.scale._memory import aco_memory, check_memory
+from jaxplan.scale._host_devices import auto_mesh
 from jaxplan.scale._mesh import BATCH_AXIS, check_mesh, pad_leading, padded_size
 
 __all__ = ["COLONIES", "BatchResult", "plan_batch", "aco_defaults"]
@@ -198,7 +199,8 @@ def compiled(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTable
         # varying-axes annotation; every output really is per shard (split along BATCH_AXIS).
         body = jax.shard_map(body, mesh=mesh, in_specs=(P(), P(BATCH_AXIS), P(), P()), out_specs=P(BATCH_AXIS),
                              check_vma=False)
-    fn = jax.jit(body).lower(tables, goals, params, keys).compile()
+    with sharing_cores(1 if mesh is None else len(mesh.local_devices)):
+        fn = jax.jit(body).lower(tables, goals, params, keys).compile()
     dt = time.perf_counter() - t0
     _memo(_PROGRAMS, key, lambda: fn, limit=32)
     return fn, dt
@@ -329,7 +331,7 @@ def plan_batch(
     planner: str = "aco",
     seeds=range(1),
     *,
-    mesh: Mesh | None = None,
+    mesh: Mesh | str | None = "auto",
     **overrides: Any,
 ) -> BatchResult:
     """Runs ``planner`` on every scenario with every seed in one compiled call.
@@ -341,8 +343,10 @@ def plan_batch(
         scenario once and repeat it across seeds, since they ignore the seed; sampling
         planners run once per scenario and seed).
       seeds: iterable of non-negative integer seeds (R of them).
-      mesh: optional 1-D device mesh (`jaxplan.scale.batch_mesh`): an ACO planner's
-        scenarios are split over its devices (padded to a multiple of the device count with
+      mesh: a 1-D device mesh (`jaxplan.scale.batch_mesh`), ``"auto"`` (default: every local
+        device when there are several and at least as many scenarios — the library's CPU
+        default, `jaxplan.scale.auto_mesh`) or None (one device). An ACO planner's scenarios
+        are split over the mesh's devices (padded to a multiple of the device count with
         copies of the last scenario, which are dropped again); the results equal the
         single-device call's. Other planners ignore it.
       **overrides: planner parameters, as for `jaxplan.plan`.
@@ -353,6 +357,7 @@ def plan_batch(
     spec, p = resolve(planner, overrides)
     s, g = np.asarray(starts), np.asarray(goals)
     if planner in COLONIES:
+        mesh = auto_mesh(mesh, len(s))
         out, dt, compile_s, width = _run_colony(planner, grid, s, g, seeds, p, mesh=mesh)
         return _to_batch(planner, out, dt, compile_s, width)
     seed_list = [int(x) for x in seeds]

@@ -64,8 +64,15 @@ class NavConfig:
       block_margin: extra distance beyond the two radii within which a disc blocks the path
         and within which cells around it are closed when re-planning.
       replan_sweeps: bound on the distance field's relaxation sweeps (static).
-      replan_slots: robots of a batch that can re-plan in the same step (static); others wait
-        a step. The cost of a re-planning step is that of this many fields, whatever the batch.
+      replan_slots: robots of a group of episodes (``replan_group``) that can re-plan in the
+        same step (static); others wait a step. The cost of a re-planning step is that of
+        this many fields per group, whatever the group's size.
+      replan_group: consecutive episodes of a batch sharing the ``replan_slots`` budget
+        (static); 0 = the whole batch (on a mesh: each device's share, so results would
+        depend on the device count). Set it (dividing each device's share of the padded
+        batch) to get results independent of the device count: `navigate_batch` then
+        splits episodes over a mesh (``mesh="auto"``: all local devices) and pads the batch
+        to whole groups with episodes that do not run.
       replan_cells: longest re-planned path in moves (static).
       path_critic: pass the waypoint polyline to the DWA path critic (static; its weight is
         `DWAParams.path`).
@@ -101,6 +108,7 @@ class NavConfig:
     replan_sweeps: int = dataclasses.field(default=512, metadata=dict(static=True))
     replan_cells: int = dataclasses.field(default=256, metadata=dict(static=True))
     replan_slots: int = dataclasses.field(default=2, metadata=dict(static=True))
+    replan_group: int = dataclasses.field(default=0, metadata=dict(static=True))
     path_critic: bool = dataclasses.field(default=False, metadata=dict(static=True))
     follow_gain: float = 2.0
     corner_speed: float = 0.3

@@ -94,7 +94,8 @@ class EpisodeOutput(NamedTuple):
         the robot was tracking at that step (from where it adopted it — the start or the
         position of a re-plan — through its waypoints); NaN for a robot that did not move.
       waypoints: ``f32[B, N, K, 2]`` and ``n_waypoints [B, N]``: the final waypoint lists.
-      executed: ``i32[B]`` control steps the loop ran (a multiple of the chunk).
+      executed: ``i32[B]`` control steps the loop ran (a multiple of the chunk; the loop stops
+        once every robot of the batch — on a mesh, of the device's share — is done).
     """
 
     states: jnp.ndarray
@@ -212,35 +213,59 @@ def _follow(config: NavConfig, robot, state: jnp.ndarray, subgoal: jnp.ndarray) 
 
 def _replan(config: NavConfig, free: jnp.ndarray, resolution, c: _Carry, inputs: EpisodeInputs,
             need: jnp.ndarray, centres: jnp.ndarray, reach: jnp.ndarray) -> tuple[_Carry, jnp.ndarray]:
-    """Re-plans up to `NavConfig.replan_slots` of the robots flagged in ``need [B, N]``.
+    """Re-plans up to `NavConfig.replan_slots` of the robots flagged in ``need [B, N]`` per group
+    of `NavConfig.replan_group` episodes (0: the whole batch is one group).
 
     ``centres [B, N, D, 2]`` / ``reach [B, N, D]``: the discs whose nearby cells are closed.
     Only the chosen robots' fields are computed (a gather into fixed slots), so the cost
-    does not grow with the batch; robots left over try again on the next step. Returns
-    the carry and ``bool[B, N]``: the robots that were attempted.
+    grows with the number of groups, not with the batch; robots left over try again on the
+    next step. Groups are consecutive episodes, so a device holding whole groups computes
+    exactly what one device computes for them. Returns the carry and ``bool[B, N]``: the
+    robots that were attempted.
     """
+    B = need.shape[0]
+    G = config.replan_group or B
+    if B % G:
+        raise ValueError(f"the batch of {B} episodes is not a multiple of NavConfig.replan_group = {G}")
+    fields = (c.state, c.waypoints, c.n_wp, c.index, c.replans, c.origin, c.error, inputs.goal_cell, inputs.goal,
+              need, centres, reach)
+    fn = lambda *a: _replan_group(config, free, resolution, *a)  # noqa: E731
+    if G == B:
+        out = fn(*fields)
+    else:
+        group = lambda x: x.reshape((B // G, G) + x.shape[1:])  # noqa: E731
+        out = jax.vmap(fn)(*map(group, fields))
+        out = jax.tree_util.tree_map(lambda x: x.reshape((B,) + x.shape[2:]), out)
+    waypoints, n_wp, index, replans, origin, error, attempted = out
+    c = c._replace(waypoints=waypoints, n_wp=n_wp, index=index, replans=replans, origin=origin, error=error)
+    return c, attempted
+
+
+def _replan_group(config: NavConfig, free: jnp.ndarray, resolution, state, waypoints, n_wp, index, replans, origin,
+                  error, goal_cell, goal, need, centres, reach):
+    """`_replan` for one group of ``G`` episodes: every argument has leading axes ``[G, N]``."""
     H, W = free.shape
-    B, N, K = c.waypoints.shape[:3]
+    B, N, K = waypoints.shape[:3]
     Q = min(config.replan_slots, B * N)
     flat_need = need.reshape(-1)
     _, slot = lax.top_k(flat_need.astype(jnp.int32) * (B * N) - jnp.arange(B * N), Q)  # first Q needing robots
     use = flat_need[slot]
     take = lambda x: x.reshape((B * N,) + x.shape[2:])[slot]  # noqa: E731
 
-    def one(need1, state1, goal_cell, cen, rch):
+    def one(need1, state1, goal_cell1, cen, rch):
         closed = disc_cells((H, W), cen, jnp.where(need1, rch, 0.0), resolution, _SPAN)
         cell = jnp.clip(jnp.floor(state1[:2] / resolution).astype(jnp.int32), 0, jnp.asarray([W - 1, H - 1]))
         plan_free = free & ~closed
         plan_free = plan_free.at[cell[1], cell[0]].set(free[cell[1], cell[0]])  # the robot's own cell stays open
-        field = distance_field(plan_free, goal_cell, need1, config.replan_sweeps, until=cell)
+        field = distance_field(plan_free, goal_cell1, need1, config.replan_sweeps, until=cell)
         cells, n = descend(field, plan_free, cell, config.replan_cells)
         pts, m = turn_vertices(cells, jnp.maximum(n, 1), K)
         return (pts + 0.5) * resolution, m, need1 & (n > 1)
 
-    pts, m, ok = jax.vmap(one)(use, take(c.state), take(inputs.goal_cell), take(centres), take(reach))
-    goal = take(inputs.goal)
+    pts, m, ok = jax.vmap(one)(use, take(state), take(goal_cell), take(centres), take(reach))
+    g = take(goal)
     # The last waypoint is the goal itself.
-    pts = jnp.where(jnp.arange(K)[None, :, None] >= m[:, None, None] - 1, goal[:, None, :], pts)
+    pts = jnp.where(jnp.arange(K)[None, :, None] >= m[:, None, None] - 1, g[:, None, :], pts)
 
     def put(x, new, mask):
         flat = x.reshape((B * N,) + x.shape[2:])
@@ -248,12 +273,9 @@ def _replan(config: NavConfig, free: jnp.ndarray, resolution, c: _Carry, inputs:
         return flat.at[slot].set(upd).reshape(x.shape)
 
     attempted = jnp.zeros(B * N, bool).at[slot].set(use).reshape(B, N)
-    c = c._replace(
-        waypoints=put(c.waypoints, pts, ok), n_wp=put(c.n_wp, m, ok), index=put(c.index, jnp.zeros_like(m), ok),
-        replans=put(c.replans, take(c.replans) + 1, ok), origin=put(c.origin, take(c.state)[:, :2], ok),
-        error=put(c.error, jnp.zeros_like(m, c.error.dtype), ok),
-    )
-    return c, attempted
+    return (put(waypoints, pts, ok), put(n_wp, m, ok), put(index, jnp.zeros_like(m), ok),
+            put(replans, take(replans) + 1, ok), put(origin, take(state)[:, :2], ok),
+            put(error, jnp.zeros_like(m, error.dtype), ok), attempted)
 
 
 _SPAN = 3

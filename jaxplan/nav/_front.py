@@ -25,13 +25,17 @@ The steps of every episode (DESIGN §5):
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
+from collections import OrderedDict
 from typing import Any, Mapping, NamedTuple, Sequence
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax.sharding import Mesh
+from jax.sharding import PartitionSpec as P
 from numpy.typing import ArrayLike
 
 from jaxplan.dwa._config import DWAParams
@@ -43,6 +47,8 @@ from jaxplan.nav._config import LOCAL_PLANNERS, SUBGOAL_MODES, NavConfig
 from jaxplan.nav._episode import GOAL, REASONS, EpisodeInputs, run_episodes
 from jaxplan.nav._obstacles import MovingObstacles, no_obstacles, obstacle_state, stack_obstacles, trajectories
 from jaxplan.nav._pipelines import Pipeline, get_pipeline
+from jaxplan.scale._host_devices import auto_mesh
+from jaxplan.scale._mesh import BATCH_AXIS, pad_leading
 from jaxplan.search._exact import shortest_lengths
 
 __all__ = ["Episode", "EpisodeBatch", "navigate", "navigate_batch", "navigate_multi", "planning_grid",
@@ -57,7 +63,36 @@ UNREACHABLE = "infeasible: goal not reachable for the inflated footprint"
 PLAN_FAILED = "global planner found no path"
 _NOT_RUN = (INFEASIBLE_START, INFEASIBLE_GOAL, UNREACHABLE, PLAN_FAILED)
 
-_RUN = jax.jit(run_episodes, static_argnums=(0, 1))
+_PROGRAMS: "OrderedDict[tuple, Any]" = OrderedDict()  # compiled episode programs, least recently used first
+_PROGRAM_CACHE = 16
+
+
+def _compiled_episodes(cfg: NavConfig, steps: int, mesh: Mesh | None, args: tuple) -> tuple[Any, float]:
+    """The compiled episode program for ``args = (table, free, params, inputs)``'s shapes, and the
+    seconds spent compiling it now (0 if cached): one compilation per configuration and shape.
+
+    With a ``mesh`` the episode axis of ``inputs`` (a multiple of the devices and of
+    `NavConfig.replan_group`) is split over its devices with `jax.shard_map`; the map and
+    the DWA params are replicated.
+    """
+    sig = jax.tree_util.tree_map(lambda a: (np.shape(a), str(jnp.result_type(a))), args)
+    key = (cfg, steps, mesh, str(jax.tree_util.tree_structure(sig)), str(jax.tree_util.tree_leaves(sig)))
+    if key in _PROGRAMS:
+        _PROGRAMS.move_to_end(key)
+        return _PROGRAMS[key], 0.0
+    t0 = time.perf_counter()
+    body = functools.partial(run_episodes, cfg, steps)
+    if mesh is not None:
+        # check_vma=False: the loop carries shard-local scalars (step counter, chunk index) beside
+        # per-episode arrays; every output is per episode and split along BATCH_AXIS.
+        body = jax.shard_map(body, mesh=mesh, in_specs=(P(), P(), P(), P(BATCH_AXIS)), out_specs=P(BATCH_AXIS),
+                             check_vma=False)
+    fn = jax.jit(body).lower(*args).compile()
+    compile_s = time.perf_counter() - t0
+    _PROGRAMS[key] = fn
+    while len(_PROGRAMS) > _PROGRAM_CACHE:
+        _PROGRAMS.popitem(last=False)
+    return fn, compile_s
 
 
 def planning_grid(grid: GridMap, d_safe: float) -> GridMap:
@@ -243,6 +278,8 @@ def _config(config: NavConfig | None, pipeline: Pipeline, local_planner: str | N
     for f in ("chunk", "replan_sweeps", "replan_cells", "replan_slots"):
         if not isinstance(getattr(cfg, f), int) or getattr(cfg, f) < 1:
             raise ValueError(f"NavConfig.{f} must be a positive integer, got {getattr(cfg, f)!r}")
+    if not isinstance(cfg.replan_group, int) or cfg.replan_group < 0:
+        raise ValueError(f"NavConfig.replan_group must be an integer >= 0 (0: the whole batch), got {cfg.replan_group!r}")
     return cfg.replace(dwa=dwa, local=local, evaluator=evaluator)
 
 
@@ -283,7 +320,8 @@ _SEEDLESS = ("astar", "dijkstra", "astar_kng")  # deterministic planners: one pl
 
 
 def _global_plans(plan_grid: GridMap, starts: np.ndarray, goals: np.ndarray, ok: np.ndarray, pipe: Pipeline,
-                  seeds: list[int], overrides: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray, float]:
+                  seeds: list[int], overrides: Mapping[str, Any],
+                  mesh: Mesh | str | None = "auto") -> tuple[np.ndarray, np.ndarray, float]:
     """Plans ``f64[S, R, P, 2]`` (cell coordinates, −1 padded), valid points ``[S, R]`` (0: failed) and the
     planning wall time (s, compilation excluded) for the ``ok`` rows of ``starts``/``goals [S, 2]``.
 
@@ -300,7 +338,8 @@ def _global_plans(plan_grid: GridMap, starts: np.ndarray, goals: np.ndarray, ok:
     if idx.size == 0:
         return np.full((S, R, 2, 2), -1.0), np.zeros((S, R), np.int64), 0.0
     if pipe.global_planner in COLONIES:
-        br = plan_batch(plan_grid, starts[idx], goals[idx], planner=pipe.global_planner, seeds=seeds, **params)
+        br = plan_batch(plan_grid, starts[idx], goals[idx], planner=pipe.global_planner, seeds=seeds, mesh=mesh,
+                        **params)
         plans = np.full((S, R) + br.paths.shape[2:], -1.0)
         plans[idx] = br.paths
         n = np.zeros((S, R), np.int64)
@@ -334,7 +373,7 @@ def _bucket(n: int, lo: int = 8) -> int:
 def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | None, global_planner: str | None,
          local_planner: str | None, seeds: Sequence[int], obstacles: Any, config: NavConfig | None,
          params: DWAParams | Mapping[str, float] | None, time_limit: float | None,
-         overrides: Mapping[str, Any]) -> EpisodeBatch:
+         overrides: Mapping[str, Any], mesh: Mesh | str | None = "auto") -> EpisodeBatch:
     from jaxplan.smooth import smooth
 
     if not isinstance(grid, GridMap):
@@ -383,7 +422,7 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
     ok = reason0 == ""
 
     # 2. Global plans on the planning map, in cell coordinates.
-    plans, n_plan, plan_time = _global_plans(plan_grid, s_flat, g_flat, ok, pipe, seeds, overrides)
+    plans, n_plan, plan_time = _global_plans(plan_grid, s_flat, g_flat, ok, pipe, seeds, overrides, mesh)
     reason = np.repeat(reason0[:, None], R, axis=1)  # [E*N, R]
     reason[(reason == "") & (n_plan < 2)] = PLAN_FAILED
     run = reason == ""
@@ -439,13 +478,23 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
     steps = cfg.steps
     table = table_of(grid)
     free_j = jnp.asarray(pf)
-    t0 = time.perf_counter()
-    compiled = _RUN.lower(cfg, steps, table, free_j, p, inputs).compile()
-    compile_s = time.perf_counter() - t0
+    B = E * R
+    # Sharding never changes a result only when the re-planning budget is per group of episodes
+    # (or there is no re-planning): only then does "auto" split the batch over the local devices.
+    grouped = cfg.replan_group > 0 or not cfg.replan
+    mesh_ = auto_mesh(mesh, B) if (grouped or not isinstance(mesh, str)) else None
+    unit = (cfg.replan_group if cfg.replan else 1) or 1
+    if mesh_ is not None:
+        unit *= mesh_.devices.size
+    B_pad = -(-B // unit) * unit
+    if B_pad != B:  # copies of the last episode that do not run, sliced off below
+        inputs = pad_leading(inputs, B_pad)
+        inputs = inputs._replace(active=inputs.active.at[B:].set(False))
+    compiled, compile_s = _compiled_episodes(cfg, steps, mesh_, (table, free_j, p, inputs))
     t0 = time.perf_counter()
     out = jax.block_until_ready(compiled(table, free_j, p, inputs))
     run_s = time.perf_counter() - t0
-    out = jax.tree_util.tree_map(np.asarray, out)
+    out = jax.tree_util.tree_map(lambda a: np.asarray(a)[:B], out)
 
     # 5. Metrics. Back to [E, R, N, ...].
     def back(x):
@@ -531,7 +580,7 @@ def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline:
                    seeds: Sequence[int] = range(1), obstacles: Any = None, *, global_planner: str | None = None,
                    local_planner: str | None = None, config: NavConfig | None = None,
                    params: DWAParams | Mapping[str, float] | None = None, time_limit: float | None = None,
-                   **overrides: Any) -> EpisodeBatch:
+                   mesh: Mesh | str | None = "auto", **overrides: Any) -> EpisodeBatch:
     """Scenarios × seeds single-robot episodes in one compiled global-planning call and one episode call.
 
     Args:
@@ -540,6 +589,13 @@ def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline:
       seeds: R seeds (global planner's seed; obstacle callables receive it too).
       obstacles: None, one `MovingObstacles` for all, an ``[E][R]`` nested list, or a callable
         ``f(scenario_index, seed) -> MovingObstacles``.
+      mesh: a 1-D device mesh (`jaxplan.scale.batch_mesh`), ``"auto"`` (default) or None. The
+        ACO global planning always follows it (`jaxplan.plan_batch`). The episodes (``E × R``,
+        padded to whole groups per device) are split over the mesh when
+        `NavConfig.replan_group` is set or re-planning is off — then every result equals the
+        single-device run's; ``"auto"`` leaves them on one device otherwise. An explicit mesh
+        with ``replan_group = 0`` gives each device its own re-planning budget (results then
+        depend on the device count).
       Others as in `navigate`.
 
     Returns:
@@ -552,14 +608,14 @@ def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline:
         pipeline = None
     cfg = config
     return _run(grid, s[:, None], g[:, None], pipeline, global_planner, local_planner, list(seeds), obstacles, cfg,
-                params, time_limit, overrides)
+                params, time_limit, overrides, mesh)
 
 
 def navigate_multi(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline: str | None = "iaco_dwa",
                    seeds: Sequence[int] = range(1), obstacles: Any = None, *, global_planner: str | None = None,
                    local_planner: str | None = None, config: NavConfig | None = None,
                    params: DWAParams | Mapping[str, float] | None = None, time_limit: float | None = None,
-                   **overrides: Any) -> EpisodeBatch:
+                   mesh: Mesh | str | None = "auto", **overrides: Any) -> EpisodeBatch:
     """Multi-robot episodes: ``starts, goals int[N, 2]`` (one team) or ``[E, N, 2]`` (E teams).
 
     Each robot plans its own global path and runs its own DWA, treating the other robots
@@ -576,4 +632,4 @@ def navigate_multi(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline:
         pipeline = None
     cfg = config
     return _run(grid, s, g, pipeline, global_planner, local_planner, list(seeds), obstacles, cfg, params,
-                time_limit, overrides)
+                time_limit, overrides, mesh)

@@ -39,6 +39,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jax.sharding import PartitionSpec as P
+
+from jaxplan.scale._host_devices import auto_mesh
+from jaxplan.scale._mesh import BATCH_AXIS, pad_leading, padded_size
 from jaxplan.tune._bounds import Bounds, make_bounds
 
 __all__ = ["Split", "Evaluation", "Objective", "aco_objective", "dwa_objective", "function_objective", "DWAEpisodes", "dwa_episodes",
@@ -116,6 +120,10 @@ class Objective:
       splits: ``{"train": Split, "test": Split}``.
       program: ``program(split_name) -> pure fn(pop [P, D]) -> (per_run cost [P, N, R], metrics {k: [P, N, R]})``.
       base: the planner's full parameter dict (for `params`).
+      mesh: where `evaluate` runs a population: ``"auto"`` (default: split over every local
+        device when there are several and at least as many members — `jaxplan.scale.auto_mesh`),
+        None (one device) or a 1-D `jax.sharding.Mesh`. Members are computed independently,
+        so the fitness values do not depend on it. Set with `with_mesh`.
     """
 
     name: str
@@ -127,7 +135,17 @@ class Objective:
     splits: Mapping[str, Split]
     program: Callable[[str], Callable]
     base: Mapping[str, Any]
+    mesh: Any = "auto"
     _compiled: dict = dataclasses.field(default_factory=dict, repr=False)
+
+    def with_mesh(self, mesh: Any) -> "Objective":
+        """This objective evaluated on ``mesh`` (a `Mesh`, ``"auto"`` or None); compiled programs are not shared."""
+        auto_mesh(mesh, 1)  # validates
+        new = dataclasses.replace(self, mesh=mesh, _compiled={})
+        for k, v in self.__dict__.items():  # extra attributes set after construction (e.g. the DWA episodes)
+            if k not in new.__dict__:
+                object.__setattr__(new, k, v)
+        return new
 
     def batched(self, split: str = "train") -> Callable:
         """The pure batched objective ``pop f32[P, D] -> (fitness [P], per_seed [P, R], metrics {k: [P]})``
@@ -147,16 +165,29 @@ class Objective:
         if pop.shape[-1] != self.bounds.dim:
             raise ValueError(f"population has {pop.shape[-1]} columns, the space has {self.bounds.dim} "
                              f"({', '.join(self.bounds.names)})")
-        key = (split, pop.shape)
+        n = pop.shape[0]
+        mesh = auto_mesh(self.mesh, n)
+        if mesh is not None:  # copies of the last member, sliced off below
+            pop = pad_leading(pop, padded_size(n, mesh))
+        key = (split, pop.shape, mesh)
         compile_s = 0.0
         if key not in self._compiled:
             t0 = time.perf_counter()
-            self._compiled[key] = jax.jit(self.batched(split)).lower(pop).compile()
+            fn = self.batched(split)
+            if mesh is not None:
+                # check_vma=False: the ACO walk is an FFI custom call without varying-axes types;
+                # every output is per member, split along BATCH_AXIS.
+                fn = jax.shard_map(fn, mesh=mesh, in_specs=P(BATCH_AXIS), out_specs=P(BATCH_AXIS), check_vma=False)
+            from jaxplan.aco._walk_numba import sharing_cores  # late, as this module's other ACO imports
+
+            with sharing_cores(1 if mesh is None else len(mesh.local_devices)):
+                self._compiled[key] = jax.jit(fn).lower(pop).compile()
             compile_s = time.perf_counter() - t0
         t0 = time.perf_counter()
         f, ps, m = jax.block_until_ready(self._compiled[key](pop))
         dt = time.perf_counter() - t0
-        return Evaluation(np.asarray(f), np.asarray(ps), {k: np.asarray(v) for k, v in m.items()}, dt, compile_s)
+        return Evaluation(np.asarray(f)[:n], np.asarray(ps)[:n], {k: np.asarray(v)[:n] for k, v in m.items()}, dt,
+                          compile_s)
 
     def __call__(self, params: Mapping[str, Any], split: str = "train") -> float:
         """The scalar objective of one params pytree (``{name: value}``, vector weights as sequences)."""

@@ -1,0 +1,108 @@
+"""The library's CPU default: one XLA host device per core, and batches sharded over them.
+
+Measured on the 2-core machine of DESIGN §7 (``python benchmarks/bench_scale.py``, medians
+of 3): an `iaco` `plan_batch` of 16 scenarios × 2 seeds, 256 ants, ran at 43 runs/s on one
+host device, 45 with XLA's intra-op threads cut to one, and 54–58 split over two host
+devices with `jax.shard_map`. XLA runs one host device's scan-heavy program mostly on one
+thread; two devices keep both cores busy. So, at ``import jaxplan``:
+
+* the CPU backend gets one host device per core of this process's affinity
+  (``jax.config.update("jax_num_cpu_devices", n)``) — unless ``$JAXPLAN_HOST_DEVICES``
+  says otherwise (a count, or ``auto`` = cores, or ``off`` = leave JAX alone), the user
+  already chose (``XLA_FLAGS=--xla_force_host_platform_device_count``,
+  ``$JAX_NUM_CPU_DEVICES``), or JAX's backend has already started (then nothing changes);
+* batched entry points (`jaxplan.plan_batch`, `Objective.evaluate` of `jaxplan.tune`,
+  `jaxplan.navigate_batch` when its re-planning budget is per group of episodes) take
+  ``mesh="auto"``: a batch at least as large as the local device count is split over the
+  local devices (`auto_mesh`); ``mesh=None`` keeps it on one device. Sharding never changes
+  a result (every batch element is computed on its own; tests compare 4 devices with 1).
+
+Unbatched work (one `jaxplan.plan`, one DWA step) is not split: it runs on the first device as
+before. On a GPU the CPU setting is irrelevant and ``"auto"`` shards over the local GPUs.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import jax
+from jax.sharding import Mesh
+
+from jaxplan.scale._mesh import batch_mesh, check_mesh
+
+__all__ = ["HOST_DEVICES_ENV", "host_devices_setting", "configure_host_devices", "auto_mesh"]
+
+HOST_DEVICES_ENV = "JAXPLAN_HOST_DEVICES"
+
+
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+def host_devices_setting(value: str | None = None) -> int | None:
+    """The host device count asked for by ``value`` (default ``$JAXPLAN_HOST_DEVICES``).
+
+    Unset, empty or ``auto`` → the cores of this process's affinity; ``off`` → None (leave
+    JAX's default); a positive integer → that many.
+
+    Raises:
+      ValueError: anything else, naming the variable.
+    """
+    raw = os.environ.get(HOST_DEVICES_ENV, "") if value is None else value
+    raw = raw.strip().lower()
+    if raw in ("", "auto"):
+        return _cores()
+    if raw in ("off", "none", "jax"):
+        return None
+    try:
+        n = int(raw)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise ValueError(f"${HOST_DEVICES_ENV} must be a positive integer, 'auto' or 'off', got {raw!r}")
+    return n
+
+
+def _user_chose() -> bool:
+    return ("xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", "")
+            or bool(os.environ.get("JAX_NUM_CPU_DEVICES")))
+
+
+def configure_host_devices() -> int | None:
+    """Applies `host_devices_setting` to JAX's CPU backend if nobody chose and it has not started.
+
+    Returns the count set, or None when it left JAX alone.
+    """
+    if _user_chose():
+        return None
+    n = host_devices_setting()
+    if n is None:
+        return None
+    try:
+        jax.config.update("jax_num_cpu_devices", n)
+    except RuntimeError:  # the backend is already running: its device count is fixed
+        return None
+    return n
+
+
+def auto_mesh(mesh: Any, batch: int) -> Mesh | None:
+    """The mesh a batched entry point uses for a batch axis of ``batch`` elements.
+
+    ``"auto"``: all local devices if there are several and ``batch`` is at least their number
+    (a smaller batch would be mostly padding), else None. None: None (one device). A `Mesh`:
+    itself, checked (`check_mesh`).
+    """
+    if mesh is None:
+        return None
+    if isinstance(mesh, str):
+        if mesh != "auto":
+            raise ValueError(f"mesh must be a jax.sharding.Mesh, None or 'auto', got {mesh!r}")
+        local = jax.local_devices()
+        if len(local) < 2 or batch < len(local):
+            return None
+        return batch_mesh(local)
+    return check_mesh(mesh)
