@@ -479,8 +479,8 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
     table = table_of(grid)
     free_j = jnp.asarray(pf)
     B = E * R
-    # Sharding never changes a result only when the re-planning budget is per group of episodes
-    # (or there is no re-planning): only then does "auto" split the batch over the local devices.
+    # Results are independent of the device count only when the re-planning budget is per group
+    # of episodes (or there is no re-planning): only then does "auto" split the episodes.
     grouped = cfg.replan_group > 0 or not cfg.replan
     mesh_ = auto_mesh(mesh, B) if (grouped or not isinstance(mesh, str)) else None
     unit = (cfg.replan_group if cfg.replan else 1) or 1

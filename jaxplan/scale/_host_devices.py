@@ -1,10 +1,15 @@
 """The library's CPU default: one XLA host device per core, and batches sharded over them.
 
-Measured on the 2-core machine of DESIGN §7 (``python benchmarks/bench_scale.py``, medians
-of 3): an `iaco` `plan_batch` of 16 scenarios × 2 seeds, 256 ants, ran at 43 runs/s on one
-host device, 45 with XLA's intra-op threads cut to one, and 54–58 split over two host
-devices with `jax.shard_map`. XLA runs one host device's scan-heavy program mostly on one
-thread; two devices keep both cores busy. So, at ``import jaxplan``:
+Measured on the 2-core machine of DESIGN §7 (``python benchmarks/bench_scale.py``; in one
+2-device process each call is timed with the mesh and with ``mesh=None`` in turn, medians of
+5, so the machine's drift hits both alike): two host devices beat one by 1.20× for an `iaco`
+`plan_batch` (16 scenarios × 2 seeds, 256 ants, 100×100 map), 1.36× for `navigate_batch` (16
+static `iaco_dwa` episodes) and 1.26× for one tuning generation (16 members); a 1-device
+process with XLA's intra-op threads cut to one ran as fast as with the default (1.00×).
+XLA runs one host device's scan-heavy program mostly on one thread; two devices keep both
+cores busy. A sharded ACO walk takes its device's share of the cores
+(`jaxplan.aco._walk_numba.sharing_cores`; with two walk threads per device, three
+between-process runs gave 0.96–1.25×). So, at ``import jaxplan``:
 
 * the CPU backend gets one host device per core of this process's affinity
   (``jax.config.update("jax_num_cpu_devices", n)``) — unless ``$JAXPLAN_HOST_DEVICES``
@@ -14,8 +19,10 @@ thread; two devices keep both cores busy. So, at ``import jaxplan``:
 * batched entry points (`jaxplan.plan_batch`, `Objective.evaluate` of `jaxplan.tune`,
   `jaxplan.navigate_batch` when its re-planning budget is per group of episodes) take
   ``mesh="auto"``: a batch at least as large as the local device count is split over the
-  local devices (`auto_mesh`); ``mesh=None`` keeps it on one device. Sharding never changes
-  a result (every batch element is computed on its own; tests compare 4 devices with 1).
+  local devices (`auto_mesh`); ``mesh=None`` keeps it on one device. Sharding changes no
+  path, cost or episode (every batch element is computed on its own; tests compare 4
+  devices with 1); float sums that XLA compiles per batch shape (a tuning objective's mean
+  clearance) can differ in the last bit, as between batch sizes on one device.
 
 Unbatched work (one `jaxplan.plan`, one DWA step) is not split: it runs on the first device as
 before. On a GPU the CPU setting is irrelevant and ``"auto"`` shards over the local GPUs.
