@@ -298,12 +298,13 @@ def _obstacle_sets(obstacles: Any, E: int, R: int, seeds: list[int]) -> list[lis
     return [list(row) for row in sets]
 
 
-_STATE = jax.jit(obstacle_state)  # one compiled call per obstacle-set shape, not an op-by-op dispatch
+# One compiled call per shape, not an op-by-op dispatch (each eager op compiles on its first shape).
+_STATE = jax.jit(obstacle_state)
+_ENERGY = jax.jit(lambda v, w, dt, n: energy(v, w, dt, EnergyModel(), n))
 
 
-def _check_obstacle_starts(obs: MovingObstacles, start_xy: np.ndarray, radius: float, where: str) -> None:
-    pos, _ = _STATE(obs, 0.0)
-    pos, rad = np.asarray(pos), np.asarray(obs.radii)
+def _check_obstacle_starts(pos: np.ndarray, rad: np.ndarray, start_xy: np.ndarray, radius: float, where: str) -> None:
+    """Raises if a disc (``pos [M, 2]`` at t = 0, ``rad [M]``) overlaps a robot at ``start_xy [N, 2]``."""
     for i, p in enumerate(start_xy):
         gap = np.hypot(*(pos - p).T) - rad - radius
         if np.any(gap < 0):
@@ -456,12 +457,16 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
     sets = _obstacle_sets(obstacles, E, R, seeds)
     for e in range(E):
         for r in range(R):
-            o = sets[e][r]
-            if not isinstance(o, MovingObstacles):
+            if not isinstance(sets[e][r], MovingObstacles):
                 raise ValueError(f"obstacles for scenario {e}, seed {seeds[r]} must be MovingObstacles")
-            if o.count:
-                _check_obstacle_starts(o, start_xy.reshape(E, N, 2)[e], radius, f"scenario {e}, seed {seeds[r]}")
     obs = stack_obstacles([sets[e][r] for e in range(E) for r in range(R)])  # [E*R, M, ...]
+    if obs.count:
+        # Positions at t = 0 of every set in one compiled call (padding slots are parked far away).
+        pos0, rad0 = np.asarray(_STATE(obs, 0.0)[0]), np.asarray(obs.radii)
+        for e in range(E):
+            for r in range(R):
+                _check_obstacle_starts(pos0[e * R + r], rad0[e * R + r], start_xy.reshape(E, N, 2)[e], radius,
+                                       f"scenario {e}, seed {seeds[r]}")
 
     # [E*N, R, ...] -> episodes B = E*R of N robots.
     def to_b(x):
@@ -521,7 +526,7 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
     kappa = np.max(np.where(fast, np.abs(w) / np.maximum(np.abs(v), CURVATURE_MIN_SPEED), 0.0), axis=-1)
     vs = np.concatenate([states[..., :1, 3], v], axis=-1)  # velocity samples at 0, P, 2P, ...
     ws = np.concatenate([states[..., :1, 4], w], axis=-1)
-    en = np.asarray(energy(jnp.asarray(vs), jnp.asarray(ws), period, EnergyModel(), jnp.asarray(valid_n)))
+    en = np.asarray(_ENERGY(jnp.asarray(vs), jnp.asarray(ws), period, jnp.asarray(valid_n)))
     seg = np.hypot(*np.diff(pos, axis=-2).transpose(4, 0, 1, 2, 3))
     length = np.sum(np.where(live, seg, 0.0), axis=-1)
     robot_steps = max(int(np.sum(n_steps)), 1)

@@ -290,8 +290,11 @@ def stack_obstacles(sets: Sequence[MovingObstacles]) -> MovingObstacles:
         raise ValueError("stack_obstacles needs at least one obstacle set")
     m = max(o.count for o in sets)
     k = max(o.waypoints.shape[-2] for o in sets)
-    padded = [pad_obstacles(o, m, k) for o in sets]
+    padded = [_PAD(o, m, k) for o in sets]
     return jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *padded)
+
+
+_PAD = jax.jit(pad_obstacles, static_argnums=(1, 2))  # sets of one shape share one compiled call
 
 
 # --------------------------------------------------------------------------------------
