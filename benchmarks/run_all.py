@@ -61,6 +61,12 @@ Sections and rows (sizes: default / ``--quick``):
            System iteration written here (`numpy_as_iteration`: vectorised over the 500 ants, a
            Python loop over the 51 construction steps, the same update); compile time.
 
+  scale    `jp.plan_batch(…, planner="iaco")` on ``jp.RandomMapGenerator(100, 100, 0.2)(0)``, 16 / 8
+           scenarios (free pairs, numpy seed 0) x 2 seeds, 256 ants x 10 / 5 iterations: runs/s
+           split over this process's host devices (one per core by default, `jaxplan.scale`)
+           against ``mesh=None`` (one device), the two timed in turn (bench_scale.py has the
+           1-device-process and thread variants).
+
 The machine header lists the CPU model, cores, this process's CPU affinity, RAM, the jax,
 jaxlib, numba, numpy and scipy versions, XLA's devices and the git revision. The JSON
 (machine, options, rows, wall time) goes to ``benchmarks/results/run_all-<UTC date>-<git
@@ -94,7 +100,7 @@ sys.path.insert(0, str(HERE))
 from _timing import median_time  # noqa: E402
 
 PAPER_SEED003_MS = 8468.0
-SECTIONS = ("aco", "dwa", "exact", "metrics", "episodes", "tune", "tsp")
+SECTIONS = ("aco", "dwa", "exact", "metrics", "episodes", "tune", "tsp", "scale")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -566,11 +572,48 @@ def section_tsp(args) -> list[Row]:
 
 
 # ---------------------------------------------------------------------------------------------
+# 8. Scale
+
+
+def section_scale(args) -> list[Row]:
+    import jax
+
+    import jaxplan as jp
+    from jaxplan.scale import batch_mesh
+
+    devices = jax.local_devices()
+    if len(devices) < 2:
+        return [status_row("scale", f"skipped: {len(devices)} local device (JAXPLAN_HOST_DEVICES / XLA_FLAGS)")]
+    scene = jp.RandomMapGenerator(100, 100, 0.2)(0)
+    free = np.argwhere(np.asarray(scene.grid.free))[:, ::-1]
+    n, its = args.scale_scenarios, args.scale_iterations
+    idx = np.random.default_rng(0).choice(len(free), (n, 2), replace=False)
+    s, g = free[idx[:, 0]], free[idx[:, 1]]
+    mesh = batch_mesh(devices)
+
+    def run(m):
+        return lambda: jp.plan_batch(scene.grid, s, g, planner="iaco", seeds=[0, 1], ants=256, iterations=its, mesh=m)
+
+    sharded, single = run(mesh), run(None)
+    sharded(), single()  # compile both
+    ts: dict[str, list[float]] = {"mesh": [], "one": []}
+    for _ in range(args.repeats):  # in turn, so that the machine's drift hits both alike
+        for k, f in (("mesh", sharded), ("one", single)):
+            t0 = time.perf_counter()
+            f()
+            ts[k].append(time.perf_counter() - t0)
+    runs = 2 * n
+    return [rate_row("scale", f"iaco plan_batch {n} scenarios x 2 seeds, 256 ants x {its} it, over {len(devices)} "
+                     "host devices", "runs/s", runs / statistics.median(ts["mesh"]),
+                     runs / statistics.median(ts["one"]), "mesh=None (one device), timed in turn", args.repeats)]
+
+
+# ---------------------------------------------------------------------------------------------
 # Table, JSON, main
 
 SECTION_FNS: dict[str, Callable] = {"aco": section_aco, "dwa": section_dwa, "exact": section_exact,
                                     "metrics": section_metrics, "episodes": section_episodes, "tune": section_tune,
-                                    "tsp": section_tsp}
+                                    "tsp": section_tsp, "scale": section_scale}
 
 
 def _num(x: float | None) -> str:
@@ -634,11 +677,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     args = ap.parse_args(argv)
     sizes = dict(repeats=5, queries=50, rows=1000, paths=10_000, subset=500, episodes=64, nav_repeats=3,
                  nav_singles=5, population=16,
-                 tune_scenarios=8, tune_ants=64, tune_iterations=10, tsp_iterations=50)
+                 tune_scenarios=8, tune_ants=64, tune_iterations=10, tsp_iterations=50, scale_scenarios=16,
+                 scale_iterations=10)
     if args.quick:
         sizes = dict(repeats=3, queries=10, rows=250, paths=2_000, subset=100, episodes=16, nav_repeats=2,
                      nav_singles=3, population=8,
-                     tune_scenarios=4, tune_ants=32, tune_iterations=5, tsp_iterations=10)
+                     tune_scenarios=4, tune_ants=32, tune_iterations=5, tsp_iterations=10, scale_scenarios=8,
+                 scale_iterations=5)
     for k, v in sizes.items():
         setattr(args, k, v)
     args.only = [s for s in args.only.split(",") if s]
@@ -650,6 +695,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
+    import jaxplan  # noqa: F401  first: its CPU default (one host device per core) must precede JAX's backend
     started = dt.datetime.now(dt.timezone.utc)
     t_start = time.perf_counter()
     mach = machine()

@@ -115,7 +115,7 @@ def test_navigate_batch_and_a_tuning_generation_on_four_devices_equal_one_device
 
 
 def test_default_host_devices_and_auto_mesh(monkeypatch):
-    """One host device per core unless the user chose; "auto" shards only batches that fill the devices."""
+    """One host device per core unless the user chose; "auto" shards only batches of enough elements per device."""
     from jaxplan.scale import auto_mesh, host_devices_setting
 
     monkeypatch.delenv("JAXPLAN_HOST_DEVICES", raising=False)
@@ -129,9 +129,11 @@ def test_default_host_devices_and_auto_mesh(monkeypatch):
     assert auto_mesh(None, 100) is None
     import jax
 
+    from jaxplan.scale import AUTO_MIN_PER_DEVICE
+
     n = len(jax.local_devices())
-    assert auto_mesh("auto", max(n - 1, 1)) is None
-    m = auto_mesh("auto", 2 * n)
+    assert auto_mesh("auto", AUTO_MIN_PER_DEVICE * n - 1) is None
+    m = auto_mesh("auto", AUTO_MIN_PER_DEVICE * n)
     assert (m is None) == (n == 1)
     out = _child("""
         import json, jax, jaxplan

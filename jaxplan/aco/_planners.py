@@ -344,7 +344,7 @@ def plan_batch(
         planners run once per scenario and seed).
       seeds: iterable of non-negative integer seeds (R of them).
       mesh: a 1-D device mesh (`jaxplan.scale.batch_mesh`), ``"auto"`` (default: every local
-        device when there are several and at least as many scenarios — the library's CPU
+        device when there are several and each gets at least 8 scenarios — the library's CPU
         default, `jaxplan.scale.auto_mesh`) or None (one device). An ACO planner's scenarios
         are split over the mesh's devices (padded to a multiple of the device count with
         copies of the last scenario, which are dropped again); the results equal the

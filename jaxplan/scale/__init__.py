@@ -10,11 +10,11 @@ host's `host_share` of the batch, `write_shard` and `merge_shards` (recipe in
 with ``mesh="auto"``) and how to change it: `jaxplan.scale._host_devices`.
 """
 
-from jaxplan.scale._host_devices import HOST_DEVICES_ENV, auto_mesh, configure_host_devices, host_devices_setting
+from jaxplan.scale._host_devices import AUTO_MIN_PER_DEVICE, HOST_DEVICES_ENV, auto_mesh, configure_host_devices, host_devices_setting
 from jaxplan.scale._hosts import host_share, initialize, merge_shards, shard_path, write_shard
 from jaxplan.scale._memory import MemoryEstimate, MemoryLimitError, aco_memory, check_memory, dwa_memory, memory_limit
 from jaxplan.scale._mesh import BATCH_AXIS, batch_mesh, check_mesh, pad_leading, padded_size
 
-__all__ = ["HOST_DEVICES_ENV", "auto_mesh", "configure_host_devices", "host_devices_setting", "BATCH_AXIS", "batch_mesh", "check_mesh", "pad_leading", "padded_size", "MemoryEstimate",
+__all__ = ["AUTO_MIN_PER_DEVICE", "HOST_DEVICES_ENV", "auto_mesh", "configure_host_devices", "host_devices_setting", "BATCH_AXIS", "batch_mesh", "check_mesh", "pad_leading", "padded_size", "MemoryEstimate",
            "MemoryLimitError", "aco_memory", "check_memory", "dwa_memory", "memory_limit", "host_share", "initialize",
            "merge_shards", "shard_path", "write_shard"]

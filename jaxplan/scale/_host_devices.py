@@ -3,7 +3,8 @@
 Measured on the 2-core machine of DESIGN §7 (``python benchmarks/bench_scale.py``; in one
 2-device process each call is timed with the mesh and with ``mesh=None`` in turn, medians of
 5, so the machine's drift hits both alike): two host devices beat one by 1.20× for an `iaco`
-`plan_batch` (16 scenarios × 2 seeds, 256 ants, 100×100 map), 1.36× for `navigate_batch` (16
+`plan_batch` (16 scenarios × 2 seeds, 256 ants, 100×100 map; 1.07–1.15× in two runs of
+``benchmarks/run_all.py --only scale``), 1.36× for `navigate_batch` (16
 static `iaco_dwa` episodes) and 1.26× for one tuning generation (16 members); a 1-device
 process with XLA's intra-op threads cut to one ran as fast as with the default (1.00×).
 XLA runs one host device's scan-heavy program mostly on one thread; two devices keep both
@@ -18,8 +19,8 @@ between-process runs gave 0.96–1.25×). So, at ``import jaxplan``:
   ``$JAX_NUM_CPU_DEVICES``), or JAX's backend has already started (then nothing changes);
 * batched entry points (`jaxplan.plan_batch`, `Objective.evaluate` of `jaxplan.tune`,
   `jaxplan.navigate_batch` when its re-planning budget is per group of episodes) take
-  ``mesh="auto"``: a batch at least as large as the local device count is split over the
-  local devices (`auto_mesh`); ``mesh=None`` keeps it on one device. Sharding changes no
+  ``mesh="auto"``: a batch that gives every local device at least `AUTO_MIN_PER_DEVICE`
+  elements is split over them (`auto_mesh`); ``mesh=None`` keeps it on one device. Sharding changes no
   path, cost or episode (every batch element is computed on its own; tests compare 4
   devices with 1); float sums that XLA compiles per batch shape (a tuning objective's mean
   clearance) can differ in the last bit, as between batch sizes on one device.
@@ -38,7 +39,7 @@ from jax.sharding import Mesh
 
 from jaxplan.scale._mesh import batch_mesh, check_mesh
 
-__all__ = ["HOST_DEVICES_ENV", "host_devices_setting", "configure_host_devices", "auto_mesh"]
+__all__ = ["HOST_DEVICES_ENV", "AUTO_MIN_PER_DEVICE", "host_devices_setting", "configure_host_devices", "auto_mesh"]
 
 HOST_DEVICES_ENV = "JAXPLAN_HOST_DEVICES"
 
@@ -96,12 +97,21 @@ def configure_host_devices() -> int | None:
     return n
 
 
+AUTO_MIN_PER_DEVICE = 8
+"""``mesh="auto"`` splits a batch only if every device gets at least this many elements.
+
+Measured (`benchmarks/run_all.py --only scale`, 2 devices against ``mesh=None`` timed in turn):
+an `iaco` `plan_batch` of 8 scenarios (4 per device) ran at 0.87–1.03×, one of 16 (8 per
+device) at 1.07–1.20×: with few scenarios per device, the device with the longer walks
+keeps the other waiting, while one device's walk threads share all its ants."""
+
+
 def auto_mesh(mesh: Any, batch: int) -> Mesh | None:
     """The mesh a batched entry point uses for a batch axis of ``batch`` elements.
 
-    ``"auto"``: all local devices if there are several and ``batch`` is at least their number
-    (a smaller batch would be mostly padding), else None. None: None (one device). A `Mesh`:
-    itself, checked (`check_mesh`).
+    ``"auto"``: all local devices if there are several and each gets at least
+    `AUTO_MIN_PER_DEVICE` elements, else None. None: None (one device). A `Mesh`: itself,
+    checked (`check_mesh`).
     """
     if mesh is None:
         return None
@@ -109,7 +119,7 @@ def auto_mesh(mesh: Any, batch: int) -> Mesh | None:
         if mesh != "auto":
             raise ValueError(f"mesh must be a jax.sharding.Mesh, None or 'auto', got {mesh!r}")
         local = jax.local_devices()
-        if len(local) < 2 or batch < len(local):
+        if len(local) < 2 or batch < AUTO_MIN_PER_DEVICE * len(local):
             return None
         return batch_mesh(local)
     return check_mesh(mesh)

@@ -121,7 +121,7 @@ class Objective:
       program: ``program(split_name) -> pure fn(pop [P, D]) -> (per_run cost [P, N, R], metrics {k: [P, N, R]})``.
       base: the planner's full parameter dict (for `params`).
       mesh: where `evaluate` runs a population: ``"auto"`` (default: split over every local
-        device when there are several and at least as many members — `jaxplan.scale.auto_mesh`),
+        device when there are several and each gets at least 8 members — `jaxplan.scale.auto_mesh`),
         None (one device) or a 1-D `jax.sharding.Mesh`. Members are computed independently,
         so the fitness values do not depend on it. Set with `with_mesh`.
     """
