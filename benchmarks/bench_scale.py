@@ -21,7 +21,7 @@ Workloads (default / ``--quick``):
         scenarios x 2 seeds, 64 ants x 10 / 5 iterations): population members per second for a
         population of 16 / 8, the objective sharded over all devices (`Objective.with_mesh`).
 
-The aco workload also runs with XLA's intra-op threads cut to one. In the 2-device process the
+The aco workload also runs with XLA's Eigen thread pool off (``--xla_cpu_multi_thread_eigen=false``). In the 2-device process the
 call is timed with the mesh and with ``mesh=None`` (one device) in turn, so that the machine's
 drift hits both alike; that ratio is the figure to quote. Each figure is
 the median of 5 timed calls after one untimed call (which compiles). Other
@@ -108,8 +108,7 @@ print(json.dumps(out))
 ROWS = (
     # label, host devices, extra environment
     ("1 device, default threads", 1, {}),
-    ("1 device, XLA 1 intra-op thread", 1, {"XLA_FLAGS": "--xla_cpu_multi_thread_eigen=false "
-                                                         "intra_op_parallelism_threads=1"}),
+    ("1 device, XLA Eigen pool off", 1, {"XLA_FLAGS": "--xla_cpu_multi_thread_eigen=false"}),
     ("2 devices, mesh over both", 2, {}),
 )
 

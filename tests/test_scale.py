@@ -58,7 +58,7 @@ def test_plan_batch_on_four_devices_equals_one_device():
 
 
 def test_navigate_batch_and_a_tuning_generation_on_four_devices_equal_one_device():
-    """Batched navigation among moving discs (re-planning per group of 2 episodes; 5 scenarios x 2 seeds
+    """Batched navigation among moving discs (re-planning per group of 3 episodes; 5 scenarios x 2 seeds
     padded to 12 over 4 devices) and one tuning generation (7 members padded to 8): identical to one device
     (the tuning metrics that are float sums over path points: to float32 rounding, see below)."""
     out = _child("""
@@ -76,7 +76,9 @@ def test_navigate_batch_and_a_tuning_generation_on_four_devices_equal_one_device
         free = np.argwhere(np.asarray(planning_grid(grid, 0.3).free))[:, ::-1]
         idx = np.random.default_rng(0).choice(len(free), (5, 2), replace=False)
         s, g = free[idx[:, 0]], free[idx[:, 1]]
-        cfg = NavConfig(replan_group=2, max_time=25.0, dwa=NavConfig().dwa.replace(n_v=6, n_omega=11))
+        # Groups of 3: one device runs 10 episodes as 3 + 3 + 3 + 1 (a partial group, nothing padded);
+        # 4 devices get 3 each (12, the last 2 padded with episodes that do not run).
+        cfg = NavConfig(replan_group=3, max_time=25.0, dwa=NavConfig().dwa.replace(n_v=6, n_omega=11))
         obs = lambda e, seed: jp.random_obstacles(grid, 3, speed=1.0, seed=seed * 100 + e,
                                                   avoid=[(s[e] + 0.5) * grid.resolution])
         kw = dict(pipeline="iaco_dwa", seeds=[0, 1], obstacles=obs, config=cfg, ants=12, iterations=4)
@@ -85,6 +87,8 @@ def test_navigate_batch_and_a_tuning_generation_on_four_devices_equal_one_device
         same = lambda x, y: np.array_equal(x, y, equal_nan=x.dtype.kind == "f")
         res["nav"] = [f for f in a._fields if isinstance(getattr(a, f), np.ndarray) and not same(getattr(a, f), getattr(b, f))]
         res["replans"] = int(a.replans.sum())
+        after = np.arange(a.states.shape[-2]) > a.steps[..., None]  # rows after each robot's last step
+        res["rest"] = bool(np.all(a.states[..., 3:][after] == 0) and np.all(b.states[..., 3:][after] == 0))
         res["moved"] = float(np.mean(a.path_length > 1.0))
 
         scene = jp.RandomMapGenerator(20, 20, 0.15)(2)
@@ -110,6 +114,7 @@ def test_navigate_batch_and_a_tuning_generation_on_four_devices_equal_one_device
     assert out["devices"] == 4
     assert out["nav"] == [], f"navigate_batch fields differ between 1 and 4 devices: {out['nav']}"
     assert out["replans"] > 0 and out["moved"] > 0.5  # the comparison covers re-planning among moving discs
+    assert out["rest"]  # after its last step a robot stands still in the state buffer
     assert out["tune"] == [], f"tuning generation outputs differ between 1 and 4 devices: {out['tune']}"
     assert out["finite"]
 
@@ -119,7 +124,7 @@ def test_default_host_devices_and_auto_mesh(monkeypatch):
     from jaxplan.scale import auto_mesh, host_devices_setting
 
     monkeypatch.delenv("JAXPLAN_HOST_DEVICES", raising=False)
-    assert host_devices_setting() == len(os.sched_getaffinity(0))
+    assert 1 <= host_devices_setting() <= len(os.sched_getaffinity(0))  # the affinity, capped by a cgroup quota
     assert host_devices_setting("3") == 3 and host_devices_setting("off") is None
     for bad in ("0", "-2", "many"):
         with pytest.raises(ValueError, match="JAXPLAN_HOST_DEVICES"):
@@ -139,7 +144,18 @@ def test_default_host_devices_and_auto_mesh(monkeypatch):
         import json, jax, jaxplan
         print(json.dumps({"devices": len(jax.devices())}))
         """, devices=None)
-    assert out["devices"] == len(os.sched_getaffinity(0))
+    assert out["devices"] == host_devices_setting("auto")
+    out = _child("""
+        import json, jax
+        jax.config.update("jax_num_cpu_devices", 1)  # the user's own choice, before the import
+        import jaxplan
+        print(json.dumps({"devices": len(jax.devices())}))
+        """, devices=None)
+    assert out["devices"] == 1
+    scene = jp.RandomMapGenerator(12, 12, 0.1)(0)
+    for planner in ("astar", "aco"):
+        with pytest.raises(ValueError, match="'auto'"):
+            jp.plan_batch(scene.grid, [scene.start], [scene.goal], planner=planner, mesh="everywhere")
 
 
 def test_mesh_helpers():

@@ -356,6 +356,7 @@ def plan_batch(
     """
     spec, p = resolve(planner, overrides)
     s, g = np.asarray(starts), np.asarray(goals)
+    auto_mesh(mesh, 1)  # a bad mesh argument fails for every planner, before any work
     if planner in COLONIES:
         mesh = auto_mesh(mesh, len(s))
         out, dt, compile_s, width = _run_colony(planner, grid, s, g, seeds, p, mesh=mesh)

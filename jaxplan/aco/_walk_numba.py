@@ -748,14 +748,28 @@ def sharing_cores(devices: int):
         _SHARERS.reset(token)
 
 
+def _thread_safe_layer() -> bool:
+    """Whether numba's threading layer may launch parallel regions from several threads at once
+    (``omp``, ``tbb``); ``workqueue`` aborts the process on concurrent access."""
+    numba.get_num_threads()  # starts the pool, so that the layer is known
+    try:
+        return numba.threading_layer() in ("omp", "tbb")
+    except ValueError:
+        return False
+
+
 def _n_chunks(A: int) -> int:
     """Parallel chunks: numba's threads, but no more than this device's share of the cores this
-    process may use (`sharing_cores`)."""
+    process may use (`sharing_cores`). Sharded over several devices, whose walks run at the same
+    time from XLA's threads, a layer that is not thread-safe gets 1 chunk (no parallel region)."""
     try:
         cores = len(os.sched_getaffinity(0))
     except AttributeError:  # not on Linux
         cores = os.cpu_count() or 1
-    return max(1, min(numba.get_num_threads(), cores // _SHARERS.get(), A))
+    sharers = _SHARERS.get()
+    if sharers > 1 and not _thread_safe_layer():
+        return 1
+    return max(1, min(numba.get_num_threads(), cores // sharers, A))
 
 
 class StatTables(NamedTuple):

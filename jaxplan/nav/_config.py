@@ -69,10 +69,11 @@ class NavConfig:
         this many fields per group, whatever the group's size.
       replan_group: consecutive episodes of a batch sharing the ``replan_slots`` budget
         (static); 0 = the whole batch (on a mesh: each device's share, so results would
-        depend on the device count). Set it (dividing each device's share of the padded
-        batch) to get results independent of the device count: `navigate_batch` then
-        splits episodes over a mesh (``mesh="auto"``: all local devices) and pads the batch
-        to whole groups with episodes that do not run.
+        depend on the device count). Set it to get results independent of the device
+        count: `navigate_batch` then splits episodes over a mesh (``mesh="auto"``: all local
+        devices, given at least one group and 8 episodes per device), padding the batch to
+        whole groups per device with episodes that do not run; without a mesh, a partial
+        last group is simply a smaller group.
       replan_cells: longest re-planned path in moves (static).
       path_critic: pass the waypoint polyline to the DWA path critic (static; its weight is
         `DWAParams.path`).

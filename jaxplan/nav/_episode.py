@@ -224,18 +224,21 @@ def _replan(config: NavConfig, free: jnp.ndarray, resolution, c: _Carry, inputs:
     robots that were attempted.
     """
     B = need.shape[0]
-    G = config.replan_group or B
-    if B % G:
-        raise ValueError(f"the batch of {B} episodes is not a multiple of NavConfig.replan_group = {G}")
+    G = min(config.replan_group or B, B)
     fields = (c.state, c.waypoints, c.n_wp, c.index, c.replans, c.origin, c.error, inputs.goal_cell, inputs.goal,
               need, centres, reach)
     fn = lambda *a: _replan_group(config, free, resolution, *a)  # noqa: E731
     if G == B:
         out = fn(*fields)
     else:
-        group = lambda x: x.reshape((B // G, G) + x.shape[1:])  # noqa: E731
+        # A partial last group is padded here, with robots that need nothing: only these gathers
+        # grow, not the episode batch.
+        Bp = -(-B // G) * G
+        fields = tuple(jnp.concatenate([x, jnp.zeros((Bp - B,) + x.shape[1:], x.dtype)]) if Bp > B else x
+                       for x in fields)
+        group = lambda x: x.reshape((Bp // G, G) + x.shape[1:])  # noqa: E731
         out = jax.vmap(fn)(*map(group, fields))
-        out = jax.tree_util.tree_map(lambda x: x.reshape((B,) + x.shape[2:]), out)
+        out = jax.tree_util.tree_map(lambda x: x.reshape((Bp,) + x.shape[2:])[:B], out)
     waypoints, n_wp, index, replans, origin, error, attempted = out
     c = c._replace(waypoints=waypoints, n_wp=n_wp, index=index, replans=replans, origin=origin, error=error)
     return c, attempted
@@ -466,9 +469,10 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
         return (k * chunk < steps) & ~jnp.all(c.done)
 
     c, states, controls, recov, k = lax.while_loop(cond, body, (carry, states, controls, recov, jnp.asarray(0)))
-    # Rows the loop never reached, or reached after a robot was done, hold its final state.
+    # Rows after a robot's last step hold its final pose at rest, whether the loop reached them
+    # (a done robot is set to v = omega = 0) or stopped first (on a mesh, once its device was done).
     rows = jnp.arange(steps + 1)[:, None, None]
-    states = jnp.where((rows <= c.steps[None])[..., None], states, c.state[None])
+    states = jnp.where((rows <= c.steps[None])[..., None], states, c.state.at[..., 3:].set(0.0)[None])
     sw = lambda x: jnp.swapaxes(x, 0, 1)  # noqa: E731  [S, B, ...] -> [B, S, ...]
     return EpisodeOutput(
         states=sw(states), controls=sw(controls), recovery=sw(recov), steps=c.steps, reason=c.reason,

@@ -27,6 +27,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import threading
 import time
 from collections import OrderedDict
 from typing import Any, Mapping, NamedTuple, Sequence
@@ -65,6 +66,7 @@ _NOT_RUN = (INFEASIBLE_START, INFEASIBLE_GOAL, UNREACHABLE, PLAN_FAILED)
 
 _PROGRAMS: "OrderedDict[tuple, Any]" = OrderedDict()  # compiled episode programs, least recently used first
 _PROGRAM_CACHE = 16
+_PROGRAMS_LOCK = threading.Lock()  # navigate_batch may be called from several threads
 
 
 def _compiled_episodes(cfg: NavConfig, steps: int, mesh: Mesh | None, args: tuple) -> tuple[Any, float]:
@@ -77,9 +79,11 @@ def _compiled_episodes(cfg: NavConfig, steps: int, mesh: Mesh | None, args: tupl
     """
     sig = jax.tree_util.tree_map(lambda a: (np.shape(a), str(jnp.result_type(a))), args)
     key = (cfg, steps, mesh, str(jax.tree_util.tree_structure(sig)), str(jax.tree_util.tree_leaves(sig)))
-    if key in _PROGRAMS:
-        _PROGRAMS.move_to_end(key)
-        return _PROGRAMS[key], 0.0
+    with _PROGRAMS_LOCK:
+        fn = _PROGRAMS.get(key)
+        if fn is not None:
+            _PROGRAMS.move_to_end(key)
+            return fn, 0.0
     t0 = time.perf_counter()
     body = functools.partial(run_episodes, cfg, steps)
     if mesh is not None:
@@ -89,9 +93,10 @@ def _compiled_episodes(cfg: NavConfig, steps: int, mesh: Mesh | None, args: tupl
                              check_vma=False)
     fn = jax.jit(body).lower(*args).compile()
     compile_s = time.perf_counter() - t0
-    _PROGRAMS[key] = fn
-    while len(_PROGRAMS) > _PROGRAM_CACHE:
-        _PROGRAMS.popitem(last=False)
+    with _PROGRAMS_LOCK:
+        _PROGRAMS[key] = fn
+        while len(_PROGRAMS) > _PROGRAM_CACHE:
+            _PROGRAMS.popitem(last=False)
     return fn, compile_s
 
 
@@ -379,6 +384,7 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
 
     if not isinstance(grid, GridMap):
         raise ValueError(f"grid must be a GridMap, got {type(grid).__name__}")
+    auto_mesh(mesh, 1)  # a bad mesh argument fails before any work
     if pipeline is not None and global_planner is not None:
         raise ValueError("give either a pipeline or a global_planner, not both")
     if pipeline is not None:
@@ -486,15 +492,16 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
     B = E * R
     # Results are independent of the device count only when the re-planning budget is per group
     # of episodes (or there is no re-planning): only then does "auto" split the episodes.
-    grouped = cfg.replan_group > 0 or not cfg.replan
-    mesh_ = auto_mesh(mesh, B) if (grouped or not isinstance(mesh, str)) else None
-    unit = (cfg.replan_group if cfg.replan else 1) or 1
-    if mesh_ is not None:
-        unit *= mesh_.devices.size
-    B_pad = -(-B // unit) * unit
-    if B_pad != B:  # copies of the last episode that do not run, sliced off below
-        inputs = pad_leading(inputs, B_pad)
-        inputs = inputs._replace(active=inputs.active.at[B:].set(False))
+    G = cfg.replan_group if cfg.replan else 1  # episodes per re-planning group (0: the whole batch)
+    mesh_ = auto_mesh(mesh, B) if (G > 0 or not isinstance(mesh, str)) else None
+    if mesh_ is not None and isinstance(mesh, str) and -(-B // max(G, 1)) < mesh_.devices.size:
+        mesh_ = None  # "auto": fewer groups than devices would leave a device only padding
+    if mesh_ is not None:  # every device a whole number of groups: copies that do not run, sliced off below
+        unit = max(G, 1) * mesh_.devices.size
+        B_pad = -(-B // unit) * unit
+        if B_pad != B:
+            inputs = pad_leading(inputs, B_pad)
+            inputs = inputs._replace(active=inputs.active.at[B:].set(False))
     compiled, compile_s = _compiled_episodes(cfg, steps, mesh_, (table, free_j, p, inputs))
     t0 = time.perf_counter()
     out = jax.block_until_ready(compiled(table, free_j, p, inputs))

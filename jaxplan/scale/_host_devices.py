@@ -6,7 +6,8 @@ Measured on the 2-core machine of DESIGN §7 (``python benchmarks/bench_scale.py
 `plan_batch` (16 scenarios × 2 seeds, 256 ants, 100×100 map; 1.07–1.15× in two runs of
 ``benchmarks/run_all.py --only scale``), 1.36× for `navigate_batch` (16
 static `iaco_dwa` episodes) and 1.26× for one tuning generation (16 members); a 1-device
-process with XLA's intra-op threads cut to one ran as fast as with the default (1.00×).
+process with XLA's Eigen thread pool off (``--xla_cpu_multi_thread_eigen=false``) ran as
+fast as with the default (1.00×).
 XLA runs one host device's scan-heavy program mostly on one thread; two devices keep both
 cores busy. A sharded ACO walk takes its device's share of the cores
 (`jaxplan.aco._walk_numba.sharing_cores`; with two walk threads per device, three
@@ -16,7 +17,9 @@ between-process runs gave 0.96–1.25×). So, at ``import jaxplan``:
   (``jax.config.update("jax_num_cpu_devices", n)``) — unless ``$JAXPLAN_HOST_DEVICES``
   says otherwise (a count, or ``auto`` = cores, or ``off`` = leave JAX alone), the user
   already chose (``XLA_FLAGS=--xla_force_host_platform_device_count``,
-  ``$JAX_NUM_CPU_DEVICES``), or JAX's backend has already started (then nothing changes);
+  ``$JAX_NUM_CPU_DEVICES``, ``jax.config.update("jax_num_cpu_devices", n)`` before the
+  import), or JAX's backend has already started (then nothing changes). "Cores" are the
+  process's CPU affinity capped by a cgroup CPU quota;
 * batched entry points (`jaxplan.plan_batch`, `Objective.evaluate` of `jaxplan.tune`,
   `jaxplan.navigate_batch` when its re-planning budget is per group of episodes) take
   ``mesh="auto"``: a batch that gives every local device at least `AUTO_MIN_PER_DEVICE`
@@ -31,6 +34,7 @@ before. On a GPU the CPU setting is irrelevant and ``"auto"`` shards over the lo
 
 from __future__ import annotations
 
+import math
 import os
 from typing import Any
 
@@ -45,10 +49,19 @@ HOST_DEVICES_ENV = "JAXPLAN_HOST_DEVICES"
 
 
 def _cores() -> int:
+    """Cores this process may use: its CPU affinity, capped by a cgroup v2 CPU quota (a container's
+    ``--cpus``), which the affinity does not show."""
     try:
-        return len(os.sched_getaffinity(0))
+        n = len(os.sched_getaffinity(0))
     except (AttributeError, OSError):
-        return os.cpu_count() or 1
+        n = os.cpu_count() or 1
+    try:
+        quota, period = open("/sys/fs/cgroup/cpu.max").read().split()[:2]
+        if quota != "max":
+            n = min(n, max(1, math.ceil(int(quota) / int(period))))
+    except (OSError, ValueError):
+        pass
+    return n
 
 
 def host_devices_setting(value: str | None = None) -> int | None:
@@ -77,7 +90,8 @@ def host_devices_setting(value: str | None = None) -> int | None:
 
 def _user_chose() -> bool:
     return ("xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", "")
-            or bool(os.environ.get("JAX_NUM_CPU_DEVICES")))
+            or bool(os.environ.get("JAX_NUM_CPU_DEVICES"))
+            or jax.config.jax_num_cpu_devices != -1)  # set in-process before `import jaxplan`
 
 
 def configure_host_devices() -> int | None:

@@ -122,8 +122,10 @@ class Objective:
       base: the planner's full parameter dict (for `params`).
       mesh: where `evaluate` runs a population: ``"auto"`` (default: split over every local
         device when there are several and each gets at least 8 members — `jaxplan.scale.auto_mesh`),
-        None (one device) or a 1-D `jax.sharding.Mesh`. Members are computed independently,
-        so the fitness values do not depend on it. Set with `with_mesh`.
+        None (one device) or a 1-D `jax.sharding.Mesh`. Members are computed independently:
+        success, gaps, failures and turns do not depend on it; float sums over path points
+        (mean clearance, roughness) may differ in the last bit, as between population sizes on
+        one device, and so may a fitness that weights them. Set with `with_mesh`.
     """
 
     name: str
