@@ -171,6 +171,33 @@ def test_plan_figures(plan_run, tmp_path):
     assert "paper's reported values (made-up numbers for the test), not ours" in bar.caption
 
 
+def test_paths_figure_with_a_smoother(plan_run, tmp_path):
+    """Seed 004 Fig. 11: each path and, dashed, the same path after line-of-sight smoothing. The run folder is
+    copied with a config naming only this figure (figures do not enter the run's fingerprint)."""
+    import shutil
+
+    run = tmp_path / "figplan"
+    shutil.copytree(plan_run, run)
+    text = (run / "config.toml").read_text()
+    (run / "config.toml").write_text(text[: text.index("[[figures]]")] + '[[figures]]\nkind = "paths"\n'
+                                     'name = "paths_los"\nmaps = ["r10"]\nsmoothing = "los"\n\n'
+                                     + text[text.index("[paper]"):])
+    drawn, problems = draw_figures(run, tmp_path / "out")
+    assert not problems and [d.name for d in drawn] == ["paths_los"]
+    assert "dashed: the same path after the 'los' smoother" in drawn[0].caption
+    assert (tmp_path / "out" / "figplan" / "paths_los.png").stat().st_size > 5_000
+
+
+def test_an_unknown_smoother_of_a_paths_figure_is_a_config_problem():
+    text = PLAN.replace("{maps}", MAPS).replace('[[figures]]\nkind = "pheromone"',
+                                                '[[figures]]\nkind = "paths"\nsmoothing = "lso"\n\n'
+                                                '[[figures]]\nkind = "pheromone"')
+    with pytest.raises(ConfigError) as e:
+        parse_config(text)
+    assert any(p.startswith("figures[") and ".smoothing: must be one of" in p and "did you mean 'los'" in p
+               for p in e.value.problems), e.value.problems
+
+
 @pytest.mark.slow  # 18-38 s each on 2 cores; the suite must stay well under CI's 20 minutes
 def test_nav_figures_through_the_cli(nav_run, tmp_path, capsys):
     assert main(["figures", str(nav_run), "--out", str(tmp_path)]) == 0

@@ -9,7 +9,8 @@ Schema (every key shown; ``#`` marks defaults and alternatives)::
 
     metrics = ["success", "length", "optimality_gap", "smoothness", "plan_time_s"]
     # Top-level keys come before the first table in TOML. Default: every metric that
-    # applies to the configured planner kinds. Names: see `METRICS`.
+    # applies to the configured planner kinds, except the opt-in ones (accuracy, los_*).
+    # Names: see `METRICS`.
 
     [experiment]
     name = "aco_warehouse"      # the run folder runs/NAME ([A-Za-z0-9][A-Za-z0-9_.-]*), required
@@ -40,6 +41,12 @@ Schema (every key shown; ``#`` marks defaults and alternatives)::
     params = { width = 20, height = 20, missing_prob = 0.1 }   # the generator's own settings
     resolution = 1.0
     scenarios = { source = "random", count = 4, seed = 1 }   # per-map keys replace [scenarios] keys
+
+    [[instances]]               # a TSPLIB instance, for kind = "tsp" planners (no [[maps]] needed then)
+    name = "eil51"              # label in tables (default: the file's stem); unique among maps and instances
+    path = "tsplib/eil51.tsp"   # relative to the data dir (or absolute)
+    tour = "tsplib/eil51.opt.tour"   # the optimal tour, for optimality_gap (default: STEM.opt.tour if present)
+    optimum = 426.0             # or the optimal length itself (not both; neither: optimality_gap is nan)
 
     [scenarios]                 # default for every map
     source = "scen"             # "scen": rows of the map's .scen file (MovingAI maps only)
@@ -72,12 +79,19 @@ Schema (every key shown; ``#`` marks defaults and alternatives)::
     params = { heading = 0.4 }                  # DWAParams critic weights
     obstacles = { n = 3, speed = 1.0, radius = 0.25, waypoints = 4, loop = false, seed = 0, avoid_radius = 1.0 }
 
+    [[planners]]                # a TSP ant colony (`jaxplan.solve_tsp`), run on every [[instances]] entry
+    label = "P-RACO"
+    kind = "tsp"
+    name = "praco"              # "praco" | "aco"
+    overrides = { iterations = 200, colonies = 5, ants = 35 }   # checked against `jaxplan.aco._tsp.tsp_defaults`
+
     [stats]
     anova = true                # one-way ANOVA across planners, per map and metric
     pairwise = true             # Welch t-tests between every pair of planners
     metrics = ["length"]        # default: every configured metric except wall-clock times
     alpha = 0.05                # marks p < alpha in the report
     correction = "holm"         # pairwise p-values adjusted by Holm's method ("holm" | "none")
+    extremes = false            # also show the smallest and largest single-trial value (seed 004's Max/Min)
 
     [[figures]]                 # stored for `jaxplan figures`; not drawn here
     kind = "convergence"        # see `FIGURE_KINDS`
@@ -86,23 +100,30 @@ Schema (every key shown; ``#`` marks defaults and alternatives)::
     planners = ["IACO"]         # default: all
     band = "iqr"
     # Other kinds: box/bar (metric = ...; default the first stats metric), paths and pheromone
-    # (scenario, seed; plan planners), trajectories and controls (scenario, seed; navigate planners:
+    # (scenario, seed; plan planners; paths also takes smoothing = "los" to draw each path after that
+    # smoother beside it, seed 004 Fig. 11), trajectories and controls (scenario, seed; navigate planners:
     # executed paths among the moving discs, v and omega over time), fan (the DWA rollouts at the
-    # given control steps = [..]), diversity (seed 004: sd of the ants' costs per iteration), and
-    # sweep (metric against x: a generator parameter name, e.g. "obstacle_ratio", or one number per map).
+    # given control steps = [..]), diversity (seed 004: sd of the ants' costs per iteration),
+    # sweep (metric against x: a generator parameter name, e.g. "obstacle_ratio", or one number per map), and
+    # tours (seed; tsp planners: the best tour over the instance's cities, the optimal one dashed).
 
     [paper]                     # the paper's numbers, shown beside ours, labelled "paper"
     source = "Seed 000, Table 2"
     [[paper.values]]
     planner = "IACO"            # a planner label
     map = "wh20"                # optional: default every map
-    length = 28.6               # metric = mean, or [mean, sd]
-    success = [1.0, 0.0]
+    length = 28.6               # metric = mean, or [mean, sd], or { mean = , sd = , min = , max = } (sd, min,
+    success = [1.0, 0.0]        # max optional: a paper's Max/Min columns)
+
+Planner kinds run where they apply: ``plan`` and ``navigate`` planners on every ``[[maps]]``
+entry, ``tsp`` planners on every ``[[instances]]`` entry (`applies`); a map or instance that no
+configured planner applies to is an error.
 
 Resolved objects: `ExperimentConfig` and its parts (`MapSpec`, `ScenarioSpec`,
 `PlannerConfig`, `ObstacleSpec`, `StatsSpec`, `FigureSpec`, `PaperValue`, `QuickSpec`).
 Paths are absolute after loading; `ExperimentConfig.text` keeps the file's bytes for the
-run folder's copy.
+run folder's copy. TSP instances are `MapSpec` entries too (``tsplib`` set), after the maps in
+``ExperimentConfig.maps``: tables, figures and quick filters name them like maps.
 """
 
 from __future__ import annotations
@@ -120,8 +141,8 @@ from typing import Any, Callable, Mapping
 
 __all__ = [
     "ConfigError", "ExperimentConfig", "MapSpec", "ScenarioSpec", "PlannerConfig", "ObstacleSpec", "StatsSpec",
-    "FigureSpec", "PaperValue", "QuickSpec", "Metric", "METRICS", "GENERATORS", "FIGURE_KINDS", "load_config",
-    "parse_config", "default_data_dir", "nav_config", "apply_quick",
+    "FigureSpec", "PaperValue", "QuickSpec", "Metric", "METRICS", "GENERATORS", "FIGURE_KINDS", "KINDS",
+    "ACCURACY_GAP", "load_config", "parse_config", "default_data_dir", "nav_config", "apply_quick", "applies",
 ]
 
 
@@ -152,6 +173,8 @@ class Metric:
         (it differs from run to run; trials.csv must not).
       given_success: averaged over successful trials only (e.g. the arrival time).
       rate: a 0/1 outcome whose per-seed mean is a rate.
+      default: in the default metric set of a config that lists none (the opt-in metrics cost
+        extra work per chunk: exact reference paths, smoothing).
     """
 
     name: str
@@ -161,22 +184,43 @@ class Metric:
     timing: bool = False
     given_success: bool = False
     rate: bool = False
+    default: bool = True
 
+
+KINDS = ("plan", "navigate", "tsp")
+"""Planner kinds: a grid planner (`jaxplan.plan_batch`), a navigation pipeline (`jaxplan.navigate_batch`),
+a TSP ant colony on a TSPLIB instance (`jaxplan.solve_tsp`'s program, batched over seeds)."""
+
+ACCURACY_GAP = 0.10
+"""Seed 000's "accuracy" (DESIGN §6): the share of trials that succeed with an optimality gap <= this."""
 
 _P, _N, _B = frozenset({"plan"}), frozenset({"navigate"}), frozenset({"plan", "navigate"})
+_T, _PT = frozenset({"tsp"}), frozenset({"plan", "tsp"})
 METRICS: Mapping[str, Metric] = MappingProxyType({m.name: m for m in (
-    Metric("success", _B, "", "plan: goal reached; navigate: goal reached without collision in time", rate=True),
+    Metric("success", _B | _T, "", "plan: goal reached; navigate: goal reached without collision in time; "
+                                   "tsp: 1 (every run returns a tour)", rate=True),
+    Metric("accuracy", _B, "", "seed 000: success with optimality gap <= 10 % (plan: the raw grid path against the "
+                               "octile optimum; navigate: the executed path against the line-of-sight smoothed "
+                               "exact path on the planning map)", rate=True, default=False),
     Metric("length", _P, "m", "path length"),
-    Metric("optimality_gap", _P, "", "length / exact 8-connected octile optimum - 1"),
+    Metric("tour_length", _T, "", "closed-tour length in the instance's metric (TSPLIB rounding)"),
+    Metric("optimality_gap", _PT, "", "plan: length / exact 8-connected octile optimum - 1; tsp: tour length / "
+                                      "optimal tour length - 1"),
     Metric("turns", _P, "", "path vertices with a heading change"),
     Metric("sharp_turns", _P, "", "heading changes >= 45 deg"),
+    Metric("los_length", _P, "m", "path length after line-of-sight smoothing (seed 004 sec. 3.3, smoother 'los')",
+           default=False),
+    Metric("los_turns", _P, "", "turns after line-of-sight smoothing", default=False),
+    Metric("los_length_reduction", _P, "", "1 - los_length / length (seed 004 Table 4)", default=False),
+    Metric("los_turns_reduction", _P, "", "1 - los_turns / turns (nan for a straight path)", default=False),
     Metric("smoothness", _P, "", "1 - mean |heading change| / pi"),
     Metric("min_clearance", _P, "m", "smallest vertex clearance"),
     Metric("mean_clearance", _P, "m", "mean vertex clearance"),
     Metric("max_curvature", _B, "1/m", "plan: Menger curvature at path vertices; navigate: executed |omega|/v"),
     Metric("hausdorff", _B, "m", "Hausdorff distance of the global path to the exact A* path (seed 000 Fig. 9)"),
     Metric("cost", _P, "", "the planner's own objective"),
-    Metric("converged_iteration", _P, "", "first iteration within 0.1 % of the final best cost"),
+    Metric("converged_iteration", _PT, "", "plan: first iteration within 0.1 % of the final best cost; tsp: first "
+                                           "iteration whose best tour is the final best (0-based)"),
     Metric("collisions", _N, "", "contacts with the map or moving discs"),
     Metric("time_s", _N, "s", "simulated time to the goal", given_success=True),
     Metric("rmse", _N, "m", "RMS distance of executed positions to the tracked path"),
@@ -184,7 +228,8 @@ METRICS: Mapping[str, Metric] = MappingProxyType({m.name: m for m in (
     Metric("path_length", _N, "m", "executed path length"),
     Metric("recoveries", _N, "", "control steps with no feasible DWA sample"),
     Metric("replans", _N, "", "in-episode re-plans"),
-    Metric("plan_time_s", _B, "s", "global planning wall time per trial (chunk time / trials)", timing=True),
+    Metric("plan_time_s", _B | _T, "s", "global planning (tsp: solving) wall time per trial (chunk time / trials)",
+           timing=True),
     Metric("step_time_s", _N, "s", "wall time per control step of one robot", timing=True),
 )})
 """Every metric a config may name, in the column order of the outputs."""
@@ -193,13 +238,14 @@ FIGURE_KINDS: Mapping[str, frozenset] = MappingProxyType({
     "convergence": frozenset({"band", "log", "scenario"}),
     "box": frozenset({"metric"}),
     "bar": frozenset({"metric"}),
-    "paths": frozenset({"scenario", "seed"}),
+    "paths": frozenset({"scenario", "seed", "smoothing"}),
     "trajectories": frozenset({"scenario", "seed"}),
     "pheromone": frozenset({"scenario", "seed", "log"}),
     "diversity": frozenset({"band", "log", "scenario"}),
     "fan": frozenset({"scenario", "seed", "steps"}),
     "controls": frozenset({"scenario", "seed"}),
     "sweep": frozenset({"metric", "x", "xlabel"}),
+    "tours": frozenset({"seed"}),
 })
 """Figure kinds and the keys each accepts besides ``kind name title maps planners format``."""
 _FIGURE_COMMON = frozenset({"kind", "name", "title", "maps", "planners", "format"})
@@ -291,17 +337,21 @@ class ScenarioSpec:
 
 @dataclass(frozen=True)
 class MapSpec:
-    """A map: a MovingAI file or a generator.
+    """A map: a MovingAI file or a generator; or a TSPLIB instance (``tsplib`` set, from ``[[instances]]``).
 
     Attributes:
       name: label in tables.
-      path: absolute ``.map`` path (None for a generator).
+      path: absolute ``.map`` path (None for a generator or an instance).
       scen: absolute ``.scen`` path (None if none was found or needed).
       generator: a `GENERATORS` name (None for a file).
       params: the generator's settings.
       seed: the generator's key.
       resolution: metres per cell.
       scenarios: how this map's scenarios are chosen.
+      tsplib: absolute ``.tsp`` path of a TSP instance (None for a map).
+      tour: absolute ``.opt.tour`` path of the instance's optimal tour, or None.
+      optimum: the instance's optimal tour length as configured, or None.
+      key: where it was configured (``maps[i]`` or ``instances[j]``), for error messages.
     """
 
     name: str
@@ -312,6 +362,14 @@ class MapSpec:
     seed: int
     resolution: float
     scenarios: ScenarioSpec
+    tsplib: Path | None = None
+    tour: Path | None = None
+    optimum: float | None = None
+    key: str = ""
+
+    @property
+    def is_tsp(self) -> bool:
+        return self.tsplib is not None
 
 
 @dataclass(frozen=True)
@@ -337,8 +395,9 @@ class PlannerConfig:
 
     Attributes:
       label: unique display name.
-      kind: ``"plan"`` (`jaxplan.plan_batch`) or ``"navigate"`` (`jaxplan.navigate_batch`).
-      name: planner name (plan) or pipeline name (navigate).
+      kind: ``"plan"`` (`jaxplan.plan_batch`), ``"navigate"`` (`jaxplan.navigate_batch`) or ``"tsp"``
+        (`jaxplan.solve_tsp`'s program, all seeds in one call; runs on the ``[[instances]]``).
+      name: planner name (plan), pipeline name (navigate) or TSP planner (tsp: ``"aco"``, ``"praco"``).
       overrides: planner parameters (navigate: of the pipeline's global planner).
       nav, dwa, robot, params: navigate only: NavConfig, DWAConfig and Unicycle fields and
         DWAParams weights.
@@ -357,8 +416,8 @@ class PlannerConfig:
 
     @property
     def global_planner(self) -> str:
-        """The registry planner that makes the global paths."""
-        if self.kind == "plan":
+        """The registry planner that makes the global paths (a tsp planner: its TSP planner name)."""
+        if self.kind in ("plan", "tsp"):
             return self.name
         from jaxplan.nav import get_pipeline
 
@@ -367,13 +426,15 @@ class PlannerConfig:
 
 @dataclass(frozen=True)
 class StatsSpec:
-    """Significance tests across planners, per map and metric (on per-seed means)."""
+    """Significance tests across planners, per map and metric (on per-seed means); ``extremes``: the tables
+    also show the smallest and largest single-trial value (seed 004 reports Max/Min beside Avg/Sd)."""
 
     anova: bool = True
     pairwise: bool = False
     metrics: tuple[str, ...] = ()
     alpha: float = 0.05
     correction: str = "holm"
+    extremes: bool = False
 
 
 @dataclass(frozen=True)
@@ -387,13 +448,16 @@ class FigureSpec:
 
 @dataclass(frozen=True)
 class PaperValue:
-    """A number the paper reports: ``mean`` (and ``sd``) of ``metric`` for a planner (on ``map``, or every map)."""
+    """A number the paper reports: ``mean`` (and ``sd``, ``min``, ``max``) of ``metric`` for a planner (on
+    ``map``, or every map)."""
 
     planner: str
     map: str | None
     metric: str
     mean: float
     sd: float | None = None
+    min: float | None = None
+    max: float | None = None
 
 
 @dataclass(frozen=True)
@@ -447,6 +511,11 @@ class ExperimentConfig:
     @property
     def kinds(self) -> frozenset:
         return frozenset(p.kind for p in self.planners)
+
+
+def applies(planner: PlannerConfig, site: MapSpec) -> bool:
+    """Whether ``planner`` runs on ``site``: tsp planners on TSP instances, plan/navigate planners on maps."""
+    return (planner.kind == "tsp") == site.is_tsp
 
 
 def default_data_dir() -> Path:
@@ -635,10 +704,11 @@ def _read_scenarios(r: _Reader, t: dict, path: str, is_file: bool) -> ScenarioSp
     return spec
 
 
-def _read_maps(r: _Reader, raw: dict, data_dir: Path) -> tuple[MapSpec, ...]:
+def _read_maps(r: _Reader, raw: dict, data_dir: Path, required: bool = True) -> tuple[MapSpec, ...]:
     maps_raw = raw.get("maps")
     if maps_raw is None:
-        r.bad("maps", "at least one [[maps]] entry is required")
+        if required:
+            r.bad("maps", "at least one [[maps]] entry is required")
         return ()
     if not isinstance(maps_raw, list) or not maps_raw:
         r.bad("maps", f"expected one or more [[maps]] tables, got {_describe(maps_raw)}")
@@ -705,7 +775,49 @@ def _read_maps(r: _Reader, raw: dict, data_dir: Path) -> tuple[MapSpec, ...]:
         if has_path and spec.source == "scen" and scen_path is None and map_path is not None and map_path.is_file():
             r.bad(_join(p, "scen"), f"no scenario file for {map_path.name} (looked for {map_path.name}.scen and "
                                     f"{map_path.stem}-random-1.scen); give 'scen' or use source = 'random'")
-        out.append(MapSpec(name, map_path, scen_path, gen, _frozen(params), seed, resolution, spec))
+        out.append(MapSpec(name, map_path, scen_path, gen, _frozen(params), seed, resolution, spec, key=p))
+    return tuple(out)
+
+
+def _read_instances(r: _Reader, raw: dict, data_dir: Path, taken: set[str]) -> tuple[MapSpec, ...]:
+    """``[[instances]]``: TSPLIB files (and their optimal tours) for the tsp planners; names unique with ``taken``."""
+    raw_list = raw.get("instances")
+    if raw_list is None:
+        return ()
+    if not isinstance(raw_list, list) or not raw_list:
+        r.bad("instances", f"expected one or more [[instances]] tables, got {_describe(raw_list)}")
+        return ()
+    out, names = [], {}
+    for i, e in enumerate(raw_list):
+        p = f"instances[{i}]"
+        t = r.table(e, p, ("name", "path", "tour", "optimum"), required=("path",) if isinstance(e, dict) else ())
+        if not isinstance(e, dict):
+            continue
+        rel = r.get(t, p, "path", "str", None)
+        tsp = tour = None
+        if rel is not None:
+            tsp = _resolve(data_dir, rel)
+            if not tsp.is_file():
+                r.bad(_join(p, "path"), f"file not found: {tsp} (data dir {data_dir}; set --data-dir or JAXPLAN_DATA)")
+        optimum = r.get(t, p, "optimum", "float", None, lo=0, strict_lo=True)
+        if "tour" in t:
+            s = r.get(t, p, "tour", "str", None)
+            if s is not None:
+                tour = _resolve(data_dir, s)
+                if not tour.is_file():
+                    r.bad(_join(p, "tour"), f"file not found: {tour}")
+            if "optimum" in t:
+                r.bad(p, "give 'tour' (the optimal tour file) or 'optimum' (its length), not both")
+        elif tsp is not None and optimum is None:
+            cand = tsp.with_name(tsp.stem + ".opt.tour")  # TSPLIB's own naming of the optimal tours
+            tour = cand if cand.is_file() else None
+        name = r.get(t, p, "name", "str", Path(rel).stem if rel else f"instance{i}")
+        if name in taken or name in names:
+            r.bad(_join(p, "name"), f"duplicate name {name!r}: maps and instances share one namespace (tables, "
+                                    "figures); give each a unique name")
+        names.setdefault(name, i)
+        out.append(MapSpec(name, None, None, None, _frozen({}), 0, 1.0, ScenarioSpec(source="scene"), tsplib=tsp,
+                           tour=tour, optimum=optimum, key=p))
     return tuple(out)
 
 
@@ -774,19 +886,22 @@ def _read_planners(r: _Reader, raw: dict) -> tuple[PlannerConfig, ...]:
         t = r.table(e, p, _PLANNER_KEYS, required=("kind", "name") if isinstance(e, dict) else ())
         if not isinstance(e, dict):
             continue
-        kind = r.get(t, p, "kind", "str", None, choices=("plan", "navigate"))
+        kind = r.get(t, p, "kind", "str", None, choices=KINDS)
         name = r.get(t, p, "name", "str", None)
         overrides = r.table(t.get("overrides"), _join(p, "overrides"), tuple(t.get("overrides") or {}))
         global_name = None
-        if kind == "plan" and name is not None:
+        if kind in ("plan", "tsp"):
+            for k in ("nav", "dwa", "robot", "params", "obstacles"):
+                if k in t:
+                    r.bad(_join(p, k), "only applies to kind = 'navigate'")
+        if kind == "tsp" and name is not None:
+            _check_tsp(r, p, name, overrides)
+        elif kind == "plan" and name is not None:
             if name not in registry:
                 r.bad(_join(p, "name"), f"unknown planner {name!r} (known: {', '.join(sorted(registry))})"
                       + _close(name, list(registry)))
             else:
                 global_name = name
-            for k in ("nav", "dwa", "robot", "params", "obstacles"):
-                if k in t:
-                    r.bad(_join(p, k), "only applies to kind = 'navigate'")
         elif kind == "navigate" and name is not None:
             if name not in pipes:
                 r.bad(_join(p, "name"), f"unknown pipeline {name!r} (known: {', '.join(sorted(pipes))})"
@@ -822,6 +937,38 @@ def _read_planners(r: _Reader, raw: dict) -> tuple[PlannerConfig, ...]:
         out.append(PlannerConfig(label, kind or "plan", name or "", _frozen(overrides), _frozen(nav), _frozen(dwa),
                                  _frozen(robot), _frozen(params), obstacles))
     return tuple(out)
+
+
+def _check_tsp(r: _Reader, p: str, name: str, overrides: dict) -> None:
+    """A tsp planner: its name, then unknown override names one by one, then `solve_tsp`'s own value checks."""
+    from jaxplan.aco._tsp import TSP_PLANNERS, _resolve as tsp_resolve, tsp_defaults
+
+    if name not in TSP_PLANNERS:
+        r.bad(_join(p, "name"), f"unknown TSP planner {name!r} (known: {', '.join(TSP_PLANNERS)})"
+              + _close(name, list(TSP_PLANNERS)))
+        return
+    accepted = list(tsp_defaults(name))
+    unknown = [k for k in overrides if k not in accepted]
+    for k in unknown:
+        r.bad(_join(p, f"overrides.{k}"), f"TSP planner {name!r} has no parameter {k!r} (accepts: "
+                                         f"{', '.join(sorted(accepted))})" + _close(k, accepted))
+    if not unknown:
+        try:
+            tsp_resolve(name, {k: _tuple(v) for k, v in overrides.items()})
+        except (ValueError, TypeError) as e:
+            r.bad(_join(p, "overrides"), str(e))
+
+
+def _check_sites(r: _Reader, maps: tuple[MapSpec, ...], planners: tuple[PlannerConfig, ...]) -> None:
+    """Every map and instance has a planner that runs on it, and every planner a map or instance."""
+    for m in maps:
+        if planners and not any(applies(pc, m) for pc in planners):
+            what = "kind = 'tsp' planner" if m.is_tsp else "plan or navigate planner"
+            r.bad(m.key, f"no {what} is configured to run on {m.name!r}")
+    for i, pc in enumerate(planners):
+        if maps and not any(applies(pc, m) for m in maps):
+            r.bad(f"planners[{i}].kind", "a kind = 'tsp' planner runs on [[instances]] entries, and there is none"
+                  if pc.kind == "tsp" else f"a kind = {pc.kind!r} planner runs on [[maps]] entries, and there is none")
 
 
 def _check_overrides(r: _Reader, path: str, planner: str, overrides: dict, resolve, base: dict) -> None:
@@ -880,7 +1027,7 @@ def _check_nav(r: _Reader, p: str, pipeline: str, nav: dict, dwa: dict, robot: d
 
 def _read_metrics(r: _Reader, raw: dict, kinds: frozenset) -> tuple[str, ...]:
     if "metrics" not in raw:
-        return tuple(m for m, spec in METRICS.items() if spec.kinds & kinds)
+        return tuple(m for m, spec in METRICS.items() if spec.kinds & kinds and spec.default)
     v = raw["metrics"]
     if not isinstance(v, list) or not v:
         r.bad("metrics", f"expected a non-empty list of metric names, got {_describe(v)}")
@@ -902,7 +1049,7 @@ def _read_metrics(r: _Reader, raw: dict, kinds: frozenset) -> tuple[str, ...]:
 
 
 def _read_stats(r: _Reader, raw: dict, metrics: tuple[str, ...]) -> StatsSpec:
-    t = r.table(raw.get("stats"), "stats", ("anova", "pairwise", "metrics", "alpha", "correction"))
+    t = r.table(raw.get("stats"), "stats", ("anova", "pairwise", "metrics", "alpha", "correction", "extremes"))
     chosen = r.str_list(t, "stats", "metrics")
     if chosen is None:
         chosen = [m for m in metrics if not METRICS[m].timing]
@@ -919,6 +1066,7 @@ def _read_stats(r: _Reader, raw: dict, metrics: tuple[str, ...]) -> StatsSpec:
         metrics=tuple(chosen),
         alpha=r.get(t, "stats", "alpha", "float", 0.05, lo=0, strict_lo=True, hi=1),
         correction=r.get(t, "stats", "correction", "str", "holm", choices=("holm", "none")),
+        extremes=r.get(t, "stats", "extremes", "bool", False),
     )
 
 
@@ -961,6 +1109,10 @@ def _read_figures(r: _Reader, raw: dict, metrics: tuple, maps: set, labels: set)
             r.bad(_join(p, "band"), f"must be 'iqr', 'sd', 'minmax' or false, got {t['band']!r}")
         r.get(t, p, "log", "bool", None)
         r.get(t, p, "xlabel", "str", None)
+        if "smoothing" in t:
+            from jaxplan.smooth import SMOOTHERS
+
+            r.get(t, p, "smoothing", "str", None, choices=tuple(sorted(SMOOTHERS)))
         if kind == "sweep" and "metric" not in t:
             r.bad(_join(p, "metric"), "required key is missing")
         if "steps" in t and not (isinstance(t["steps"], list) and t["steps"]
@@ -1014,41 +1166,50 @@ def _read_paper(r: _Reader, raw: dict, metrics: tuple, maps: set, labels: set) -
             if k not in metrics:
                 r.bad(kp, f"metric {k!r} is not configured (metrics = [{', '.join(metrics)}])")
                 continue
-            if isinstance(x, (int, float)) and not isinstance(x, bool):
+            num = lambda y: isinstance(y, (int, float)) and not isinstance(y, bool)  # noqa: E731
+            lo = hi = None
+            if num(x):
                 mean, sd = float(x), None
-            elif (isinstance(x, list) and len(x) == 2
-                  and all(isinstance(y, (int, float)) and not isinstance(y, bool) for y in x)):
+            elif isinstance(x, list) and len(x) == 2 and all(num(y) for y in x):
                 mean, sd = float(x[0]), float(x[1])
+            elif isinstance(x, dict) and "mean" in x and set(x) <= {"mean", "sd", "min", "max"} and all(
+                    num(y) for y in x.values()):
+                # A paper's Max/Min are stored as printed, unchecked against the mean: seed 004's Table 1
+                # prints an ACO average below its minimum.
+                mean, sd = float(x["mean"]), (float(x["sd"]) if "sd" in x else None)
+                lo, hi = (float(x["min"]) if "min" in x else None), (float(x["max"]) if "max" in x else None)
             else:
-                r.bad(kp, f"expected a number or [mean, sd], got {_describe(x)}")
+                r.bad(kp, f"expected a number, [mean, sd] or {{ mean = , sd = , min = , max = }}, got {_describe(x)}")
                 continue
-            if not math.isfinite(mean) or (sd is not None and not (math.isfinite(sd) and sd >= 0)):
-                r.bad(kp, f"mean must be finite and sd finite and >= 0, got {x!r}")
+            if not all(math.isfinite(y) for y in (mean, lo, hi) if y is not None) or (
+                    sd is not None and not (math.isfinite(sd) and sd >= 0)):
+                r.bad(kp, f"mean, min and max must be finite and sd finite and >= 0, got {x!r}")
                 continue
             key = (planner, mp, k)
             if key in seen:
                 r.bad(kp, f"a second paper value for planner {planner!r}, map {mp!r}, metric {k!r}")
             seen.add(key)
-            out.append(PaperValue(planner, mp, k, mean, sd))
+            out.append(PaperValue(planner, mp, k, mean, sd, lo, hi))
     return source, tuple(out)
 
 
 def _read_quick(r: _Reader, q: dict, planners: tuple[PlannerConfig, ...], map_names: list[str] | None = None
                 ) -> QuickSpec:
     """Quick overrides: each key must be accepted by at least one planner, and valid for each that accepts it."""
-    import jaxplan as jp
+    from jaxplan.aco._tsp import _resolve as tsp_resolve
     from jaxplan.nav import get_pipeline
     from jaxplan.registry import resolve
 
-    registry = jp.planners()
     for k, v in q["overrides"].items():
-        takers = [pc for pc in planners if pc.kind in ("plan", "navigate") and _global(pc) in registry
-                  and k in registry[_global(pc)].defaults]
+        takers = [pc for pc in planners if k in _accepted(pc)]
         if not takers and planners:
             r.bad(f"experiment.quick.overrides.{k}", "no configured planner accepts this parameter")
         for pc in takers:
-            base = dict(get_pipeline(pc.name).planner_overrides) if pc.kind == "navigate" else {}
             try:
+                if pc.kind == "tsp":
+                    tsp_resolve(pc.name, {**dict(pc.overrides), k: _tuple(v)})
+                    continue
+                base = dict(get_pipeline(pc.name).planner_overrides) if pc.kind == "navigate" else {}
                 resolve(_global(pc), {**base, **dict(pc.overrides), k: _tuple(v)})
             except (ValueError, TypeError) as e:
                 r.bad(f"experiment.quick.overrides.{k}", f"for {pc.label!r}: {e}")
@@ -1069,10 +1230,22 @@ def _read_quick(r: _Reader, q: dict, planners: tuple[PlannerConfig, ...], map_na
                      tuple(q["planners"]) if q.get("planners") else None, tuple(q["maps"]) if q.get("maps") else None)
 
 
+def _accepted(pc: PlannerConfig) -> tuple[str, ...]:
+    """The override names planner ``pc`` accepts (none for a name that failed validation)."""
+    import jaxplan as jp
+    from jaxplan.aco._tsp import TSP_PLANNERS, tsp_defaults
+
+    if pc.kind == "tsp":
+        return tuple(tsp_defaults(pc.name)) if pc.name in TSP_PLANNERS else ()
+    registry = jp.planners()
+    g = _global(pc)
+    return tuple(registry[g].defaults) if g in registry else ()
+
+
 def _global(pc: PlannerConfig) -> str | None:
     import jaxplan as jp
 
-    if pc.kind == "plan":
+    if pc.kind in ("plan", "tsp"):
         return pc.name
     p = jp.pipelines().get(pc.name)
     return p.global_planner if p else None
@@ -1082,7 +1255,7 @@ def _global(pc: PlannerConfig) -> str | None:
 # Entry points
 
 
-_TOP = ("metrics", "experiment", "maps", "scenarios", "planners", "stats", "figures", "paper")
+_TOP = ("metrics", "experiment", "maps", "instances", "scenarios", "planners", "stats", "figures", "paper")
 
 
 def parse_config(text: str, *, data_dir: str | os.PathLike | None = None, source: str = "config",
@@ -1106,8 +1279,10 @@ def parse_config(text: str, *, data_dir: str | os.PathLike | None = None, source
     r = _Reader()
     r.table(raw, "", _TOP)
     exp = _read_experiment(r, raw)
-    maps = _read_maps(r, raw, ddir)
+    maps = _read_maps(r, raw, ddir, required="instances" not in raw)
+    maps = maps + _read_instances(r, raw, ddir, {m.name for m in maps})
     planners = _read_planners(r, raw)
+    _check_sites(r, maps, planners)
     kinds = frozenset(p.kind for p in planners if p.kind)
     metrics = _read_metrics(r, raw, kinds)
     stats = _read_stats(r, raw, metrics)
@@ -1142,12 +1317,9 @@ def apply_quick(cfg: ExperimentConfig) -> ExperimentConfig:
     q = cfg.quick
     maps = tuple(dataclasses.replace(m, scenarios=dataclasses.replace(
         m.scenarios, count=min(q.count, m.scenarios.count or q.count))) for m in cfg.maps) if q.count else cfg.maps
-    import jaxplan as jp
-
-    registry = jp.planners()
     planners = []
     for pc in cfg.planners:
-        accepted = registry[_global(pc)].defaults
+        accepted = _accepted(pc)
         extra = {k: v for k, v in q.overrides.items() if k in accepted}
         nav = {**dict(pc.nav), **dict(q.nav)} if pc.kind == "navigate" else dict(pc.nav)
         planners.append(dataclasses.replace(pc, overrides=_frozen({**dict(pc.overrides), **extra}), nav=_frozen(nav)))

@@ -13,17 +13,20 @@ plot are redrawn from the runner's own per-trial obstacle seeds.
 
 Kinds (keys besides ``kind name title maps planners format``):
 
-    convergence  best cost per iteration, median and band over seeds, at ``scenario`` (plan planners)
+    convergence  best cost per iteration, median and band over seeds, at ``scenario`` (plan planners; tsp
+                 planners: best tour length per iteration on each instance)
     diversity    seed 004's diversity (sd of the ants' path costs) per iteration, same layout
     box          per-seed means of ``metric`` per planner (box plot), one panel per map
     bar          mean ± sd over seeds of ``metric`` per planner, the paper's value beside ours, hatched
     sweep        ``metric`` against ``x`` (a generator parameter, e.g. ``obstacle_ratio``, or one number
                  per map): mean ± sd over seeds per planner, the paper's values as open markers
-    paths        global paths over the map at (``scenario``, ``seed``) (plan and navigate planners)
+    paths        global paths over the map at (``scenario``, ``seed``) (plan and navigate planners);
+                 ``smoothing`` (a `jaxplan.smooth` smoother, e.g. "los") adds each path after it, dashed
     pheromone    final pheromone per cell of each colony planner at (``scenario``, ``seed``)
     trajectories executed robot paths with the moving discs' tracks (navigate planners)
     controls     v (m/s) and omega (rad/s) against time (navigate planners), seed 002 Figs 8/11
     fan          DWA rollouts (feasible blue, infeasible red, chosen black) at control ``steps``
+    tours        best tour of each tsp planner at ``seed`` over the instance's cities, the optimal tour dashed
 
 Output: ``OUT/RUN/STEM.png`` and ``.svg`` (``format`` = one of png/svg/pdf writes only that),
 ``OUT/RUN/index.md`` (one section per figure with its caption), and ``OUT/index.md``
@@ -43,7 +46,9 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from jaxplan.experiments import plots
-from jaxplan.experiments.config import METRICS, ExperimentConfig, FigureSpec, apply_quick, nav_config, parse_config
+from jaxplan.experiments.config import (
+    METRICS, ExperimentConfig, FigureSpec, applies, apply_quick, nav_config, parse_config,
+)
 
 __all__ = ["Drawn", "RunData", "load_run", "draw_figures", "write_index"]
 
@@ -121,15 +126,19 @@ def load_run(run_dir: str | os.PathLike, data_dir: str | os.PathLike | None = No
 # Helpers
 
 
-def _selected(run: RunData, spec: FigureSpec, kind: str | None = None) -> tuple[list[int], list[int]]:
-    """Indices of the maps and planners the figure names (default all; ``kind`` filters planners)."""
+def _selected(run: RunData, spec: FigureSpec, kind: str | tuple[str, ...] | None = None
+              ) -> tuple[list[int], list[int]]:
+    """Indices of the maps and planners the figure names (default all; ``kind`` filters planners, and the maps
+    are those at least one selected planner runs on)."""
     cfg = run.config
+    kinds = (kind,) if isinstance(kind, str) else kind
     maps = spec.params.get("maps") or [m.spec.name for m in run.prep.maps]
     labels = spec.params.get("planners") or [p.label for p in cfg.planners]
-    mi = [i for i, m in enumerate(run.prep.maps) if m.spec.name in maps]
-    pi = [i for i, p in enumerate(cfg.planners) if p.label in labels and (kind is None or p.kind == kind)]
+    pi = [i for i, p in enumerate(cfg.planners) if p.label in labels and (kinds is None or p.kind in kinds)]
+    mi = [i for i, m in enumerate(run.prep.maps) if m.spec.name in maps
+          and any(applies(cfg.planners[p], m.spec) for p in pi)]
     if not mi or not pi:  # e.g. a --quick run that keeps none of the figure's maps or planners
-        what = "map" if not mi else (f"{kind} planner" if kind else "planner")
+        what = (f"{'/'.join(kinds)} planner" if kinds else "planner") if not pi else "map"
         raise ValueError(f"figure {spec.name!r}: no {what} of this run selected")
     return mi, pi
 
@@ -205,7 +214,7 @@ def _disc_positions(obs, times: np.ndarray) -> np.ndarray:
 
 
 def _curves(run: RunData, spec: FigureSpec, key: str, ylabel: str, what: str):
-    mi, pi = _selected(run, spec, "plan")
+    mi, pi = _selected(run, spec, ("plan", "tsp"))
     pi = [p for p in pi if run.config.planners[p].name not in ("astar", "dijkstra")]
     if not pi:
         raise ValueError(f"figure {spec.name!r}: no iterative plan planner selected")
@@ -250,7 +259,8 @@ def _box(run, spec):
         data, labels = [], []
         for p in pi:
             label = run.config.planners[p].label
-            if METRICS[metric].kinds.isdisjoint({run.config.planners[p].kind}):
+            if METRICS[metric].kinds.isdisjoint({run.config.planners[p].kind}) or not applies(
+                    run.config.planners[p], run.prep.maps[m].spec):
                 continue
             v, _ = per_seed_means(t, name, label, metric, run.config.seeds)
             data.append(v[np.isfinite(v)])
@@ -281,8 +291,9 @@ def _bar(run, spec):
     any_paper = False
     for ax, m in zip(axes[0], mi):
         name = run.prep.maps[m].spec.name
-        xs, labels = np.arange(len(pi)), []
-        for j, p in enumerate(pi):
+        here = [p for p in pi if applies(cfg.planners[p], run.prep.maps[m].spec)]
+        xs, labels = np.arange(len(here)), []
+        for j, p in enumerate(here):
             label = cfg.planners[p].label
             labels.append(label)
             v, _ = per_seed_means(t, name, label, metric, cfg.seeds)
@@ -358,13 +369,16 @@ def _sweep(run, spec):
 
 
 def _paths(run, spec):
-    mi, pi = _selected(run, spec)
+    from jaxplan.smooth import smooth
+
+    mi, pi = _selected(run, spec, ("plan", "navigate"))
     sc, seed, r = _scenario_seed(run, spec)
+    smoother = spec.params.get("smoothing")
     fig, axes = _panels(len(mi), w=6.0, h=4.8)
     for ax, m in zip(axes[0], mi):
         mw = run.prep.maps[m]
         res = float(mw.grid.resolution)
-        paths, labels = [], []
+        paths, labels, smoothed, smoothed_labels = [], [], [], []
         for p in pi:
             got = run.arrays(m, p, sc)
             if got is None:
@@ -378,11 +392,24 @@ def _paths(run, spec):
                 continue
             paths.append(_cell_path_m(pts, n, res))
             labels.append(run.config.planners[p].label)
+            if smoother and n > 0:
+                sm = smooth(np.asarray(pts[:n], np.float64), mw.grid, smoother)
+                smoothed.append(_cell_path_m(np.asarray(sm.points), int(sm.n), res))
+                smoothed_labels.append(f"{labels[-1]} ({smoother})")
         plots.plot_map(ax, mw.grid, layer=_layer(mw.grid), title=f"{mw.spec.name}, scenario {sc}, seed {seed}")
         plots.plot_paths(ax, mw.grid, paths, labels=labels, start=_cell_path_m(mw.starts[sc][None], 1, res)[0],
                          goal=_cell_path_m(mw.goals[sc][None], 1, res)[0], coords="m")
+        if smoothed:
+            lines_before = len(ax.lines)
+            plots.plot_paths(ax, mw.grid, smoothed, labels=smoothed_labels, coords="m", lw=1.4)
+            for line in ax.lines[lines_before:]:
+                line.set_linestyle("--")
+            ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)  # with the dashes
     fig.suptitle(_title(spec, "Planned paths"))
-    return fig, f"Global paths of each planner at scenario {sc}, seed {seed} (cell centres; start circle, goal star)."
+    cap = f"Global paths of each planner at scenario {sc}, seed {seed} (cell centres; start circle, goal star)"
+    if smoother:
+        cap += f"; dashed: the same path after the {smoother!r} smoother (jaxplan.smooth)"
+    return fig, cap + "."
 
 
 def _pheromone(run, spec):
@@ -550,9 +577,43 @@ def _fan(run, spec):
                  "recomputed with jaxplan.dwa_step at the stored robot states.")
 
 
+def _tours(run, spec):
+    import jaxplan as jp
+
+    mi, pi = _selected(run, spec, "tsp")
+    _, seed, r = _scenario_seed(run, spec)
+    fig, axes = _panels(len(mi), w=5.5, h=4.8)
+    for ax, m in zip(axes[0], mi):
+        mw = run.prep.maps[m]
+        if mw.problem.coords is None:
+            raise ValueError(f"figure {spec.name!r}: instance {mw.spec.name!r} has no city coordinates")
+        xy = np.asarray(mw.problem.coords, np.float64)
+        if mw.spec.tour is not None:  # the optimal tour underneath, for comparison
+            t = jp.load_tour(mw.spec.tour)
+            c = xy[np.append(t, t[0])]
+            ax.plot(c[:, 0], c[:, 1], color="0.6", ls="--", lw=2.5,
+                    label=f"optimal ({jp.tour_length(mw.problem, t):g})")
+        for p in pi:
+            got = run.arrays(m, p, 0)
+            if got is None or "tours" not in got[0]:
+                continue
+            t = np.asarray(got[0]["tours"][got[1], r], np.int64)
+            c = xy[np.append(t, t[0])]
+            label = f"{run.config.planners[p].label} ({jp.tour_length(mw.problem, t):g})"
+            ax.plot(c[:, 0], c[:, 1], lw=1.2, label=label)
+        ax.plot(xy[:, 0], xy[:, 1], "k.", ms=5)
+        ax.set_aspect("equal")
+        ax.set_title(f"{mw.spec.name}, seed {seed}")
+        ax.legend(fontsize=8)
+    fig.suptitle(_title(spec, "Best tours"))
+    return fig, (f"Best tour of each TSP planner at seed {seed} (length in the instance's metric); dashed grey: "
+                 "the optimal tour of the instance's .opt.tour file.")
+
+
 DRAW: dict[str, Callable[[RunData, FigureSpec], tuple[Any, str]]] = {
     "convergence": _convergence, "diversity": _diversity, "box": _box, "bar": _bar, "sweep": _sweep,
     "paths": _paths, "pheromone": _pheromone, "trajectories": _trajectories, "controls": _controls, "fan": _fan,
+    "tours": _tours,
 }
 """Figure kind -> drawing function ``(run, spec) -> (figure, caption)``."""
 

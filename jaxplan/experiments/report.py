@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any
 
-from jaxplan.experiments.config import METRICS, ExperimentConfig
+from jaxplan.experiments.config import METRICS, ExperimentConfig, applies
 from jaxplan.experiments.stats import PER_CHUNK, PER_SEED, Analysis, SummaryRow
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -31,6 +31,13 @@ def _pm(mean: float, sd: float) -> str:
     return fmt(mean) if (sd is None or math.isnan(sd)) and not math.isnan(mean) else f"{fmt(mean)} ± {fmt(sd)}"
 
 
+def _range(lo: float | None, hi: float | None) -> str:
+    """`` [min, max]`` for a cell, or nothing when neither is known."""
+    if (lo is None or math.isnan(lo)) and (hi is None or math.isnan(hi)):
+        return ""
+    return f" [{fmt(lo)}, {fmt(hi)}]"
+
+
 def _table(head: list[str], rows: list[list[str]], text: int = 1) -> str:
     """A Markdown table; the first ``text`` columns left-aligned, numbers right-aligned."""
     align = ["---"] * text + ["---:"] * (len(head) - text)
@@ -46,7 +53,10 @@ def _label(metric: str) -> str:
 
 def _map_table(a: Analysis, cfg: ExperimentConfig, map_: str) -> str:
     rows_by = {(r.planner, r.metric): r for r in a.summary if r.map == map_}
-    metrics = [m for m in cfg.metrics if any((pc.label, m) in rows_by for pc in cfg.planners)]
+    site = next(m for m in cfg.maps if m.name == map_)
+    planners = [pc for pc in cfg.planners if applies(pc, site)]
+    metrics = [m for m in cfg.metrics if any((pc.label, m) in rows_by for pc in planners)]
+    ext = cfg.stats.extremes
     with_paper = {m for m in metrics if any(r.paper_mean is not None for (p, mm), r in rows_by.items() if mm == m)}
     head = ["planner"]
     for m in metrics:
@@ -54,14 +64,15 @@ def _map_table(a: Analysis, cfg: ExperimentConfig, map_: str) -> str:
         if m in with_paper:
             head.append(f"paper: {m}")
     body = []
-    for pc in cfg.planners:
+    for pc in planners:
         row = [pc.label]
         for m in metrics:
             r: SummaryRow | None = rows_by.get((pc.label, m))
-            row.append("n/a" if r is None else _pm(r.mean, r.sd))
+            row.append("n/a" if r is None else _pm(r.mean, r.sd) + (_range(r.min, r.max) if ext else ""))
             if m in with_paper:
                 row.append("" if r is None or r.paper_mean is None else _pm(r.paper_mean, r.paper_sd if r.paper_sd
-                                                                            is not None else math.nan))
+                                                                            is not None else math.nan)
+                           + (_range(r.paper_min, r.paper_max) if ext else ""))
         body.append(row)
     return _table(head, body)
 
@@ -92,7 +103,9 @@ def summary_markdown(a: Analysis, cfg: ExperimentConfig) -> str:
     R = len(a.seeds)
     out = [f"# {cfg.name}: summary", "",
            f"Each cell: {PER_SEED}, over {R} seed{'s' if R != 1 else ''}; wall-clock times: {PER_CHUNK}. "
-           "Columns headed \"paper:\" are the numbers the paper reports"
+           + ("[min, max]: the smallest and largest single trial (wall-clock times: chunk). " if cfg.stats.extremes
+              else "")
+           + "Columns headed \"paper:\" are the numbers the paper reports"
            + (f" ({cfg.paper_source})" if cfg.paper_source else "") + ", not ours.", ""]
     for mp in cfg.maps:
         out += [f"## {mp.name}", "", _map_table(a, cfg, mp.name), ""]
@@ -129,6 +142,13 @@ def report_markdown(a: Analysis, cfg: ExperimentConfig, prep: "Prepared", meta: 
             "## Setup", "", "Maps and scenarios:", ""]
     for mw in prep.maps:
         s = mw.spec
+        if mw.problem is not None:
+            value = f"optimum {fmt(float(mw.optimal[0]), 8)}"
+            opt = (f"{value} ({s.tour.name})" if s.tour is not None else
+                   f"{value} (configured)" if s.optimum is not None else "optimum unknown")
+            out.append(f"- **{s.name}**: TSPLIB {s.tsplib.name}, {mw.problem.n} cities ({mw.problem.metric}); {opt}; "
+                       "one scenario (the instance)")
+            continue
         src = (f"{s.path.name}" if s.path is not None else f"generator {s.generator}({_overrides(s.params)}), "
                                                              f"seed {s.seed}")
         sc = s.scenarios
@@ -155,7 +175,11 @@ def report_markdown(a: Analysis, cfg: ExperimentConfig, prep: "Prepared", meta: 
             "where it is defined: a failed plan has no length (see `success`), infeasible navigation trials "
             "(the inflated footprint does not fit) are left out, arrival time counts successful trials only. "
             "Wall-clock times are measured per batched call and divided by its trials (mean ± sd over chunks); "
-            "they are in timings.csv, not in trials.csv, which is reproducible byte for byte.", ""]
+            "they are in timings.csv, not in trials.csv, which is reproducible byte for byte.", "",
+            "Metrics:", ""]
+    out += [f"- `{m}`" + (f" ({METRICS[m].unit})" if METRICS[m].unit else "") + f": {METRICS[m].description}"
+            for m in cfg.metrics]
+    out += [""]
     body = summary_markdown(a, cfg)
     out += [body[body.index("\n## "):].lstrip("\n")]  # the tables, without summary.md's title and preamble
     if cfg.figures:
@@ -166,6 +190,6 @@ def report_markdown(a: Analysis, cfg: ExperimentConfig, prep: "Prepared", meta: 
             "- `trials.csv`: one row per (map, planner, scenario, seed)",
             "- `summary.csv`, `summary.md`: the tables above; `significance.csv`: the tests",
             "- `timings.csv`: compile and run time per chunk",
-            "- `checkpoints/`: manifest, per-chunk rows and arrays (orbax: convergence histories, paths, "
+            "- `checkpoints/`: manifest, per-chunk rows and arrays (orbax: convergence histories, paths, tours, "
             "trajectories; `jaxplan.experiments.runner.load_chunk_arrays`)", ""]
     return "\n".join(out)

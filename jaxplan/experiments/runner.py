@@ -4,8 +4,12 @@ Work plan. Maps are loaded (or generated) and their scenarios chosen first; then
 trials are cut into *chunks*: one chunk is one map × one planner × up to ``chunk``
 consecutive scenarios × every seed, and runs as ONE compiled call (`jaxplan.plan_batch`
 or `jaxplan.navigate_batch`, seeds on the second batch axis — never a Python loop over
-seeds). Chunks run in a fixed order (map, planner, scenarios), so the trials file has
-rows ordered by (map, planner, scenario, seed). The last chunk of a (map, planner) is
+seeds). A TSP instance (``[[instances]]``) is one scenario: its chunk is the instance × one
+``kind = "tsp"`` planner × every seed, `jaxplan.aco._tsp.run_tsp` vmapped over the seeds' keys
+(the program `jaxplan.solve_tsp` runs for one seed). Planners run only where they apply
+(`jaxplan.experiments.config.applies`): grid planners on maps, tsp planners on instances.
+Chunks run in a fixed order (map, planner, scenarios), so the trials file has rows ordered
+by (map, planner, scenario, seed). The last chunk of a (map, planner) is
 padded to the full chunk size with copies of its last scenario (rows dropped after the
 call): every chunk then has the same shapes and the program compiles once.
 
@@ -21,7 +25,7 @@ mixes with the real one)::
     report.md            the whole run in one page
     checkpoints/manifest.json       the commit log of finished chunks
     checkpoints/chunks/ID.csv       each finished chunk's rows
-    checkpoints/arrays/ID/          each chunk's arrays (orbax): convergence histories, paths, trajectories
+    checkpoints/arrays/ID/          each chunk's arrays (orbax): convergence histories, paths, tours, trajectories
 
 Checkpoints and resume. A finished chunk is committed in three steps: its rows are
 written to ``chunks/ID.csv`` (temporary file, fsync, `os.replace`), its arrays saved
@@ -56,6 +60,7 @@ import shutil
 import subprocess
 import sys
 import time
+from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping, Sequence
@@ -63,16 +68,18 @@ from typing import Any, Callable, Iterator, Mapping, Sequence
 import numpy as np
 
 from jaxplan.experiments.config import (
-    METRICS, ConfigError, ExperimentConfig, MapSpec, PlannerConfig, apply_quick, load_config, nav_config,
+    ACCURACY_GAP, METRICS, ConfigError, ExperimentConfig, MapSpec, PlannerConfig, applies, apply_quick, load_config,
+    nav_config,
 )
 
 __all__ = ["run_experiment", "prepare", "Prepared", "MapWork", "Unit", "trial_columns", "read_manifest",
-           "load_chunk_arrays", "RunFolderError", "ID_COLUMNS"]
+           "load_chunk_arrays", "RunFolderError", "ID_COLUMNS", "accuracy", "reductions"]
 
 ID_COLUMNS = ("map", "planner", "kind", "scenario", "scen_row", "start_x", "start_y", "goal_x", "goal_y", "optimal",
               "seed")
-"""The identifying columns of trials.csv, before the metric columns (``optimal``: exact octile optimum, m;
-``scenario``: index among the map's chosen scenarios; ``scen_row``: row in the .scen file, −1 if generated)."""
+"""The identifying columns of trials.csv, before the metric columns (``optimal``: exact octile optimum, m — for
+a TSP instance the optimal tour's length, nan if unknown; ``scenario``: index among the map's chosen scenarios;
+``scen_row``: row in the .scen file, −1 if generated; a TSP row leaves the start and goal cells empty)."""
 
 MANIFEST_VERSION = 1
 
@@ -96,6 +103,8 @@ class MapWork:
       optimal: ``f64[S]`` exact 8-connected octile optimum (m).
       rows: ``int64[S]`` row of each scenario in the .scen file (−1 when generated).
       digest: SHA-256 of the map (and scenario) file bytes, or of the generated grid.
+      problem: a TSP instance's `TSPProblem` (then ``grid`` is None, S = 1, starts/goals are −1 and
+        ``optimal`` is the optimal tour length); None for a map.
     """
 
     spec: MapSpec
@@ -105,6 +114,7 @@ class MapWork:
     optimal: np.ndarray
     rows: np.ndarray
     digest: str
+    problem: Any = None
 
 
 @dataclass(frozen=True)
@@ -160,6 +170,23 @@ def _load_map(spec: MapSpec):
     arrays = [np.ascontiguousarray(a).tobytes() for a in (grid.free, grid.height, grid.clearance_height, grid.risk,
                                                             grid.turn_rule)]
     return grid, np.asarray(scene.start), np.asarray(scene.goal), _sha(*arrays, repr(grid.resolution).encode())
+
+
+def _load_instance(spec: MapSpec) -> MapWork:
+    """A TSP instance as one scenario: the problem, its optimum (from the optimal tour, the configured length, or
+    nan) and a digest of the files."""
+    import jaxplan as jp
+
+    problem = jp.load_tsplib(spec.tsplib)
+    if spec.tour is not None:
+        optimum = float(jp.tour_length(problem, jp.load_tour(spec.tour)))
+        extra = spec.tour.read_bytes()
+    else:
+        optimum = math.nan if spec.optimum is None else float(spec.optimum)
+        extra = repr(spec.optimum).encode()
+    none = np.full((1, 2), -1, np.int64)
+    return MapWork(spec, None, none, none, np.asarray([optimum], np.float64), np.full(1, -1, np.int64),
+                   _sha(spec.tsplib.read_bytes(), extra), problem=problem)
 
 
 def _choose(n: int, count: int | None, spread: str, seed: int) -> np.ndarray:
@@ -254,17 +281,22 @@ def prepare(cfg: ExperimentConfig) -> Prepared:
     problems, maps = [], []
     for i, spec in enumerate(cfg.maps):
         try:
+            if spec.is_tsp:
+                maps.append(_load_instance(spec))
+                continue
             grid, s0, g0, digest = _load_map(spec)
             s, g, opt, rows = _scenarios(spec, grid, s0, g0)
         except (ValueError, FileNotFoundError) as e:
-            problems.append(f"maps[{i}] ({spec.name}): {e}")
+            problems.append(f"{spec.key or f'maps[{i}]'} ({spec.name}): {e}")
             continue
         maps.append(MapWork(spec, grid, s, g, np.asarray(opt, np.float64), rows, digest))
     if problems:
         raise ConfigError(problems, str(cfg.path or cfg.name))
     units, k = [], 0
     for mi, mw in enumerate(maps):
-        for pi in range(len(cfg.planners)):
+        for pi, pc in enumerate(cfg.planners):
+            if not applies(pc, mw.spec):
+                continue
             for ci, lo in enumerate(range(0, len(mw.starts), cfg.chunk)):
                 hi = min(lo + cfg.chunk, len(mw.starts))
                 units.append(Unit(k, f"{k:05d}-m{mi}-p{pi}-c{ci}", mi, pi, lo, hi))
@@ -294,12 +326,23 @@ def _plain(x: Any) -> Any:
     return x
 
 
+def _spec_doc(spec: MapSpec) -> dict:
+    """A map's part of the fingerprint. The instance fields are left out while unset (and ``key`` always: it names
+    the config entry, it does not shape trials), so a map's fingerprint is the one written before instances."""
+    doc = _plain(spec)
+    doc.pop("key", None)
+    for k in ("tsplib", "tour", "optimum"):
+        if doc.get(k) is None:
+            doc.pop(k, None)
+    return doc
+
+
 def fingerprint(prep: Prepared) -> str:
     """SHA-256 of everything that shapes trials.csv (not stats, figures or paper numbers)."""
     cfg = prep.config
     doc = {
         "seeds": list(cfg.seeds), "chunk": cfg.chunk, "columns": list(trial_columns(cfg)),
-        "maps": [{"spec": _plain(m.spec), "digest": m.digest} for m in prep.maps],
+        "maps": [{"spec": _spec_doc(m.spec), "digest": m.digest} for m in prep.maps],
         "planners": _plain(cfg.planners), "quick": cfg.is_quick,
     }
     return _sha(json.dumps(doc, sort_keys=True).encode())
@@ -327,7 +370,58 @@ def _pad(idx: np.ndarray, size: int) -> np.ndarray:
 
 _PATH_KEYS = ("length", "optimality_gap", "turns", "sharp_turns", "smoothness", "min_clearance", "mean_clearance",
               "max_curvature")
-_INT_METRICS = ("turns", "sharp_turns", "converged_iteration", "collisions", "recoveries", "replans")
+_LOS_KEYS = ("los_length", "los_turns", "los_length_reduction", "los_turns_reduction")
+_INT_METRICS = ("turns", "sharp_turns", "los_turns", "converged_iteration", "collisions", "recoveries", "replans")
+_GAP_TOL = 1e-9  # a gap of exactly 10 % computes as 0.10000000000000009: count it as within
+
+
+def accuracy(success: np.ndarray, gap: np.ndarray, threshold: float = ACCURACY_GAP) -> np.ndarray:
+    """Seed 000's accuracy per trial (DESIGN §6): 1 for a success with ``gap <= threshold``, else 0.
+
+    Args:
+      success: ``[...]`` 1/0 outcomes (nan: undefined).
+      gap: ``[...]`` optimality gaps (length / optimum − 1; nan where unknown).
+      threshold: the largest gap that counts as accurate (default `ACCURACY_GAP`, 10 %).
+
+    Returns:
+      ``f64[...]``: 1.0 or 0.0; nan where ``success`` is undefined, or a success has no defined gap (a failure
+      is 0 whatever its gap). Its per-seed mean is the share of accurate trials.
+    """
+    s, g = np.asarray(success, np.float64), np.asarray(gap, np.float64)
+    with np.errstate(invalid="ignore"):
+        hit = np.where(np.isfinite(g), (g <= threshold + _GAP_TOL).astype(np.float64), np.nan)
+    return np.where(np.isnan(s), np.nan, np.where(s == 1, hit, 0.0))
+
+
+def reductions(before: np.ndarray, after: np.ndarray) -> np.ndarray:
+    """``f64[...]`` reduction rates ``1 − after / before`` (seed 004 Table 4); nan where ``before`` is 0 or nan."""
+    b, a = np.asarray(before, np.float64), np.asarray(after, np.float64)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(b > 0, 1.0 - a / np.where(b > 0, b, 1.0), np.nan)
+
+
+def _los_metrics(grid, paths: np.ndarray, n: np.ndarray, ok: np.ndarray, fill: np.ndarray) -> dict[str, np.ndarray]:
+    """Length (m) and turns of each path after line-of-sight smoothing (seed 004 §3.3: an intermediate cell centre
+    is dropped while the last kept one sees the next), nan where the plan failed.
+
+    Args:
+      grid: the map; paths: ``i32[B, P, 2]`` grid paths (cells) with ``n [B]`` valid points; ok: ``bool[B]`` plans
+        that succeeded; fill: ``[B, 2]`` a free cell per path (its start), standing in for a failed path.
+
+    Returns:
+      ``{"los_length": f64[B], "los_turns": f64[B]}``.
+    """
+    import jaxplan as jp
+    from jaxplan.smooth import smooth
+
+    B, P = paths.shape[:2]
+    valid = ok[:, None] & (np.arange(P)[None, :] < n[:, None])
+    # smooth() checks every valid point against the map: a failed plan (−1 padding) becomes its start alone.
+    pts = np.where(valid[..., None], paths, np.asarray(fill)[:, None, :]).astype(np.float64)
+    sm = smooth(pts, grid, "los", n=np.where(ok, np.maximum(n, 1), 1))
+    pm = jp.path_metrics(np.asarray(sm.points, np.float64), grid, n=np.asarray(sm.n))
+    return {"los_length": np.where(ok, np.asarray(pm["length"], np.float64), np.nan),
+            "los_turns": np.where(ok, np.asarray(pm["turns"], np.float64), np.nan)}
 
 
 def _hausdorff(mw: MapWork, idx: np.ndarray, paths: np.ndarray, n_cells: np.ndarray) -> np.ndarray:
@@ -359,14 +453,22 @@ def _run_plan(mw: MapWork, pc: PlannerConfig, idx: np.ndarray, seeds: tuple[int,
     n, R = len(idx), len(seeds)
     ok = br.success[:n]
     out: dict[str, np.ndarray] = {"success": ok.astype(np.int64)}
-    if any(m in _PATH_KEYS for m in metrics):
+    los = any(m in _LOS_KEYS for m in metrics)
+    if any(m in _PATH_KEYS for m in metrics) or los or "accuracy" in metrics:
         P = br.paths.shape[2]
         pm = jp.path_metrics(br.paths[:n].reshape(n * R, P, 2), mw.grid, optimal=np.repeat(mw.optimal[idx], R),
                              n=br.n_cells[:n].reshape(-1))
-        for k in _PATH_KEYS:
-            if k in metrics:
-                v = np.asarray(pm[k], np.float64).reshape(n, R)
-                out[k] = np.where(ok, v, np.nan)
+        raw = {k: np.where(ok, np.asarray(pm[k], np.float64).reshape(n, R), np.nan) for k in _PATH_KEYS}
+        out.update({k: v for k, v in raw.items() if k in metrics})
+        if "accuracy" in metrics:  # the raw grid path against the exact octile optimum
+            out["accuracy"] = accuracy(ok, raw["optimality_gap"])
+        if los:
+            sm = _los_metrics(mw.grid, br.paths[:n].reshape(n * R, P, 2), br.n_cells[:n].reshape(-1), ok.reshape(-1),
+                              np.repeat(mw.starts[idx], R, axis=0))
+            sm = {k: v.reshape(n, R) for k, v in sm.items()}
+            sm["los_length_reduction"] = reductions(raw["length"], sm["los_length"])
+            sm["los_turns_reduction"] = reductions(raw["turns"], sm["los_turns"])
+            out.update({k: v for k, v in sm.items() if k in metrics})
     if "hausdorff" in metrics:
         out["hausdorff"] = np.where(ok, _hausdorff(mw, idx, br.paths[:n], br.n_cells[:n]), np.nan)
     if "cost" in metrics:
@@ -404,6 +506,33 @@ _NAV_KEYS = ("success", "collisions", "time_s", "rmse", "max_curvature", "energy
              "replans")
 
 
+def _executed_optimum(mw: MapWork, pc: PlannerConfig, idx: np.ndarray) -> np.ndarray:
+    """``f64[n]`` the reference length (m) an executed path is measured against, per scenario: the exact path on
+    the planning map (the map closed within d_safe of obstacles, as the pipelines plan) after the line-of-sight
+    smoothing the pipelines apply (clearance d_safe) — DESIGN §6's "the same smoothing applied to the exact path".
+    nan where the robot does not fit (start or goal closed, or not connected)."""
+    import jaxplan as jp
+    from jaxplan.nav import planning_grid
+    from jaxplan.search import shortest_lengths
+    from jaxplan.smooth import smooth
+
+    d_safe = float(nav_config(pc)[0].dwa.d_safe)
+    pg = planning_grid(mw.grid, d_safe)
+    s, g = mw.starts[idx], mw.goals[idx]
+    free = np.asarray(pg.free)
+    ok = free[s[:, 1], s[:, 0]] & free[g[:, 1], g[:, 0]]
+    out = np.full(len(idx), np.nan)
+    if ok.any():
+        ok[ok] = np.isfinite(shortest_lengths(pg, s[ok], g[ok]))
+    if ok.any():
+        ref = jp.plan_batch(pg, s[ok], g[ok], planner="astar", seeds=[0])
+        sm = smooth(np.asarray(ref.paths[:, 0], np.float64), mw.grid, "los", n=np.asarray(ref.n_cells[:, 0]),
+                    radius=d_safe)
+        out[ok] = np.asarray(jp.path_metrics(np.asarray(sm.points, np.float64), mw.grid, n=np.asarray(sm.n))["length"],
+                             np.float64)
+    return out
+
+
 def _run_navigate(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, seeds: tuple[int, ...], chunk: int,
                   metrics: Sequence[str]) -> tuple[dict, dict, dict]:
     """Metric arrays ``[n, R]`` (and ``reason``), arrays to keep, and timings of one `navigate_batch` call."""
@@ -424,6 +553,9 @@ def _run_navigate(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, seeds
                 np.asarray(v, np.float64)
     if "hausdorff" in metrics:
         out["hausdorff"] = _hausdorff(mw, idx, eb.plans[:n, :, 0], eb.n_plan[:n, :, 0])
+    if "accuracy" in metrics:  # the executed path against the smoothed exact path the robot fits
+        gap = np.asarray(eb.path_length[:n, :, 0], np.float64) / _executed_optimum(mw, pc, idx)[:, None] - 1.0
+        out["accuracy"] = accuracy(eb.success[:n, :, 0], gap)
     out["reason"] = eb.reason[:n, :, 0]
     T = int(eb.steps[:n].max()) + 1
     # states (x, y, theta, v, omega) feed the velocity traces and the DWA fans of `jaxplan figures`.
@@ -434,6 +566,69 @@ def _run_navigate(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, seeds
     timing = {"compile_s": float(eb.compile_s), "time_s": float(eb.run_time_s), "plan_time_s": float(eb.plan_time_s),
               "step_time_s": float(eb.step_time_s)}
     return out, keep, timing
+
+
+# Compiled TSP programs keyed by (config, n, seeds, parameter names): one compile per (instance size, planner).
+_TSP_PROGRAMS: OrderedDict[tuple, Any] = OrderedDict()
+
+
+def _tsp_program(cfg, dist, params: dict, keys) -> tuple[Callable, float]:
+    """`run_tsp` vmapped over ``keys [R]``, compiled for these shapes, and the seconds spent compiling now (0 if
+    cached)."""
+    import jax
+
+    from jaxplan.aco._tsp import run_tsp
+
+    sig = (cfg, dist.shape, keys.shape, tuple(sorted(params)))
+    if sig in _TSP_PROGRAMS:
+        _TSP_PROGRAMS.move_to_end(sig)
+        return _TSP_PROGRAMS[sig], 0.0
+    t0 = time.perf_counter()
+    fn = jax.jit(jax.vmap(lambda d, p, k: run_tsp(cfg, d, p, k), in_axes=(None, None, 0))).lower(
+        dist, params, keys).compile()
+    _TSP_PROGRAMS[sig] = fn
+    while len(_TSP_PROGRAMS) > 8:  # a sweep over many sizes must not keep every executable alive
+        _TSP_PROGRAMS.popitem(last=False)
+    return fn, time.perf_counter() - t0
+
+
+def _run_tsp(mw: MapWork, pc: PlannerConfig, seeds: tuple[int, ...], metrics: Sequence[str]
+             ) -> tuple[dict, dict, dict]:
+    """Metric arrays ``[1, R]``, arrays to keep and timings of one TSP chunk: every seed in one compiled call.
+
+    Each seed's run is `jaxplan.solve_tsp`'s (same parameter resolution, program and PRNG key
+    ``jax.random.key(seed)``), vmapped over the seeds; lengths are recomputed in float64 on the host from the tours,
+    as `solve_tsp` does.
+    """
+    import jax
+    import jax.numpy as jnp
+
+    from jaxplan.aco._tsp import _STATIC, TSPConfig, _resolve
+    from jaxplan.aco._tsplib import tour_length
+
+    problem = mw.problem
+    p = _resolve(pc.name, {k: tuple(v) if isinstance(v, tuple) else v for k, v in pc.overrides.items()})
+    cfg = TSPConfig(pc.name, int(p.get("colonies", 1)), int(p["ants"]), int(p["iterations"]), p["local_search"])
+    params = {k: jnp.asarray(v, jnp.float32) for k, v in p.items() if k not in _STATIC}
+    dist = jnp.asarray(np.asarray(problem.dist, np.float64), jnp.float32)
+    keys = jax.random.wrap_key_data(jnp.stack([jax.random.key_data(jax.random.key(int(s))) for s in seeds]))
+    fn, compile_s = _tsp_program(cfg, dist, params, keys)
+    t0 = time.perf_counter()
+    res = jax.block_until_ready(fn(dist, params, keys))
+    time_s = time.perf_counter() - t0
+    tours = np.asarray(res.tour, np.int64)  # [R, n], any rotation
+    tours = np.stack([np.roll(t, -int(np.flatnonzero(t == 0)[0])) for t in tours])
+    lengths = np.asarray([tour_length(problem, t) for t in tours], np.float64)
+    history = np.asarray(res.history, np.float64)  # [R, I] best length so far
+    R = len(seeds)
+    values = {"success": np.ones((1, R), np.int64), "tour_length": lengths[None],
+              "optimality_gap": (lengths / mw.optimal[0] - 1.0)[None],
+              # The iteration the final best tour was found: Table 1's "number of iterations" (seed 004).
+              "converged_iteration": np.argmax(history <= history[:, -1:], axis=1).astype(np.float64)[None]}
+    keep = {"history": history[None].astype(np.float32), "tours": tours[None].astype(np.int32),
+            "success": np.ones((1, R), bool)}
+    timing = {"compile_s": float(compile_s), "time_s": float(time_s), "plan_time_s": float(time_s) / R}
+    return {k: v for k, v in values.items() if k in metrics}, keep, timing
 
 
 def _rows(prep: Prepared, u: Unit, values: dict) -> str:
@@ -449,6 +644,8 @@ def _rows(prep: Prepared, u: Unit, values: dict) -> str:
                    "scen_row": int(mw.rows[sc]), "start_x": int(mw.starts[sc, 0]), "start_y": int(mw.starts[sc, 1]),
                    "goal_x": int(mw.goals[sc, 0]), "goal_y": int(mw.goals[sc, 1]),
                    "optimal": float(mw.optimal[sc]), "seed": seed}
+            if mw.problem is not None:  # a TSP has no start or goal cell
+                row.update(start_x="", start_y="", goal_x="", goal_y="")
             for c in cols[len(ID_COLUMNS):]:
                 if c == "reason":
                     row[c] = str(values["reason"][i, r]) if "reason" in values else (
@@ -468,7 +665,9 @@ def run_unit(prep: Prepared, u: Unit) -> tuple[str, dict, dict]:
     mw, pc = prep.maps[u.m], cfg.planners[u.p]
     idx = np.arange(u.lo, u.hi)
     metrics = ("success",) + cfg.metrics  # success is always a column: other metrics are read given it
-    if pc.kind == "plan":
+    if pc.kind == "tsp":
+        values, keep, timing = _run_tsp(mw, pc, cfg.seeds, metrics)
+    elif pc.kind == "plan":
         values, keep, timing = _run_plan(mw, pc, idx, cfg.seeds, cfg.chunk, metrics)
     else:
         values, keep, timing = _run_navigate(mw, u.m, pc, idx, cfg.seeds, cfg.chunk, metrics)
@@ -553,8 +752,9 @@ class _Store:
 def load_chunk_arrays(run_dir: str | os.PathLike, uid: str) -> dict[str, np.ndarray]:
     """The arrays (orbax) kept for chunk ``uid``: plan chunks ``history f32[n, R, I]``, ``diversity``,
     ``successes``, ``paths i32[n, R, P, 2]``, ``n_cells``, ``success``; navigate chunks ``positions
-    f32[n, R, T, 2]`` (m), ``states f32[n, R, T, 5]`` (x, y, theta, v, omega), ``steps``, ``plans``, ``n_plan``, ``success``. The manifest entry of ``uid``
-    names its map, planner and scenario range."""
+    f32[n, R, T, 2]`` (m), ``states f32[n, R, T, 5]`` (x, y, theta, v, omega), ``steps``, ``plans``, ``n_plan``,
+    ``success``; tsp chunks ``history f32[1, R, I]`` (best tour length so far), ``tours i32[1, R, n]`` (the best
+    tour, from city 0), ``success``. The manifest entry of ``uid`` names its map, planner and scenario range."""
     import orbax.checkpoint as ocp
 
     return ocp.PyTreeCheckpointer().restore((Path(run_dir) / "checkpoints" / "arrays" / uid).resolve())

@@ -8,7 +8,9 @@ trials; ``success`` itself averages to a rate. The table then gives the mean and
 sample standard deviation (``ddof=1``) of those per-seed means over the seeds: the
 spread a reader should expect from re-running the experiment with new seeds on the same
 scenarios — not the spread over scenarios, which mixes easy and hard rows. ``n`` counts
-the seeds with a defined per-seed mean.
+the seeds with a defined per-seed mean. ``min`` and ``max`` are the smallest and largest
+single-trial value (not per-seed means): seed 004 reports Max/Min of its runs beside Avg/Sd, and
+with one scenario per map (its configs) a trial is a seed's run.
 
 Significance (if ``[stats]`` asks): per map and metric, a one-way ANOVA across planners
 (`scipy.stats.f_oneway`) and Welch t-tests between every pair (`scipy.stats.ttest_ind`
@@ -32,13 +34,14 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from jaxplan.experiments.config import METRICS, ExperimentConfig, PaperValue
+from jaxplan.experiments.config import METRICS, ExperimentConfig, PaperValue, applies
 
-__all__ = ["SummaryRow", "TestRow", "Analysis", "read_trials", "per_seed_means", "analyse", "holm", "write_summary",
-           "write_significance", "write_timings", "SUMMARY_COLUMNS", "SIGNIFICANCE_COLUMNS", "TIMING_COLUMNS"]
+__all__ = ["SummaryRow", "TestRow", "Analysis", "read_trials", "per_seed_means", "trial_range", "analyse", "holm",
+           "write_summary", "write_significance", "write_timings", "SUMMARY_COLUMNS", "SIGNIFICANCE_COLUMNS",
+           "TIMING_COLUMNS"]
 
-SUMMARY_COLUMNS = ("map", "planner", "metric", "unit", "statistic", "n", "trials", "mean", "sd", "paper_mean",
-                   "paper_sd", "paper_source")
+SUMMARY_COLUMNS = ("map", "planner", "metric", "unit", "statistic", "n", "trials", "mean", "sd", "min", "max",
+                   "paper_mean", "paper_sd", "paper_min", "paper_max", "paper_source")
 SIGNIFICANCE_COLUMNS = ("map", "metric", "test", "planner_a", "planner_b", "statistic", "p_value", "p_adjusted",
                         "n_a", "n_b")
 TIMING_COLUMNS = ("uid", "map", "planner", "kind", "scenario_lo", "scenario_hi", "trials", "session", "compile_s",
@@ -49,8 +52,8 @@ PER_CHUNK = "mean over chunks of per-trial wall time (sd: ddof=1)"
 
 @dataclass(frozen=True)
 class SummaryRow:
-    """One map × planner × metric: ``mean``, ``sd`` over ``n`` seeds (or chunks) from ``trials`` values;
-    the paper's numbers in ``paper_mean``/``paper_sd`` (None when the paper gives none)."""
+    """One map × planner × metric: ``mean``, ``sd`` over ``n`` seeds (or chunks) from ``trials`` values, ``min``
+    and ``max`` of those single values; the paper's numbers in ``paper_*`` (None when the paper gives none)."""
 
     map: str
     planner: str
@@ -64,6 +67,10 @@ class SummaryRow:
     paper_mean: float | None
     paper_sd: float | None
     paper_source: str
+    min: float = math.nan
+    max: float = math.nan
+    paper_min: float | None = None
+    paper_max: float | None = None
 
 
 @dataclass(frozen=True)
@@ -121,6 +128,13 @@ def _trial_mask(t: Mapping[str, np.ndarray], map_: str, planner: str, metric: st
     if METRICS[metric].given_success:
         m &= t["success"] == 1
     return m
+
+
+def trial_range(t: Mapping[str, np.ndarray], map_: str, planner: str, metric: str) -> tuple[float, float]:
+    """(smallest, largest) defined single-trial value of ``metric`` (nan, nan when none is defined)."""
+    x = t[metric][_trial_mask(t, map_, planner, metric)]
+    x = x[np.isfinite(x)]
+    return (float(np.min(x)), float(np.max(x))) if x.size else (math.nan, math.nan)
 
 
 def per_seed_means(t: Mapping[str, np.ndarray], map_: str, planner: str, metric: str,
@@ -182,6 +196,8 @@ def analyse(trials_path: str | os.PathLike, timings_path: str | os.PathLike | No
     summary, per_seed, infeasible = [], {}, {}
     for mp in cfg.maps:
         for pc in cfg.planners:
+            if not applies(pc, mp):
+                continue
             if "reason" in t:
                 rows = (t["map"] == mp.name) & (t["planner"] == pc.label)
                 infeasible[mp.name, pc.label] = int(sum(str(x).startswith("infeasible") for x in t["reason"][rows]))
@@ -194,15 +210,19 @@ def analyse(trials_path: str | os.PathLike, timings_path: str | os.PathLike | No
                                        and r["planner"] == pc.label and r.get(metric, "") != ""], float)
                     mean, sd, n = _mean_sd(vals)
                     used, statistic = n, PER_CHUNK
+                    fin = vals[np.isfinite(vals)]
+                    lo, hi = (float(fin.min()), float(fin.max())) if fin.size else (math.nan, math.nan)
                 else:
                     ps, used = per_seed_means(t, mp.name, pc.label, metric, seeds)
                     per_seed[mp.name, pc.label, metric] = ps
                     mean, sd, n = _mean_sd(ps)
+                    lo, hi = trial_range(t, mp.name, pc.label, metric)
                     statistic = PER_SEED + (" (successful trials)" if spec.given_success else "")
                 pv = _paper(cfg, mp.name, pc.label, metric)
                 summary.append(SummaryRow(mp.name, pc.label, metric, spec.unit, statistic, n, used, mean, sd,
                                           pv.mean if pv else None, pv.sd if pv else None,
-                                          cfg.paper_source if pv else ""))
+                                          cfg.paper_source if pv else "", lo, hi, pv.min if pv else None,
+                                          pv.max if pv else None))
     tests = []
     st = cfg.stats
     for mp in cfg.maps:
