@@ -57,11 +57,14 @@ def test_plan_batch_on_four_devices_equals_one_device():
         assert out[planner + "_success"] > 0.5
 
 
-def test_navigate_batch_and_a_tuning_generation_on_four_devices_equal_one_device():
+@pytest.mark.parametrize("local", ["follow", pytest.param("dwa", marks=pytest.mark.slow)])  # dwa: +30 s of compiling
+def test_navigate_batch_and_a_tuning_generation_on_four_devices_equal_one_device(local):
     """Batched navigation among moving discs (re-planning per group of 3 episodes; 5 scenarios x 2 seeds
     padded to 12 over 4 devices) and one tuning generation (7 members padded to 8): identical to one device
     (the tuning metrics that are float sums over path points: to float32 rounding, see below)."""
-    out = _child("""
+    out = _child(f"""
+        LOCAL = {local!r}
+""" + """
         import json
         import numpy as np, jax
         import jaxplan as jp
@@ -81,7 +84,8 @@ def test_navigate_batch_and_a_tuning_generation_on_four_devices_equal_one_device
         cfg = NavConfig(replan_group=3, max_time=25.0, dwa=NavConfig().dwa.replace(n_v=6, n_omega=11))
         obs = lambda e, seed: jp.random_obstacles(grid, 3, speed=1.0, seed=seed * 100 + e,
                                                   avoid=[(s[e] + 0.5) * grid.resolution])
-        kw = dict(pipeline="iaco_dwa", seeds=[0, 1], obstacles=obs, config=cfg, ants=12, iterations=4)
+        kw = dict(pipeline="iaco_dwa", local_planner=LOCAL, seeds=[0, 1], obstacles=obs, config=cfg, ants=12,
+                  iterations=4)
         a = jp.navigate_batch(grid, s, g, mesh=None, **kw)
         b = jp.navigate_batch(grid, s, g, mesh=batch_mesh(), **kw)
         same = lambda x, y: np.array_equal(x, y, equal_nan=x.dtype.kind == "f")

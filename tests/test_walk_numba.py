@@ -172,7 +172,10 @@ def _both(grid, starts, goals, planner, seeds, **kw):
 
 
 @pytest.mark.parametrize("planner", PLANNERS)
-@pytest.mark.parametrize("dead_end", ["die", "retreat", "alert"])
+# The presets' default rule runs by default; the others are slow (~8 s each): every rule is also
+# compared step by step at the walk level above.
+@pytest.mark.parametrize("dead_end", [pytest.param("die", marks=pytest.mark.slow), "retreat",
+                                      pytest.param("alert", marks=pytest.mark.slow)])
 def test_every_preset_and_dead_end_rule_gives_identical_results(room, planner, dead_end):
     grid, starts, goals = room
     extra = {"vehicle_height": None} if planner == "opt_ant" else {}
