@@ -17,6 +17,12 @@ and says so here:
   * ``walk_backend`` (every ACO planner; not a paper parameter): ``"auto"`` (default) walks
     the ants in one numba call per iteration when JAX runs on the CPU and in the JAX step
     loop elsewhere; ``"jax"`` / ``"numba"`` force one. Both give identical results.
+  * ``update_backend`` (every ACO planner; not a paper parameter): where each iteration's path
+    statistics and deposits are computed, ``"auto"`` (numba on the CPU), ``"jax"`` or
+    ``"numba"``; the two may differ in the last bits of summed statistics (summation order).
+    ``walk_backend="jax", update_backend="jax"`` needs no numba compilation at all (about
+    50 s once per install for the walk, statistics and deposit kernels), which pays for
+    small colonies run once (the demo does this).
 """
 
 from __future__ import annotations
@@ -59,7 +65,7 @@ COLONIES: dict[str, Colony] = {
 
 _COMMON = {"ants": 50, "iterations": 50, "alpha": 1.0, "beta": 7.0, "connectivity": 8, "max_steps": None,
            "heuristic": "euclidean", "dead_end": "retreat", "vehicle_height": None, "keep_pheromone": False,
-           "walk_backend": "auto"}
+           "walk_backend": "auto", "update_backend": "auto"}
 
 _DEFAULTS: dict[str, dict[str, Any]] = {
     "aco": {**_COMMON, "dead_end": "die", "rho": 0.3, "q": 100.0, "tau0": 1.0},
@@ -75,7 +81,7 @@ _DEFAULTS: dict[str, dict[str, Any]] = {
 
 # Parameters that shape the compiled program (everything else is a traced leaf of `params`).
 _STATIC = ("ants", "iterations", "connectivity", "max_steps", "heuristic", "dead_end", "vehicle_height", "colonies",
-           "keep_pheromone", "walk_backend")
+           "keep_pheromone", "walk_backend", "update_backend")
 # Parameters that must lie in [0, 1].
 _UNIT = ("rho", "rho_res", "lambda_p", "delta")
 _DESCRIPTIONS = {
@@ -104,6 +110,9 @@ def _validate(name: str):
             raise ValueError(f"planner {name!r}: connectivity must be one of (4, 8, 16), got {p['connectivity']!r}")
         if p.get("walk_backend", "auto") not in WALK_BACKENDS:
             raise ValueError(f"planner {name!r}: walk_backend must be one of {WALK_BACKENDS}, got {p['walk_backend']!r}")
+        if p.get("update_backend", "auto") not in WALK_BACKENDS:
+            raise ValueError(
+                f"planner {name!r}: update_backend must be one of {WALK_BACKENDS}, got {p['update_backend']!r}")
         if not isinstance(p.get("keep_pheromone", False), (bool, np.bool_)):
             raise ValueError(f"planner {name!r}: keep_pheromone must be True or False, got {p['keep_pheromone']!r}")
         vh = p["vehicle_height"]
@@ -146,6 +155,7 @@ def split_params(grid: GridMap, p: Mapping[str, Any]) -> tuple[RunConfig, dict, 
         penalise="lambda_p" in p,
         keep_pheromone=bool(p.get("keep_pheromone", False)),
         walk_backend=p.get("walk_backend", "auto"),
+        update_backend=p.get("update_backend", "auto"),
     )
     params = {k: jnp.asarray(v, jnp.float32) for k, v in p.items() if k not in _STATIC}
     return cfg, params, int(p["connectivity"]), p["vehicle_height"]

@@ -7,9 +7,13 @@ shows the executed trajectories over their global paths and the speed profiles, 
 ``demo.gif`` animates both robots with the discs (matplotlib's pillow writer).
 
 Speed. Each pipeline compiles its global planner and its episode program once (most of
-the demo's time); the settings below keep the demo near a minute on two busy CPU cores:
-in-episode re-planning off (it would compile a second planner program), a 10 x 20 velocity
-window without unrolling, colonies of 20 ants x 20 iterations. `jaxplan demo` also keeps
+the demo's time); the settings below keep the demo under a minute on two CPU cores, the
+first run after install included: in-episode re-planning off (it would compile a second
+planner program), a 10 x 20 velocity window without unrolling, colonies of 20 ants x 20
+iterations walked and updated in JAX (``walk_backend="jax", update_backend="jax"``: the
+numba walk is the faster engine for large colonies, but its one-time compilation, about
+50 s per install, would be most of a first demo whose colonies take milliseconds either
+way; the results are the same). `jaxplan demo` also keeps
 JAX's persistent compilation cache (``~/.cache/jaxplan/jax``), so later runs skip most of it. ``quick=True`` (tests) uses a generated
 14x10 warehouse, a 5 x 9 window, small colonies and a 30 s limit.
 
@@ -59,14 +63,15 @@ def _settings(quick: bool):
     from jaxplan.nav import NavConfig
 
     base = NavConfig()
+    engine = {"walk_backend": "jax", "update_backend": "jax"}  # no numba compilation (module docstring)
     if quick:
         scene = jp.WarehouseGenerator(width=14, height=10, shelf_length=4, shelf_depth=2, aisle=1, cross_aisle=2)(0)
         dwa = dataclasses.replace(base.dwa, n_v=5, n_omega=9)
         return scene, dataclasses.replace(base, replan=False, max_time=30.0, dwa=dwa), \
-            {"ants": 8, "iterations": 5}, {"n": 2, "speed": 0.4, "radius": 0.2}
+            {"ants": 8, "iterations": 5, **engine}, {"n": 2, "speed": 0.4, "radius": 0.2}
     dwa = dataclasses.replace(base.dwa, n_v=10, n_omega=20, unroll=1)  # unroll 1: ~2 s less compilation each
     return jp.demo_warehouse(), dataclasses.replace(base, replan=False, max_time=150.0, dwa=dwa), \
-        {"ants": 20, "iterations": 20}, {"n": 4, "speed": 0.5, "radius": 0.25}
+        {"ants": 20, "iterations": 20, **engine}, {"n": 4, "speed": 0.5, "radius": 0.25}
 
 
 def min_clearance(grid, ep, robot_radius: float, window: int = 3) -> float:
@@ -144,7 +149,7 @@ def _figure(result: DemoResult, grid, path: Path) -> list[str]:
 
 
 def _animation(result: DemoResult, grid, path: Path, frames: int) -> list[str]:
-    from matplotlib.animation import FuncAnimation, PillowWriter
+    from matplotlib.animation import PillowWriter
 
     eps = list(result.episodes.items())
     T = max(len(ep.trajectory) for _, ep in eps)
@@ -178,10 +183,15 @@ def _animation(result: DemoResult, grid, path: Path, frames: int) -> list[str]:
         title.set_text(f"t = {t * period:5.1f} s")
         return trails + robots + discs + [title]
 
-    anim = FuncAnimation(fig, draw, frames=list(idx), blit=False)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.stem + ".tmp" + path.suffix)
-    anim.save(str(tmp), writer=PillowWriter(fps=10), dpi=64)
+    # The writer driven directly: `FuncAnimation.save` renders every frame twice (a draw, then
+    # the grab's own savefig), half of this function's time.
+    writer = PillowWriter(fps=10)
+    with writer.saving(fig, str(tmp), dpi=64):
+        for t in idx:
+            draw(int(t))
+            writer.grab_frame()
     tmp.replace(path)
     plt.close(fig)
     return [str(path)]

@@ -202,7 +202,10 @@ class EpisodeBatch(NamedTuple):
         st = self.states[e, r, i, : T + 1]
         times = np.arange(T + 1, dtype=np.float32) * self.period
         obs = jax.tree_util.tree_map(lambda x: np.asarray(x[e, r]), self.obstacles)
-        opos = np.asarray(trajectories(obs, times)) if obs.radii.shape[-1] else np.zeros((T + 1, 0, 2), np.float32)
+        # Over the batch's full step range, so every episode of a batch shares one compiled shape.
+        every = np.arange(self.states.shape[3], dtype=np.float32) * self.period
+        opos = np.asarray(trajectories(obs, every))[: T + 1] if obs.radii.shape[-1] else \
+            np.zeros((T + 1, 0, 2), np.float32)
         m = {k: getattr(self, k)[e, r, i].item() for k in self.METRICS}
         m["plan_time_s"], m["step_time_s"] = self.plan_time_s, self.step_time_s
         return Episode(

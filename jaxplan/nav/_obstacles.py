@@ -198,8 +198,15 @@ def discs_at(obs: MovingObstacles, t) -> DiscObstacles:
 
 
 def trajectories(obs: MovingObstacles, times: ArrayLike) -> jnp.ndarray:
-    """``f32[T, ..., M, 2]``: positions (m) at each of ``times f32[T]`` (s), for metrics and plots."""
-    return jax.vmap(lambda t: obstacle_state(obs, t)[0])(jnp.asarray(times, jnp.float32))
+    """``f32[T, ..., M, 2]``: positions (m) at each of ``times f32[T]`` (s), for metrics and plots.
+
+    One compiled call per shape (op by op, the model would compile each of its ~50
+    operations on first use: about 10 s of a cold run).
+    """
+    return _TRAJECTORIES(obs, jnp.asarray(times, jnp.float32))
+
+
+_TRAJECTORIES = jax.jit(lambda obs, times: jax.vmap(lambda t: obstacle_state(obs, t)[0])(times))
 
 
 # --------------------------------------------------------------------------------------

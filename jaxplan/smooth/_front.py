@@ -47,7 +47,9 @@ def _compiled(name: str, radius: float, static: tuple):
 
 
 def _bucket(n: int) -> int:
-    return max(4, 1 << math.ceil(math.log2(max(n, 1))))
+    # Powers of two from 16: paths of a few vertices (the second pass of a chain) share one
+    # program; each smoother program costs about 2 s to compile and microseconds to run.
+    return max(16, 1 << math.ceil(math.log2(max(n, 1))))
 
 
 def _options(name: str, res: float, given: dict) -> tuple[tuple, dict]:
