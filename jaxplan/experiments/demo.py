@@ -13,9 +13,9 @@ planner program), a 10 x 20 velocity window without unrolling, colonies of 20 an
 iterations walked and updated in JAX (``walk_backend="jax", update_backend="jax"``: the
 numba walk is the faster engine for large colonies, but its one-time compilation, about
 50 s per install, would be most of a first demo whose colonies take milliseconds either
-way; the results are the same). `jaxplan demo` also keeps
-JAX's persistent compilation cache (``~/.cache/jaxplan/jax``), so later runs skip most of it. ``quick=True`` (tests) uses a generated
-14x10 warehouse, a 5 x 9 window, small colonies and a 30 s limit.
+way; the results are the same). `jaxplan demo` also keeps JAX's persistent compilation
+cache (``~/.cache/jaxplan/jax``), so later runs skip most of it. ``quick=True`` (tests) uses
+a generated 14x10 warehouse, a 5 x 9 window, small colonies and a 30 s limit.
 
 Min clearance is the smallest gap (m) over the executed steps between the robot's disc
 footprint and the nearest blocked square or moving disc (negative: overlap); it is a

@@ -188,7 +188,8 @@ def path_search(index, valid, step, width, source, target, hkind, capacity):
     targets = np.array([target], dtype=np.int64)
     out = np.empty(1, np.float64)
     # np.int64 constants, not literals: a literal argument compiles `_search` once more per caller.
-    expanded = _search(index, valid, step, width, source, targets, hkind, np.int64(1), g, seen, closed, tmark, parent, hf, hg, hv, out)
+    expanded = _search(index, valid, step, width, source, targets, hkind, np.int64(1), g, seen, closed, tmark, parent,
+                       hf, hg, hv, out)
     return out[0], parent, expanded
 
 
@@ -199,7 +200,8 @@ def full_distances(index, valid, step, source, capacity):
     g, seen, closed, tmark, parent, hf, hg, hv = _work_arrays(n, capacity)
     targets = np.empty(0, dtype=np.int64)
     out = np.empty(0, np.float64)
-    _search(index, valid, step, np.int64(1), source, targets, np.int64(H_NONE), np.int64(1), g, seen, closed, tmark, parent, hf, hg, hv, out)
+    _search(index, valid, step, np.int64(1), source, targets, np.int64(H_NONE), np.int64(1), g, seen, closed, tmark,
+            parent, hf, hg, hv, out)
     dist = np.full(n, np.inf)
     for i in range(n):
         if closed[i] == 1:
