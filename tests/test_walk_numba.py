@@ -251,6 +251,30 @@ def test_walk_backend_is_validated(room):
         jp.plan(grid, starts[0], goals[0], planner="aco", walk_backend="cuda")
     with pytest.raises(ValueError, match="walk_backend must be one of"):
         RunConfig(colonies=1, ants=2, iterations=1, max_steps=4, width=4, walk_backend="gpu")
+    with pytest.raises(ValueError, match="planner 'iaco': update_backend must be one of"):
+        jp.plan(grid, starts[0], goals[0], planner="iaco", update_backend="numpy")
+
+
+def test_jax_backends_compile_no_native_call_and_reach_the_same_paths(room):
+    # The demo's setting: no numba at all. Statistics may differ in the last bits from the native
+    # update (another summation order); on this map the runs take the same paths.
+    from jaxplan.aco._context import goal_tables
+    from jaxplan.aco._planners import COLONIES, _seed_keys, cached_map_tables, compiled, split_params
+    from jaxplan.registry import resolve
+
+    grid, starts, goals = room
+    over = dict(ants=16, iterations=6, walk_backend="jax")
+    for update, native in (("jax", False), ("numba", True)):
+        cfg, params, conn, vh = split_params(grid, resolve("iaco", {**over, "update_backend": update})[1])
+        fn, _ = compiled(COLONIES["iaco"], cfg, cached_map_tables(grid, conn, vh),
+                         goal_tables(grid, starts[:2], goals[:2], conn, vh), params, _seed_keys([3]))
+        assert ("jaxplan_aco_deposit" in fn.as_text()) == native, update
+        assert "jaxplan_aco_walk" not in fn.as_text()
+    runs = [jp.plan_batch(grid, starts[:2], goals[:2], planner="iaco", seeds=[3], **over, update_backend=u)
+            for u in ("jax", "numba")]
+    np.testing.assert_array_equal(runs[0].paths, runs[1].paths)
+    np.testing.assert_allclose(runs[0].cost, runs[1].cost, rtol=1e-6)
+    assert runs[0].success.all()
 
 
 def _random_paths(seed: int = 5, A: int = 300, ants_per_colony: int = 50):
