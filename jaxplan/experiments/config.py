@@ -734,22 +734,14 @@ def _read_maps(r: _Reader, raw: dict, data_dir: Path, required: bool = True) -> 
         params: dict = {}
         label = None
         if has_path:
-            rel = r.get(t, p, "path", "str", None)
+            map_path = _data_file(r, t, p, "path", data_dir, hint=True)
             for k in ("params", "seed"):
                 if k in t:
                     r.bad(_join(p, k), "only applies to a generated map")
-            if rel is not None:
-                map_path = _resolve(data_dir, rel)
-                label = Path(rel).stem
-                if not map_path.is_file():
-                    r.bad(_join(p, "path"), f"file not found: {map_path} (data dir {data_dir}; set --data-dir or "
-                                            "JAXPLAN_DATA)")
+            if map_path is not None:
+                label = map_path.stem
             if "scen" in t:
-                s = r.get(t, p, "scen", "str", None)
-                if s is not None:
-                    scen_path = _resolve(data_dir, s)
-                    if not scen_path.is_file():
-                        r.bad(_join(p, "scen"), f"file not found: {scen_path}")
+                scen_path = _data_file(r, t, p, "scen", data_dir)
             elif map_path is not None:
                 for cand in (Path(str(map_path) + ".scen"), map_path.with_name(map_path.stem + "-random-1.scen")):
                     if cand.is_file():
@@ -793,25 +785,17 @@ def _read_instances(r: _Reader, raw: dict, data_dir: Path, taken: set[str]) -> t
         t = r.table(e, p, ("name", "path", "tour", "optimum"), required=("path",) if isinstance(e, dict) else ())
         if not isinstance(e, dict):
             continue
-        rel = r.get(t, p, "path", "str", None)
-        tsp = tour = None
-        if rel is not None:
-            tsp = _resolve(data_dir, rel)
-            if not tsp.is_file():
-                r.bad(_join(p, "path"), f"file not found: {tsp} (data dir {data_dir}; set --data-dir or JAXPLAN_DATA)")
+        tsp = _data_file(r, t, p, "path", data_dir, hint=True)
+        tour = None
         optimum = r.get(t, p, "optimum", "float", None, lo=0, strict_lo=True)
         if "tour" in t:
-            s = r.get(t, p, "tour", "str", None)
-            if s is not None:
-                tour = _resolve(data_dir, s)
-                if not tour.is_file():
-                    r.bad(_join(p, "tour"), f"file not found: {tour}")
+            tour = _data_file(r, t, p, "tour", data_dir)
             if "optimum" in t:
                 r.bad(p, "give 'tour' (the optimal tour file) or 'optimum' (its length), not both")
         elif tsp is not None and optimum is None:
             cand = tsp.with_name(tsp.stem + ".opt.tour")  # TSPLIB's own naming of the optimal tours
             tour = cand if cand.is_file() else None
-        name = r.get(t, p, "name", "str", Path(rel).stem if rel else f"instance{i}")
+        name = r.get(t, p, "name", "str", tsp.stem if tsp is not None else f"instance{i}")
         if name in taken or name in names:
             r.bad(_join(p, "name"), f"duplicate name {name!r}: maps and instances share one namespace (tables, "
                                     "figures); give each a unique name")
@@ -824,6 +808,19 @@ def _read_instances(r: _Reader, raw: dict, data_dir: Path, taken: set[str]) -> t
 def _resolve(data_dir: Path, rel: str) -> Path:
     p = Path(rel).expanduser()
     return p if p.is_absolute() else (data_dir / p)
+
+
+def _data_file(r: _Reader, t: dict, p: str, key: str, data_dir: Path, hint: bool = False) -> Path | None:
+    """``t[key]`` resolved against the data folder (None when absent); a missing file is reported at
+    ``p.key``, with the data folder and how to set it when ``hint``."""
+    rel = r.get(t, p, key, "str", None)
+    if rel is None:
+        return None
+    f = _resolve(data_dir, rel)
+    if not f.is_file():
+        more = f" (data dir {data_dir}; set --data-dir or JAXPLAN_DATA)" if hint else ""
+        r.bad(_join(p, key), f"file not found: {f}{more}")
+    return f
 
 
 def _check_generator(r: _Reader, path: str, name: str, entry: tuple, params: dict, resolution: float) -> None:
