@@ -341,6 +341,7 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
     state0 = _init_state(colony, cfg, tables, params)
     state = jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (B,) + a.shape), state0)
     nbr = jnp.where(tables.valid, tables.index, -1)
+    bits = _walk_numba.move_bits(nbr)
     lut = move_lut(tables.offsets)
     run_of = jnp.repeat(jnp.arange(B), M)
     colony_of = jnp.tile(jnp.repeat(jnp.arange(S), m), B)
@@ -373,7 +374,7 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
             if colony.hook is not None:
                 logits = colony.hook_logits(tables, params, h_cell, table)
                 hook_tables = HookTables(logits, tables.right_turn, tables.turn_rule)
-            ants = _walk_numba.walk(*walk_args, **sizes, hook=hook_tables, stats=stat_tables)
+            ants = _walk_numba.walk(*walk_args, **sizes, hook=hook_tables, stats=stat_tables, bits=bits)
         else:
             ants = walk(*walk_args, **sizes, hook=hook)
         per_run = Ants(
