@@ -12,7 +12,8 @@ native call per iteration, the default on a CPU; both give identical results):
     loop step; after compaction the loop carries A/4 ants; the numba walk has no idle slots);
   * compile time of the configuration: XLA's (lower + compile), and the first call's time
     minus the steady-state run time (adds numba's one-off load or compilation);
-then the time of a seed-003-sized run (20x20 warehouse, risk_aco defaults: 100 ants,
+then the compile time of every planner's configuration (its defaults, and with 1,024 ants), and
+the time of a seed-003-sized run (20x20 warehouse, risk_aco defaults: 100 ants,
 50 iterations; the paper reports 8.468 s in MATLAB) per backend, and the peak memory of
 iaco with 1,024 ants on brc202d (measured first, in a fresh child process of its own). The
 speed figures are measured three times, each in a child process: with XLA's default threads,
@@ -73,6 +74,12 @@ def measure(iterations: int, repeats: int) -> dict:
                                     first_minus_run_s=first - statistics.median(times),
                                     success=float(np.asarray(o.success).mean()))
             out["rows"].append(row)
+    # Compile time of every planner's configuration: its defaults, and with 1,024 ants (default backend).
+    out["compile"] = {}
+    for planner in ("aco", "iaco", "risk_aco", "opt_ant", "praco"):
+        for label, extra in (("defaults", {}), ("1024 ants", dict(ants=1024))):
+            _, p = resolve(planner, extra)
+            out["compile"][f"{planner}/{label}"] = _run_colony(planner, scene.grid, starts, goals, [0], p)[2]
     ware = jp.warehouse_seed003(0)
     grid = jp.poisson_risk(ware.grid, 0, lam=1.0)
     out["seed003_ms"] = {}
@@ -156,6 +163,14 @@ def main() -> None:
             print(f"{row['planner']:<8}{row['ants']:>6} | {j['ant_steps_per_s'] / 1e6:>8.2f}{j['slot_use']:>7.0%}"
                   f"{j['compile_s']:>9.2f}{j['first_minus_run_s']:>10.2f} | {n['ant_steps_per_s'] / 1e6:>8.2f}"
                   f"{n['compile_s']:>9.2f}{n['first_minus_run_s']:>10.2f} | {n['run_s'] and j['run_s'] / n['run_s']:>7.1f}x")
+    labels = list(results)
+    print("\ncompile time per configuration, s (trace, lower and XLA compile; 100x100 bench map, default backend; "
+          "target <= 2 s)")
+    print(f"{'planner':<10}{'setting':<11}" + "".join(f"{lab:>30}" for lab in labels))
+    for key in results[labels[0]]["compile"]:
+        planner, setting = key.split("/")
+        print(f"{planner:<10}{setting:<11}" + "".join(f"{results[lab]['compile'][key]:>30.2f}" for lab in labels))
+    print()
     for label, r in results.items():
         ms = r["seed003_ms"]
         print(f"seed-003-sized run (20x20, risk_aco, 100 ants x 50 iterations), {label}: jax {ms['jax']:.1f} ms, "

@@ -275,8 +275,8 @@ def hook_opt_ant_logits(tables: MapTables, params, h_cell, logits):
     progress = (d_from - d_to) / tables.step[None, None, :]
     dist_term = jnp.where(jnp.isfinite(d_to) & jnp.isfinite(d_from), jnp.clip(0.5 + 0.5 * progress, 0.0, 1.0), 0.0)
     flat = 1.0 / (1.0 + jnp.abs(tables.height[safe] - tables.height[:, None]))
-    out = []
-    for straight in (jnp.zeros_like(params["mu"]), params["mu"]):
-        eta = dist_term + straight + flat
-        out.append(logits + params["beta"] * jnp.log(eta)[:, None])
-    return jnp.stack(out).reshape(2, -1, K)
+    # Stacked before adding the logits, not after: a concatenate of two fused log-and-add loops
+    # made XLA's CPU backend emit ~1.3 MB of LLVM IR, about 2 s of this planner's compile time.
+    eta = jnp.stack([params["beta"] * jnp.log(dist_term + straight + flat)
+                     for straight in (jnp.zeros_like(params["mu"]), params["mu"])])  # [2, B, C, K]
+    return (logits[None] + eta[:, :, None]).reshape(2, -1, K)
