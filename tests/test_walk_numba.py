@@ -224,6 +224,34 @@ def test_unreachable_goal_fails_cleanly_without_nan_in_numba():
         assert (r.successes == 0).all()
 
 
+def test_walk_refuses_move_bits_of_another_grid():
+    scene = jp.RandomMapGenerator(20, 18, 0.25)(3)
+    d = _walk_inputs(scene.grid, 1, 1, 8, seed=5)
+    args = (d["nbr"], d["table"], d["start"], d["goal"], d["row0"], d["cell0"], d["seed"], d["local"], None)
+    kw = dict(max_steps=50, width=scene.grid.width, lut=move_lut(d["tables"].offsets), dead_end="die")
+    with pytest.raises(ValueError, match="bits must be move_bits"):
+        WN.walk(*args, **kw, bits=WN.move_bits(d["nbr"])[:-1])
+
+
+@pytest.mark.parametrize("dead_end", ["die", "retreat"])
+def test_nan_move_weights_stop_the_ant_as_in_the_jax_walk(dead_end):
+    """A cell whose weights are NaN (β = 0 with a geodesic heuristic where the goal is unreachable
+    gives 0·log 0) leaves the ant stuck there in both walks; the two-ant walk must not move blind."""
+    scene = jp.RandomMapGenerator(20, 18, 0.25)(3)
+    d = _walk_inputs(scene.grid, 1, 1, 64, seed=5)
+    table = np.asarray(d["table"]).copy()
+    nan_cells = np.random.default_rng(0).random(d["C"]) < 0.15
+    table[nan_cells] = np.where(np.asarray(d["tables"].valid)[nan_cells], np.nan, 0.0)
+    kw = dict(max_steps=120, width=scene.grid.width, lut=move_lut(d["tables"].offsets), dead_end=dead_end)
+    args = (d["nbr"], jnp.asarray(table), d["start"], d["goal"], d["row0"], d["cell0"], d["seed"], d["local"], None)
+    ref = jax.jit(functools.partial(walk, **kw))(*args)
+    out = jax.jit(functools.partial(WN.walk, **kw))(*args)
+    _assert_same_walk(ref, out, ["cells", "moves", "status", "ant_steps"])
+    n = np.asarray(ref.n)
+    last = np.asarray(ref.cells)[np.arange(n.size), n]
+    assert nan_cells[last].any(), "some ant should have stopped on a NaN cell"
+
+
 def test_vmap_over_params_matches_per_element_runs(room):
     """Tuning vmaps a run over parameter values: the callback then walks each element in turn."""
     grid, starts, goals = room

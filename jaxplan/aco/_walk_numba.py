@@ -512,6 +512,9 @@ def _walk_pair8(c, n_chunks, table, vbits, start, goal, row0, seed, local, max_s
     ``vbits`` holds each cell's allowed moves as bits; the weights, their running sums and the
     inverse-CDF draw are one vector sequence (`_draw8`). Same draws, same bits as `walk_ant`.
 
+    Moves come from ``lut`` and ``width`` (``nbr`` is not read): the neighbour table must be the
+    grid's own, where a valid move k from cell c leads to ``c + off[k]`` (`neighbour_table`'s).
+
     The two lanes' steps are written out twice on purpose: a shared step function inlined by numba
     keeps reference counting of its array arguments inside the loop (calls on every step, measured
     1.6x slower than the single-ant walk), and a non-inlined one costs a call per step.
@@ -551,7 +554,7 @@ def _walk_pair8(c, n_chunks, table, vbits, start, goal, row0, seed, local, max_s
             allowed = np.uint32(vbits[pos0]) & ~np.uint32(lut9[_visited3x3(seen0, pp0 - wp - 1, wp, st0)])
             k, total = _draw8(table, r0_0 + pos0, allowed, _uniform(sd0, t0, loc0))
             t0 += 1
-            if allowed != 0:  # total > 0: every allowed move weighs at least TINY
+            if total > 0:  # as walk_ant: a NaN weight (0·log 0 under β = 0) makes the ant stuck, not move blind
                 pos0 += off[k]
                 pp0 += offp[k]
                 moves[a0, n0] = k
@@ -575,7 +578,7 @@ def _walk_pair8(c, n_chunks, table, vbits, start, goal, row0, seed, local, max_s
             allowed = np.uint32(vbits[pos1]) & ~np.uint32(lut9[_visited3x3(seen1, pp1 - wp - 1, wp, st1)])
             k, total = _draw8(table, r0_1 + pos1, allowed, _uniform(sd1, t1, loc1))
             t1 += 1
-            if allowed != 0:
+            if total > 0:
                 pos1 += off[k]
                 pp1 += offp[k]
                 moves[a1, n1] = k
@@ -627,7 +630,7 @@ def _walk_chunk(c, n_chunks, nbr, table, hook_l, right_turn, turn_rule, start, g
     parallel loop, its array set-up must not become a parallel region of its own)."""
     A = start.shape[0]
     C, K = nbr.shape
-    if K == 8 and not has_hook and mode != _ALERT:
+    if K == 8 and not has_hook and mode != _ALERT and max_steps > 0:
         _walk_pair8(c, n_chunks, table, vbits, start, goal, row0, seed, local, max_steps, width, lut, mode, penalise,
                     movef, cellf, cells, moves, n_out, status_out, steps_out, part, stats)
         return
@@ -1114,6 +1117,9 @@ def walk(
     if stats is None:
         stats = StatTables(jnp.ones((K + K * K,), jnp.float32), jnp.ones((3, C), jnp.float32))
     cfg = np.array([L, width, mode, hook is not None, penalty_size > 0, _n_chunks(A)], np.int32)
+    bits = move_bits(nbr) if bits is None else jnp.asarray(bits, jnp.uint8)
+    if bits.shape != ((C,) if K == 8 else (1,)):  # the native walk sizes its tabu grid from it
+        raise ValueError(f"bits must be move_bits(nbr), of shape {(C,) if K == 8 else (1,)}, got {bits.shape}")
     shapes = [
         jax.ShapeDtypeStruct((A, L + 1), jnp.int32),  # cells
         # Move indices (< 16) as int8: a quarter of the bytes; the conversion fuses into their consumers.
@@ -1129,7 +1135,7 @@ def walk(
         i32(nbr), jnp.asarray(table, jnp.float32), jnp.asarray(hook_l, jnp.float32), i32(right_turn),
         jnp.asarray(turn_rule, bool), jnp.stack([i32(start), i32(goal), i32(row0), i32(cell0), i32(local)]),
         jnp.asarray(seed, jnp.uint32), i32(lut), jnp.asarray(alert, bool) if n_marks else jnp.zeros((1,), bool),
-        jnp.asarray(cfg), stats.movef, stats.cellf, move_bits(nbr) if bits is None else bits,
+        jnp.asarray(cfg), stats.movef, stats.cellf, bits,
     )
     return Ants(cells=cells, moves=moves, n=per_ant[0], status=per_ant[1],
                 penalty=penalty if penalty_size else None, ant_steps=per_ant[2], loop_steps=counters[0],
