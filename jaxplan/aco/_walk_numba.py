@@ -500,6 +500,19 @@ def _pair_tables(lut, width):
 
 
 @njit(cache=True, nogil=True)
+def _start_ant(a, start, goal, row0, seed, local, width, cells, seen):
+    """Puts ant ``a`` on its start for `_walk_pair8` (path slot 0, tabu stamp ``a + 1`` on the padded
+    grid ``seen``) and returns its lane's registers ``(pos, pp, goal, row0, seed, local, stamp)``:
+    ``pp`` is the start's index on the padded grid. Called once per ant, not per step."""
+    pos = np.int64(start[a])
+    pp = pos + (pos // width) * 2 + width + 3
+    stamp = np.int32(a + 1)
+    cells[a, 0] = pos
+    seen[pp] = stamp
+    return pos, pp, np.int64(goal[a]), np.int64(row0[a]), seed[a], np.int64(local[a]), stamp
+
+
+@njit(cache=True, nogil=True)
 def _walk_pair8(c, n_chunks, table, vbits, start, goal, row0, seed, local, max_steps, width, lut, mode, penalise,
                 movef, cellf, cells, moves, n_out, status_out, steps_out, penalty, stats):
     """`walk_ant` for the common case (8 moves, no hook, ``die`` or ``retreat``), two ants at a time.
@@ -537,17 +550,9 @@ def _walk_pair8(c, n_chunks, table, vbits, start, goal, row0, seed, local, max_s
     sd0 = sd1 = np.uint32(0)
     st0 = st1 = np.int32(0)
     if live0:
-        pos0 = np.int64(start[a0])
-        pp0 = pos0 + (pos0 // width) * 2 + wp + 1
-        g0, r0_0, sd0, loc0, st0 = np.int64(goal[a0]), np.int64(row0[a0]), seed[a0], np.int64(local[a0]), np.int32(a0 + 1)
-        cells[a0, 0] = pos0
-        seen0[pp0] = st0
+        pos0, pp0, g0, r0_0, sd0, loc0, st0 = _start_ant(a0, start, goal, row0, seed, local, width, cells, seen0)
     if live1:
-        pos1 = np.int64(start[a1])
-        pp1 = pos1 + (pos1 // width) * 2 + wp + 1
-        g1, r0_1, sd1, loc1, st1 = np.int64(goal[a1]), np.int64(row0[a1]), seed[a1], np.int64(local[a1]), np.int32(a1 + 1)
-        cells[a1, 0] = pos1
-        seen1[pp1] = st1
+        pos1, pp1, g1, r0_1, sd1, loc1, st1 = _start_ant(a1, start, goal, row0, seed, local, width, cells, seen1)
     while live0 or live1:
         s0 = s1 = WALKING
         if live0:
@@ -604,22 +609,18 @@ def _walk_pair8(c, n_chunks, table, vbits, start, goal, row0, seed, local, max_s
             nxt += n_chunks
             live0 = a0 < A
             if live0:
-                pos0, n0, t0 = np.int64(start[a0]), np.int64(0), np.int64(0)
-                pp0 = pos0 + (pos0 // width) * 2 + wp + 1
-                g0, r0_0, sd0, loc0, st0 = np.int64(goal[a0]), np.int64(row0[a0]), seed[a0], np.int64(local[a0]), np.int32(a0 + 1)
-                cells[a0, 0] = pos0
-                seen0[pp0] = st0
+                n0 = t0 = np.int64(0)
+                pos0, pp0, g0, r0_0, sd0, loc0, st0 = _start_ant(a0, start, goal, row0, seed, local, width,
+                                                                   cells, seen0)
         if live1 and s1 != WALKING:
             _finish_ant(a1, n1, t1, s1, cells, moves, n_out, status_out, steps_out, movef, cellf, 8, stats)
             a1 = nxt
             nxt += n_chunks
             live1 = a1 < A
             if live1:
-                pos1, n1, t1 = np.int64(start[a1]), np.int64(0), np.int64(0)
-                pp1 = pos1 + (pos1 // width) * 2 + wp + 1
-                g1, r0_1, sd1, loc1, st1 = np.int64(goal[a1]), np.int64(row0[a1]), seed[a1], np.int64(local[a1]), np.int32(a1 + 1)
-                cells[a1, 0] = pos1
-                seen1[pp1] = st1
+                n1 = t1 = np.int64(0)
+                pos1, pp1, g1, r0_1, sd1, loc1, st1 = _start_ant(a1, start, goal, row0, seed, local, width,
+                                                                   cells, seen1)
 
 
 @njit(cache=True, nogil=True)
