@@ -32,6 +32,8 @@ import subprocess
 import sys
 import time
 
+from _timing import Steal, machine_line
+
 BACKENDS = ("jax", "numba")
 SINGLE_THREADED_XLA = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
 # (label, pin the child to one core, extra XLA_FLAGS): each configuration runs in a child process of its own.
@@ -139,6 +141,7 @@ def main() -> None:
     if args.memory_child:
         print(json.dumps(measure_memory(1024, 2)))
         return
+    steal = Steal()
     memory = None
     if os.path.exists(BRC202D):
         proc = subprocess.run([sys.executable, __file__, "--memory-child"], capture_output=True, text=True, check=True)
@@ -153,7 +156,7 @@ def main() -> None:
                                "--repeats", str(args.repeats)], capture_output=True, text=True, preexec_fn=pre,
                               env=env, check=True)
         results[label] = json.loads(proc.stdout.strip().splitlines()[-1])
-    print(f"machine: {os.cpu_count()} cores; {results['default threads']['devices']}")
+    print(f"machine: {machine_line()}; {results['default threads']['devices']}")
     for label, res in results.items():
         print(f"\n{label}: M ant-steps/s (slot use of the JAX loop), compile s = XLA compile / first call minus run")
         print(f"{'planner':<8}{'ants':>6} | {'jax':>8}{'slots':>7}{'compile':>9}{'first-run':>10} | "
@@ -183,6 +186,7 @@ def main() -> None:
               f"{m['peak_rss_MB']:.0f} MB (bound 2,048 MB; {m['before_run_MB']:.0f} MB after imports and map loading); "
               f"walk buffers and move tables {m['walk_estimate_MB']:.0f} MB estimated; compile {m['compile_s']:.2f} s, "
               f"run {m['run_s']:.2f} s")
+    print(steal.summary())
 
 if __name__ == "__main__":
     main()

@@ -38,7 +38,7 @@ import sys
 import time
 
 import numpy as np
-from _timing import median_time
+from _timing import Steal, machine_line, median_time
 
 
 # ---------------------------------------------------------------------------------------------
@@ -244,6 +244,7 @@ def main() -> None:
     if args.child:
         print(json.dumps(measure(robots, args.repeat, args.child == "sharded")))
         return
+    steal = Steal()
     results = {}
     for label in ("default", "pinned", "sharded"):
         env = dict(os.environ)
@@ -256,7 +257,7 @@ def main() -> None:
                                "--robots", ",".join(str(b) for b in robots if label != "sharded" or b > 1)],
                               capture_output=True, text=True, preexec_fn=pre, env=env, check=True)
         results[label] = json.loads(proc.stdout.strip().splitlines()[-1])
-    print(f"machine: {os.cpu_count()} cores; 20 x 40 samples, 20 steps of 0.1 s (16,000 trajectory points per robot)")
+    print(f"machine: {machine_line()}; 20 x 40 samples, 20 steps of 0.1 s (16,000 trajectory points per robot)")
     names = {"default": "XLA default threads", "pinned": "pinned to 1 core", "sharded": "batch over 2 host devices"}
     print(f"\n{'threads':<26}{'clearance':<10}{'robots':>7} | {'ms/step':>9}{'M pts/s':>9}{'compile s':>10} | "
           f"{'numpy ms':>10}{'x numpy':>8}{'same choice':>12}")
@@ -271,6 +272,7 @@ def main() -> None:
         print(f"1 robot, {names[label]}: {r['episode_step_ms']:.3f} ms per control step inside a 50-step episode "
               f"(lax.scan, hybrid); host front dwa_step with every rollout kept: {r['front_ms']:.3f} ms")
     print("targets: <= 0.2 ms per single-robot step, >= 200 M points/s for >= 64 robots, >= 3x numpy, compile <= 1 s")
+    print(steal.summary())
 
 
 if __name__ == "__main__":

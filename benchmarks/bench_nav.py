@@ -272,10 +272,15 @@ def main() -> None:
     args.pipeline_maps = [m for m in args.pipeline_maps.split(",") if m]
     import jax
 
-    print(f"jax {jax.__version__} on {jax.devices()[0].platform}, {os.cpu_count()} cores; maps from {d}")
+    sys.path.insert(0, str(Path(__file__).parent))
+    from _timing import Steal, machine_line
+
+    steal = Steal()
+    print(f"jax {jax.__version__} on {jax.devices()[0].platform}, {machine_line()}; maps from {d}")
     print(f"{args.rows} rows (optimal <= 80 cells) x {args.seeds} seeds per map")
     for s in args.sections.split(","):
         {"maps": section_maps, "pipelines": section_pipelines, "multi": section_multi, "speed": section_speed}[s](d, args)
+    print(steal.summary())
 
 
 if __name__ == "__main__":

@@ -37,6 +37,8 @@ import subprocess
 import sys
 import textwrap
 
+from _timing import Steal, machine_line
+
 CHILD = r"""
 import json, statistics, sys, time
 import numpy as np
@@ -130,7 +132,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--only", default="aco,nav,tune", help="comma-separated workloads: aco, nav, tune")
     args = ap.parse_args(argv)
-    print(f"cores: {os.cpu_count()}, affinity: {len(os.sched_getaffinity(0))}")
+    steal = Steal()
+    print(f"machine: {machine_line()}")
     for work in args.only.split(","):
         print(f"\n{work}: {textwrap.shorten(__doc__.split(work + '  ')[1].split(chr(10) + chr(10))[0], 300)}")
         print(f"{'configuration':38s} {'rate':>10s} {'unit':>11s} {'vs row 1':>9s}")
@@ -145,6 +148,7 @@ def main(argv: list[str] | None = None) -> None:
             if d > 1:  # the same process, mesh=None (one device), timed in turn with the mesh
                 print(f"{'  same process, mesh=None (1 device)':38s} {r['one']:10.2f} {r['unit']:>11s} "
                       f"{r['one'] / base:8.2f}x   mesh / mesh=None: {r['rate'] / r['one']:.2f}x", flush=True)
+    print(steal.summary())
 
 
 if __name__ == "__main__":

@@ -25,6 +25,8 @@ from pathlib import Path
 import jax
 import numpy as np
 
+from _timing import Steal, machine_line
+
 from jaxplan.aco._tsp import solve_tsp
 from jaxplan.aco._tsplib import load_tsplib
 
@@ -50,7 +52,8 @@ def main() -> None:
     args = ap.parse_args()
     folder = Path(args.data_dir) / "tsplib"
     optima = _manifest(folder)
-    print(f"machine: {os.cpu_count()} cores; {jax.devices()}")
+    steal = Steal()
+    print(f"machine: {machine_line()}; {jax.devices()}")
     print(f"\n{'instance':<10}{'planner':<12}{'runs':>5}{'mean':>9}{'min':>7}{'max':>7}{'mean gap':>10}"
           f"{'opt hits':>9}{'conv it':>8}{'run s':>7}{'ms/it':>7}{'compile s':>10}")
     for name in ("eil51", "berlin52"):
@@ -83,6 +86,7 @@ def main() -> None:
               f"{first.info['compile_s']:>11.2f}")
     target_ms = math.floor(1e4 * REFERENCE_S_PER_ITERATION / TARGET_SPEEDUP) / 10
     print(f"(target: >= {TARGET_SPEEDUP:.0f}x, i.e. <= {target_ms} ms per iteration)")
+    print(steal.summary())
 
 
 if __name__ == "__main__":

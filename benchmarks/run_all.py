@@ -97,7 +97,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
-from _timing import median_time  # noqa: E402
+from _timing import Steal, cpu_info, machine_line, median_time  # noqa: E402
 
 PAPER_SEED003_MS = 8468.0
 SECTIONS = ("aco", "dwa", "exact", "metrics", "episodes", "tune", "tsp", "scale")
@@ -189,7 +189,7 @@ def machine() -> dict[str, Any]:
 
     aff = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None
     return {
-        "cpu": _cpu_model(), "cores": os.cpu_count(), "affinity": aff, "ram_gb": _ram_gb(),
+        "cpu": _cpu_model(), "cpu_info": cpu_info(), "cpu_line": machine_line(), "cores": os.cpu_count(), "affinity": aff, "ram_gb": _ram_gb(),
         "load_avg": list(os.getloadavg()) if hasattr(os, "getloadavg") else None,
         "python": platform.python_version(), "platform": platform.platform(),
         "jax": _version("jax"), "jaxlib": _version("jaxlib"), "numba": _version("numba"),
@@ -699,10 +699,11 @@ def main(argv: list[str] | None = None) -> None:
     started = dt.datetime.now(dt.timezone.utc)
     t_start = time.perf_counter()
     mach = machine()
+    steal = Steal()
     print(f"jaxplan benchmarks ({'quick' if args.quick else 'default'} sizes), {started:%Y-%m-%d %H:%M} UTC")
-    print(f"machine: {mach['cpu']}, {mach['cores']} cores (affinity {mach['affinity']}), "
+    print(f"machine: {mach['cpu_line']} (affinity {mach['affinity']}), "
           f"{mach['ram_gb']:.1f} GB RAM, load {mach['load_avg'][0]:.1f}" if mach["ram_gb"] and mach["load_avg"]
-          else f"machine: {mach['cpu']}, {mach['cores']} cores")
+          else f"machine: {mach['cpu_line']}")
     print(f"  jax {mach['jax']}, jaxlib {mach['jaxlib']}, numba {mach['numba']}, numpy {mach['numpy']}, "
           f"scipy {mach['scipy']}; devices {mach['devices']}; git {mach['git_rev']}"
           f"{' (uncommitted changes)' if mach['git_dirty'] else ''}", flush=True)
@@ -723,6 +724,8 @@ def main(argv: list[str] | None = None) -> None:
     print("\nspeed-up: times faster than the reference (>1: jaxplan faster); n: repeats of the median; "
           "compilation excluded\n")
     print(table(rows))
+    mach["steal_fraction"] = steal.fraction()
+    print(steal.summary())
     print(f"\nwall time {wall:.0f} s ({', '.join(f'{k} {v:.0f} s' for k, v in timings.items())})")
     data = {"started_utc": started.isoformat(timespec="seconds"), "quick": args.quick, "machine": mach,
             "options": {k: v for k, v in vars(args).items() if k not in ("json",)}, "wall_s": wall,
