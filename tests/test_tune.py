@@ -96,7 +96,12 @@ def test_strategy_runs_inside_lax_scan_as_in_a_python_loop(name, box):
     for g in range(5):
         pop = ask(jax.random.fold_in(jax.random.key(1), g), looped)
         looped = tell(looped, pop, sphere(pop))
-    np.testing.assert_allclose(scanned.best_x, looped.best_x, rtol=1e-5, atol=1e-6)
+    # The surrogate's candidate comes out of a ridge solve and 100 Adam steps on the fit, which
+    # amplify the float32 rounding differences between one fused scan and separately compiled
+    # calls: 2.7e-5 relative on an AVX-512 host (1e-5 held on the host of earlier sessions). A wrong carry would
+    # differ by orders of magnitude more.
+    rtol = 2e-4 if name == "surrogate" else 1e-5
+    np.testing.assert_allclose(scanned.best_x, looped.best_x, rtol=rtol, atol=1e-6)
 
 
 def test_sanitize_turns_nan_and_inf_into_the_worst_value():
