@@ -48,7 +48,7 @@ def cpu_info() -> dict:
             info[name] = int(fields[key])
     flags = set(fields.get("flags", "").split())
     info["isa"] = ("AVX-512" if "avx512f" in flags else "AVX2" if "avx2" in flags else "AVX" if "avx" in flags
-                   else "SSE" if flags else "unknown")
+                   else "no AVX" if flags else "unknown")
     return info
 
 
@@ -67,10 +67,10 @@ def _cpu_ticks() -> tuple[int, int] | None:
     """(steal, total) jiffies of all CPUs since boot, or None off Linux."""
     try:
         parts = Path("/proc/stat").read_text().splitlines()[0].split()
-    except (OSError, IndexError):
+        ticks = [int(x) for x in parts[1:9]]  # user nice system idle iowait irq softirq steal
+        return ticks[7], sum(ticks)
+    except (OSError, IndexError, ValueError):  # no /proc, or a kernel without the steal column
         return None
-    ticks = [int(x) for x in parts[1:9]]  # user nice system idle iowait irq softirq steal
-    return ticks[7], sum(ticks)
 
 
 class Steal:
@@ -85,8 +85,9 @@ class Steal:
             return None
         return (end[0] - self._start[0]) / (end[1] - self._start[1])
 
-    def summary(self) -> str:
-        f = self.fraction()
+    def summary(self, fraction: float | None = None) -> str:
+        """``fraction``: a value `fraction` returned before (so a printed and a stored figure agree)."""
+        f = self.fraction() if fraction is None else fraction
         if f is None:
             return "CPU steal during the run: not measurable here"
         note = " (the host lent these cores to other guests: figures are low)" if f > 0.02 else ""

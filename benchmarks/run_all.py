@@ -189,7 +189,8 @@ def machine() -> dict[str, Any]:
 
     aff = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None
     return {
-        "cpu": _cpu_model(), "cpu_info": cpu_info(), "cpu_line": machine_line(), "cores": os.cpu_count(), "affinity": aff, "ram_gb": _ram_gb(),
+        "cpu": _cpu_model(), "cpu_info": cpu_info(), "cpu_line": machine_line(),
+        "cores": os.cpu_count(), "affinity": aff, "ram_gb": _ram_gb(),
         "load_avg": list(os.getloadavg()) if hasattr(os, "getloadavg") else None,
         "python": platform.python_version(), "platform": platform.platform(),
         "jax": _version("jax"), "jaxlib": _version("jaxlib"), "numba": _version("numba"),
@@ -725,7 +726,7 @@ def main(argv: list[str] | None = None) -> None:
           "compilation excluded\n")
     print(table(rows))
     mach["steal_fraction"] = steal.fraction()
-    print(steal.summary())
+    print(steal.summary(mach["steal_fraction"]))
     print(f"\nwall time {wall:.0f} s ({', '.join(f'{k} {v:.0f} s' for k, v in timings.items())})")
     data = {"started_utc": started.isoformat(timespec="seconds"), "quick": args.quick, "machine": mach,
             "options": {k: v for k, v in vars(args).items() if k not in ("json",)}, "wall_s": wall,
