@@ -386,3 +386,30 @@ def test_core_traces_once_per_configuration(clutter):
     assert len(traces) == 1  # limits, distances and weights are traced
     step(cfg.replace(n_v=5), default_params(), s)
     assert len(traces) == 2  # sample counts are static
+
+
+def test_rollouts_are_checked_only_until_they_enter_the_finish_disc():
+    free = np.zeros((7, 30), bool)
+    free[2:5, 1:20] = True  # a corridor 1.5 m wide, closed at x = 10 m
+    grid = jp.grid_from_array(free, resolution=0.5)
+    table = clearance_table(collision_map(grid))
+    config = DWAConfig(keep_rollouts=True)
+    state = jnp.asarray([8.0, 1.75, 0.0, 1.0, 0.0])  # 1 m/s towards the end wall, 2 m away
+    goal = jnp.asarray([9.0, 1.75])
+    control = jax.jit(dwa_control)
+    _, plain = control(table, config, default_params(), state, goal)
+    finish = jnp.asarray([9.0, 1.75, 0.5])
+    _, ended = control(table, config, default_params(), state, goal, None, None, finish)
+    samples = np.asarray(ended.samples)
+    straight = np.argmin(np.abs(samples[:, 1]) - samples[:, 0])  # the fastest sample with the least turn
+    assert abs(samples[straight, 1]) < 0.06 and samples[straight, 0] > 0.9
+    assert not plain.feasible[straight]  # run on for 2 s, it reaches the end wall ...
+    assert ended.feasible[straight]  # ... but the robot stops in the goal disc, 1 m short of it
+    pts = np.asarray(ended.rollouts[straight, :, :2])
+    inside = np.hypot(*(pts - [9.0, 1.75]).T) <= 0.5
+    first = int(np.argmax(inside))
+    assert inside.any() and first < len(pts) - 1
+    want = _brute_clearance(pts[:first + 1], free, 0.5).min()  # up to and including the first point inside
+    assert float(ended.clearance[straight]) == pytest.approx(want, abs=2e-3)
+    assert float(plain.clearance[straight]) < 0.3
+    np.testing.assert_array_equal(np.asarray(plain.samples), samples)

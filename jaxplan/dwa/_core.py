@@ -153,7 +153,7 @@ def _current_clearance(clearance, state: jnp.ndarray, footprint) -> jnp.ndarray:
 
 def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, state: jnp.ndarray,
                 subgoal: jnp.ndarray, obstacles: DiscObstacles | None = None,
-                path: jnp.ndarray | None = None) -> tuple[jnp.ndarray, DWAInfo]:
+                path: jnp.ndarray | None = None, finish: jnp.ndarray | None = None) -> tuple[jnp.ndarray, DWAInfo]:
     """One DWA step for one robot (pure; jit it, vmap it, scan it, differentiate it).
 
     Args:
@@ -165,6 +165,8 @@ def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, sta
       obstacles: `DiscObstacles` with ``M`` discs (``[M, 2]`` positions and velocities,
         ``[M]`` radii) or None.
       path: ``f32[L, 2]`` the global path (m) for the path critic, or None.
+      finish: ``f32[3]`` (x, y, radius) the goal region where the robot's run ends, or None:
+        rollout points after a rollout enters it are not checked (see `rollout`).
 
     Returns:
       ``(control f32[2] = (v, omega), DWAInfo)``.
@@ -181,7 +183,7 @@ def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, sta
         return c
 
     ro = rollout(state, v, w, clearance, robot.footprint, steps, dt, keep=config.keep_rollouts,
-                 unroll=config.unroll)
+                 unroll=config.unroll, finish=finish)
     threshold = config.d_safe
     if config.escape:
         threshold = jnp.minimum(threshold, _current_clearance(clearance, state, robot.footprint) - ESCAPE_SLACK)
@@ -226,8 +228,8 @@ def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, sta
 
 def dwa_control_batch(table: ClearanceTable, config: DWAConfig, params: DWAParams, states: jnp.ndarray,
                       subgoals: jnp.ndarray, obstacles: DiscObstacles | None = None, path: jnp.ndarray | None = None,
-                      chunk: int | None = 128) -> tuple[jnp.ndarray, DWAInfo]:
-    """`dwa_control` for ``B`` robots: ``states [B, 5]``, ``subgoals [B, 2]``.
+                      chunk: int | None = 128, finish: jnp.ndarray | None = None) -> tuple[jnp.ndarray, DWAInfo]:
+    """`dwa_control` for ``B`` robots: ``states [B, 5]``, ``subgoals [B, 2]``, ``finish [B, 3]`` or None.
 
     ``obstacles`` may be shared (``[M, 2]``/``[M]`` fields) or per robot (``[B, M, 2]``/``[B, M]``);
     ``path`` shared ``[L, 2]`` or per robot ``[B, L, 2]``. Robots are processed ``chunk``
@@ -240,12 +242,12 @@ def dwa_control_batch(table: ClearanceTable, config: DWAConfig, params: DWAParam
     """
     ob_batched = obstacles is not None and obstacles.radii.ndim == 2
     path_batched = path is not None and path.ndim == 3
-    xs = (states, subgoals, obstacles if ob_batched else None, path if path_batched else None)
+    xs = (states, subgoals, obstacles if ob_batched else None, path if path_batched else None, finish)
 
     def one(x):
-        st, sg, ob, pa = x
+        st, sg, ob, pa, fi = x
         return dwa_control(table, config, params, st, sg, ob if ob_batched else obstacles,
-                           pa if path_batched else path)
+                           pa if path_batched else path, fi)
 
     if chunk is None or chunk >= states.shape[0]:
         return jax.vmap(one)(xs)

@@ -57,7 +57,8 @@ class Rollouts(NamedTuple):
 
 
 def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: ClearanceFn, footprint: Footprint,
-            steps: int, dt: float, keep: bool = False, unroll: int = 1) -> Rollouts:
+            steps: int, dt: float, keep: bool = False, unroll: int = 1,
+            finish: jnp.ndarray | None = None) -> Rollouts:
     """Rolls out S constant-velocity samples from ``state`` and tracks their clearance.
 
     Args:
@@ -72,6 +73,10 @@ def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: Clear
       keep: also return every pose ``[S, T, 3]`` (static).
       unroll: steps per loop iteration (static; `lax.scan`'s ``unroll``). On a CPU every
         iteration launches a few kernels, which for one robot costs more than the arithmetic.
+      finish: ``f32[3]`` (x, y, radius): the disc where the robot's run ends (its goal region),
+        or None. A rollout's points after its first point inside the disc do not count towards
+        its clearance: the robot stops there, and a constant-velocity rollout that runs on
+        past a goal at the end of a dead end would otherwise hit the end wall.
     """
     x0, y0, th0 = state[0], state[1], state[2]
     dtype = v.dtype
@@ -107,21 +112,35 @@ def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: Clear
     # Both initial carries derive from the inputs (not constants), so that the loop also
     # works inside shard_map, where a carry must vary along the sharded axes like its update.
     init = (rot, v * 0.0 + jnp.inf)
+    if finish is not None:
+        init = init + ((v * 0.0) > 0.0,)  # inside the finish disc yet: False (and NaN-proof)
+
+    def track(carry, x, y, clr):
+        """The carry after a point: running minimum clearance (and whether the finish was reached)."""
+        if finish is None:
+            return (jnp.minimum(carry[1], clr),)
+        inside = carry[2]
+        m = jnp.minimum(carry[1], jnp.where(inside, jnp.inf, clr))
+        dx, dy = x - finish[0], y - finish[1]
+        return m, inside | (dx * dx + dy * dy <= finish[2] * finish[2])
+
     if keep:
         def body(carry, k):
-            q, m = carry  # q = e^{i(k+1)φ}: the rotor of this step's point
+            q = carry[0]  # q = e^{i(k+1)φ}: the rotor of this step's point
             x, y, t, clr = point(q, k + 1)
-            return (q * rot, jnp.minimum(m, clr)), jnp.stack([x, y, th0 + w * t], axis=-1)
+            return (q * rot,) + track(carry, x, y, clr), jnp.stack([x, y, th0 + w * t], axis=-1)
 
-        (q, m), poses = lax.scan(body, init, jnp.arange(steps, dtype=jnp.int32), unroll=unroll)
+        carry, poses = lax.scan(body, init, jnp.arange(steps, dtype=jnp.int32), unroll=unroll)
         poses = jnp.swapaxes(poses, 0, 1)
     else:
         def body(k, carry):  # the loop counter itself gives k: no per-step index kernel
-            q, m = carry
-            return q * rot, jnp.minimum(m, point(q, k + 1)[3])
+            q = carry[0]
+            x, y, _, clr = point(q, k + 1)
+            return (q * rot,) + track(carry, x, y, clr)
 
-        q, m = lax.fori_loop(0, steps, body, init, unroll=unroll)
+        carry = lax.fori_loop(0, steps, body, init, unroll=unroll)
         poses = None
+    q, m = carry[0], carry[1]
     q = q * jnp.conj(rot)  # undo the last advance: e^{iTφ}
     x, y = pose(q, jnp.asarray(steps, dtype))
     end = jnp.stack([x, y, th0 + w * (steps * dt)], axis=-1)
