@@ -215,3 +215,66 @@ def test_path_blocked_sees_discs_near_the_next_metres():
     far = path_blocked(pos, wp, 2, 0, jnp.asarray([[5.0, 4.0]]), jnp.asarray([0.5]), 3.0)
     beyond = path_blocked(pos, wp, 2, 0, jnp.asarray([[5.0, 4.0]]), jnp.asarray([0.5]), 20.0)
     assert bool(on) and not bool(far) and bool(beyond)
+
+
+def test_a_robot_orbiting_a_waypoint_creeps_to_it(movingai):
+    # random-32-32-20's scenario row 158: the first waypoint is 4 m straight ahead of the start;
+    # once at full speed the DWA's 2 s rollouts through it all overshoot it, and the robot
+    # circled 1.1-2.3 m from it until the time limit (measured).
+    grid = jp.load_map(movingai / "random-32-32-20.map", resolution=1.0)
+    start, goal = (8, 0), (1, 14)
+    cfg = NavConfig(max_time=60.0)
+    orbit = jp.navigate(grid, start, goal, pipeline="iaco_dwa", seed=0, config=cfg.replace(stall_time=math.inf))
+    assert not orbit.success and orbit.reason == "time limit"
+    ep = jp.navigate(grid, start, goal, pipeline="iaco_dwa", seed=0, config=cfg)
+    assert ep.success and ep.collisions == 0, ep.reason
+    # It crept (a commanded speed at the creep cap after full speed) and sped up again past the waypoint.
+    v = ep.controls[:, 0]
+    fast = np.nonzero(v > 1.0)[0]
+    assert len(fast)
+    creeping = np.nonzero((v <= cfg.stall_speed + 1e-6) & (np.arange(len(v)) > fast[0]))[0]
+    assert len(creeping) and v[creeping[0]:].max() > cfg.stall_speed + 0.5
+
+
+def test_stall_settings_must_be_positive(room):
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="stall_time"):
+            jp.navigate(room, (2, 2), (21, 8), global_planner="astar", config=NavConfig(stall_time=bad))
+    for field, bad in (("stall_progress", 0.0), ("stall_progress", math.inf), ("stall_speed", 0.0),
+                       ("stall_speed", float("nan"))):
+        with pytest.raises(ValueError, match=field):
+            jp.navigate(room, (2, 2), (21, 8), global_planner="astar", config=NavConfig(**{field: bad}))
+
+
+def test_a_waypoint_is_passed_early_only_if_the_way_on_is_clear():
+    from jaxplan.dwa import clearance_table, static_clearance
+    from jaxplan.grid._collision import collision_map
+    from jaxplan.nav._episode import _subgoal_index
+
+    free = np.ones((5, 5), bool)
+    free[2, 1] = False  # cell (1, 2): its corner (2, 2) m is beside the robot
+    table = clearance_table(collision_map(jp.grid_from_array(free, resolution=1.0)))
+    index = jax.jit(lambda pos, wp: _subgoal_index(pos, wp, jnp.asarray(3), jnp.asarray(0), 1.0, 0.25, 0.3,
+                                                   lambda x, y: static_clearance(table, x, y, "hybrid")))
+    corner = [2.5, 1.5]
+    # 0.95 m from the corner waypoint: the straight way to the next grazes the blocked cell (0.22 m) -> hold.
+    assert int(index(jnp.asarray([2.4, 2.45]), jnp.asarray([corner, [0.5, 1.5], [0.5, 0.5]]))) == 0
+    # The same, with a next waypoint in plain view -> passed, as the switch radius says.
+    assert int(index(jnp.asarray([2.4, 2.45]), jnp.asarray([corner, [2.5, 0.5], [0.5, 0.5]]))) == 1
+    # Within switch_min of the corner waypoint it is passed whatever lies ahead.
+    assert int(index(jnp.asarray([2.5, 1.7]), jnp.asarray([corner, [0.5, 1.5], [0.5, 0.5]]))) == 1
+
+
+def test_a_goal_at_the_end_of_a_dead_end_is_reached():
+    # A 1 m corridor closed at x = 14 m with the goal in its last cell and a side way out just
+    # before it. Fast, the DWA's 2 s rollouts run on into the end wall, and on maze-32-32-2 (row
+    # 319) a robot took such a side way and never came back; rollouts are now checked only up to
+    # the goal disc (tests/test_dwa.py), and a stalled robot creeps and re-plans. Here the robot
+    # arrives either way: this checks the whole episode.
+    free = np.zeros((12, 16), bool)
+    free[1:8, 1:4] = True  # a 3 m x 7 m room ...
+    free[4, 1:14] = True  # ... with a 1 m corridor leaving it to the east
+    free[5:11, 11:13] = True  # and a side way out of the corridor, 1.5 m before its end
+    grid = jp.grid_from_array(free, resolution=1.0)
+    ep = jp.navigate(grid, (2, 4), (13, 4), global_planner="astar", config=NavConfig(max_time=60.0))
+    assert ep.success and ep.collisions == 0, ep.reason

@@ -129,6 +129,10 @@ class _Carry(NamedTuple):
     origin: jnp.ndarray  # [B, N, 2] where the tracked polyline begins (start, or the position at a re-plan)
     sq_error: jnp.ndarray  # [B, N] sum of squared distances to the tracked polyline
     error: jnp.ndarray  # [B, N] distance to the tracked polyline after the last step
+    watch: jnp.ndarray  # [B, N, 2] the waypoint whose approach is being watched (m)
+    closest: jnp.ndarray  # [B, N] closest approach to that waypoint so far (m)
+    progress_t: jnp.ndarray  # [B, N] step of the last approach by NavConfig.stall_progress
+    creep: jnp.ndarray  # [B, N] stalled: top speed corner_speed until the waypoint changes
     t: jnp.ndarray  # scalar step counter
 
 
@@ -143,13 +147,34 @@ def _robot_discs(state: jnp.ndarray, robot) -> tuple[jnp.ndarray, jnp.ndarray]:
     return jnp.stack([state[..., 0:1] + off * c, state[..., 1:2] + off * s], axis=-1), r
 
 
-def _subgoal_index(pos: jnp.ndarray, wp: jnp.ndarray, n: jnp.ndarray, index: jnp.ndarray, radius) -> jnp.ndarray:
-    """First waypoint from ``index`` on that is farther than ``radius`` (the last if none). ``pos [2]``."""
+_SIGHT_POINTS = 32
+_SIGHT_STEP = 0.1
+"""The straight way to a waypoint is checked at this many points this far apart (m): corners within 3.2 m."""
+
+
+def _subgoal_index(pos: jnp.ndarray, wp: jnp.ndarray, n: jnp.ndarray, index: jnp.ndarray, radius, near, d_safe,
+                   clearance) -> jnp.ndarray:
+    """The current waypoint: the first from ``index`` on that is farther than ``radius`` (the last if
+    none) — unless the straight way to it from ``pos [2]`` comes closer than ``d_safe`` to the map
+    (``clearance(x, y)``, m) within 3.2 m; then the one before it, until that is within ``near``.
+
+    Passing a waypoint a metre early cuts the corner it marks: measured on random-64-64-20 (row
+    347), a robot 0.94 m below a corner waypoint took the next one, whose straight way grazed the
+    corner's blocked cell, and sat still facing it until the time limit.
+    """
     K = wp.shape[0]
     j = jnp.arange(K)
-    far = jnp.sqrt(jnp.sum((wp - pos) ** 2, axis=-1)) >= radius
-    cand = (j >= index) & (j < n) & far
-    return jnp.where(jnp.any(cand), jnp.argmax(cand), n - 1).astype(jnp.int32)
+    dist = jnp.sqrt(jnp.sum((wp - pos) ** 2, axis=-1))
+    cand = (j >= index) & (j < n) & (dist >= radius)
+    nxt = jnp.where(jnp.any(cand), jnp.argmax(cand), n - 1).astype(jnp.int32)
+    prev = jnp.maximum(nxt - 1, index)
+    gap = wp[nxt] - pos
+    length = jnp.sqrt(jnp.sum(gap * gap))
+    s = jnp.minimum(jnp.arange(1, _SIGHT_POINTS + 1, dtype=pos.dtype) * _SIGHT_STEP, length)
+    pts = pos + s[:, None] * (gap / jnp.maximum(length, 1e-6))
+    blocked = jnp.any(clearance(pts[:, 0], pts[:, 1]) < d_safe)
+    hold = (nxt > index) & blocked & (dist[prev] >= near)
+    return jnp.where(hold, prev, nxt)
 
 
 def _lookahead_point(pos: jnp.ndarray, wp: jnp.ndarray, n: jnp.ndarray, index: jnp.ndarray, ahead) -> tuple:
@@ -199,6 +224,26 @@ def _corner_cap(config: NavConfig, pos: jnp.ndarray, wp: jnp.ndarray, n: jnp.nda
     d_goal = jnp.sqrt(jnp.sum((wp[jnp.maximum(n - 1, 0)] - pos) ** 2))
     cap = jnp.minimum(cap, jnp.sqrt(v_c ** 2 + 2.0 * decel * jnp.maximum(d_goal - config.goal_tolerance, 0.0)))
     return jnp.minimum(cap, jnp.where((index > 0) & turn(prev), behind, jnp.inf))
+
+
+def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, discs: jnp.ndarray, radii: jnp.ndarray) -> _Carry:
+    """Updates the stall watch (see `NavConfig.stall_time`): ``pos [B, N, 2]``, discs ``[B, N, D, 2]`` / ``[B, N, D]``.
+
+    The watch restarts whenever the current waypoint changes (passed, or another after a
+    re-plan), and while a disc is near (then slow progress is an evasion or a wait, not an orbit).
+    """
+    target = jnp.take_along_axis(c.waypoints, c.index[..., None, None], axis=2)[:, :, 0]  # [B, N, 2]
+    d = jnp.sqrt(jnp.sum((target - pos) ** 2, axis=-1))
+    gap = jnp.sqrt(jnp.sum((discs - pos[:, :, None, :]) ** 2, axis=-1)) - radii
+    crowded = jnp.any(gap < 0.5 * config.block_distance, axis=-1)
+    restart = jnp.any(target != c.watch, axis=-1) | crowded  # the initial NaN restarts
+    closer = d < c.closest - config.stall_progress
+    reset = restart | closer
+    progress_t = jnp.where(reset, c.t, c.progress_t)
+    closest = jnp.where(reset, d, c.closest)
+    stalled = (c.t - progress_t).astype(jnp.float32) * config.dwa.period >= config.stall_time
+    creep = ~restart & (c.creep | stalled)
+    return c._replace(watch=target, closest=closest, progress_t=progress_t, creep=creep)
 
 
 def _follow(config: NavConfig, robot, state: jnp.ndarray, subgoal: jnp.ndarray) -> jnp.ndarray:
@@ -318,9 +363,18 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
 
     # Sub-goals.
     pos = c.state[..., :2]
-    index = jax.vmap(jax.vmap(_subgoal_index, in_axes=(0, 0, 0, 0, None)), in_axes=(0, 0, 0, 0, None))(
-        pos, c.waypoints, c.n_wp, c.index, config.switch_radius)
+    # Only a creeping robot holds a waypoint whose way on is not clear: applied to every robot, the
+    # rule sharpened turns at corners (warehouse, mean max curvature 1.20 -> 1.94 1/m) and cost
+    # evasions among walkers (random-64-64-20 with 5 walkers, 5 seeds: success 94.4 -> 90.0 %).
+    near = jnp.where(c.creep, config.switch_min, config.switch_radius).reshape(-1)
+    index = jax.vmap(_subgoal_index, in_axes=(0, 0, 0, 0, None, 0, None, None))(
+        pos.reshape(B * N, 2), c.waypoints.reshape((B * N,) + c.waypoints.shape[2:]), c.n_wp.reshape(-1),
+        c.index.reshape(-1), config.switch_radius, near, dwa.d_safe,
+        lambda x, y: static_clearance(table, x, y, "hybrid")).reshape(B, N)
     c = c._replace(index=index)
+
+    creeping = c.creep
+    c = _watch_progress(config, c, pos, pos_all, rad_all)
 
     if config.replan:
         reach = rad_all + rr + config.block_margin
@@ -350,11 +404,17 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
             blocked = jnp.zeros((B, N), bool)
             future, P = pos_all[:, :, :, None, :], 1
         due = (c.t - c.last_replan).astype(jnp.float32) * period >= config.replan_period - 1e-6
-        need = (blocked | lost) & due & ~c.done
+        # A robot that starts creeping also re-plans from where it stalled: momentum may have
+        # carried it into a pocket the old path's next waypoint cannot be reached from in a line.
+        need = (blocked | lost | (c.creep & ~creeping)) & due & ~c.done
         closing = future.reshape(B, N, -1, 2), jnp.repeat(reach, P, axis=-1)
         c, tried = lax.cond(jnp.any(need), lambda cc: _replan(config, free, res, cc, inputs, need, *closing),
                             lambda cc: (cc, jnp.zeros_like(need)), c)
         c = c._replace(last_replan=jnp.where(tried, c.t, c.last_replan))
+        # A creeping robot keeps creeping along its new path, to that path's first waypoint: released
+        # by the re-plan, the robot that orbited went back to full speed and orbited again (measured).
+        new_target = jnp.take_along_axis(c.waypoints, c.index[..., None, None], axis=2)[:, :, 0]
+        c = c._replace(watch=jnp.where((c.creep & tried)[..., None], new_target, c.watch))
 
     if config.subgoal == "key_nodes":
         sub = jnp.take_along_axis(c.waypoints, c.index[..., None, None], axis=2)[:, :, 0]
@@ -363,19 +423,24 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
             pos, c.waypoints, c.n_wp, c.index, config.lookahead)
         c = c._replace(index=seg)
 
-    # Local planner, its top speed capped near corners.
+    # Local planner, its top speed capped near corners (and while creeping).
     flat = lambda x: x.reshape((B * N,) + x.shape[2:])  # noqa: E731
     cap = jax.vmap(lambda p_, w_, n_, i_: _corner_cap(config, p_, w_, n_, i_, robot.decel))(
         flat(pos), flat(c.waypoints), flat(c.n_wp), flat(c.index))
     v_top = jnp.minimum(robot.v_max, jnp.maximum(cap, config.corner_speed))
+    v_top = jnp.where(flat(c.creep), jnp.minimum(v_top, config.stall_speed), v_top)
     if config.local == "dwa":
         discs = DiscObstacles(flat(pos_all), flat(vel_all), flat(rad_all))
 
-        def control(state, subgoal, d, wp, vmax):
+        def control(state, subgoal, d, wp, vmax, finish):
             cfg = dataclasses.replace(dwa, robot=dataclasses.replace(robot, v_max=vmax))
-            return dwa_control(table, cfg, params, state, subgoal, d, wp if config.path_critic else None)
+            return dwa_control(table, cfg, params, state, subgoal, d, wp if config.path_critic else None, finish)
 
-        u, info = jax.vmap(control)(flat(c.state), flat(sub), discs, flat(c.waypoints), v_top)
+        # The run ends in the goal disc: rollouts are checked only until they enter it (a goal at
+        # the end of a dead end is otherwise reached only by rollouts that run on into its end wall).
+        finish = jnp.concatenate([flat(inputs.goal), jnp.full((B * N, 1), config.goal_tolerance, inputs.goal.dtype)],
+                                 axis=-1)
+        u, info = jax.vmap(control)(flat(c.state), flat(sub), discs, flat(c.waypoints), v_top, finish)
         recovery = info.recovery.reshape(B, N)
     else:
         u = jax.vmap(lambda s, g, vmax: _follow(config, dataclasses.replace(robot, v_max=vmax), s, g))(
@@ -449,7 +514,8 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
         reason=zeros, steps=zeros, hit=jnp.zeros((B, N), bool), pair_hit=jnp.zeros((B, N, N), bool),
         collisions=zeros, pair_collisions=jnp.zeros((B, N, N), jnp.int32), replans=zeros,
         last_replan=zeros - 10**6, origin=inputs.start[..., :2], sq_error=jnp.zeros((B, N), inputs.start.dtype),
-        error=jnp.zeros((B, N), inputs.start.dtype),
+        error=jnp.zeros((B, N), inputs.start.dtype), watch=jnp.full((B, N, 2), jnp.nan, inputs.start.dtype),
+        closest=jnp.zeros((B, N), inputs.start.dtype), progress_t=zeros, creep=jnp.zeros((B, N), bool),
         t=jnp.asarray(0, jnp.int32),
     )
     states = jnp.broadcast_to(inputs.start[None], (steps + 1, B, N, 5))
