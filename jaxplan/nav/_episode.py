@@ -226,16 +226,14 @@ def _corner_cap(config: NavConfig, pos: jnp.ndarray, wp: jnp.ndarray, n: jnp.nda
     return jnp.minimum(cap, jnp.where((index > 0) & turn(prev), behind, jnp.inf))
 
 
-def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, discs: jnp.ndarray, radii: jnp.ndarray) -> _Carry:
-    """Updates the stall watch (see `NavConfig.stall_time`): ``pos [B, N, 2]``, discs ``[B, N, D, 2]`` / ``[B, N, D]``.
+def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp.ndarray) -> _Carry:
+    """Updates the stall watch (see `NavConfig.stall_time`): ``pos [B, N, 2]``; ``crowded [B, N]``: a disc is near.
 
     The watch restarts whenever the current waypoint changes (passed, or another after a
     re-plan), and while a disc is near (then slow progress is an evasion or a wait, not an orbit).
     """
     target = jnp.take_along_axis(c.waypoints, c.index[..., None, None], axis=2)[:, :, 0]  # [B, N, 2]
     d = jnp.sqrt(jnp.sum((target - pos) ** 2, axis=-1))
-    gap = jnp.sqrt(jnp.sum((discs - pos[:, :, None, :]) ** 2, axis=-1)) - radii
-    crowded = jnp.any(gap < 0.5 * config.block_distance, axis=-1)
     restart = jnp.any(target != c.watch, axis=-1) | crowded  # the initial NaN restarts
     closer = d < c.closest - config.stall_progress
     reset = restart | closer
@@ -373,8 +371,11 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
         lambda x, y: static_clearance(table, x, y, "hybrid")).reshape(B, N)
     c = c._replace(index=index)
 
+    # A disc within half the look-ahead: slow progress or drift is then an evasion.
+    gap = jnp.sqrt(jnp.sum((pos_all - pos[:, :, None, :]) ** 2, axis=-1)) - rad_all  # [B, N, D]
+    crowded = jnp.any(gap < 0.5 * config.block_distance, axis=-1)
     creeping = c.creep
-    c = _watch_progress(config, c, pos, pos_all, rad_all)
+    c = _watch_progress(config, c, pos, crowded)
 
     if config.replan:
         reach = rad_all + rr + config.block_margin
@@ -388,8 +389,6 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
         # Drifted off the path (e.g. overshot an aisle) — unless a disc is within half the look-ahead:
         # then the drift is an evasion, and a fresh path through the disc undoes it (measured: two
         # robots crossing re-planned back into each other).
-        gap = jnp.sqrt(jnp.sum((pos_all - pos[:, :, None, :]) ** 2, axis=-1)) - rad_all  # [B, N, D]
-        crowded = jnp.any(gap < 0.5 * config.block_distance, axis=-1)
         lost = (c.error > config.replan_deviation) & ~crowded
         if M > 0 or N > 1:
             # Each disc at its predicted positions over the next block_horizon seconds.
