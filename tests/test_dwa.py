@@ -413,3 +413,11 @@ def test_rollouts_are_checked_only_until_they_enter_the_finish_disc():
     assert float(ended.clearance[straight]) == pytest.approx(want, abs=2e-3)
     assert float(plain.clearance[straight]) < 0.3
     np.testing.assert_array_equal(np.asarray(plain.samples), samples)
+    # Batched: a finish disc per robot (the second robot's is far away: no effect).
+    from jaxplan.dwa import dwa_control_batch
+    states = jnp.stack([state, state])
+    finishes = jnp.stack([finish, jnp.asarray([1.0, 1.75, 0.5])])
+    _, both = jax.jit(dwa_control_batch)(table, config, default_params(), states, jnp.stack([goal, goal]),
+                                         finish=finishes)
+    np.testing.assert_array_equal(np.asarray(both.clearance[0]), np.asarray(ended.clearance))
+    np.testing.assert_array_equal(np.asarray(both.clearance[1]), np.asarray(plain.clearance))

@@ -93,8 +93,9 @@ class NavConfig:
         aisle at 29° and 1.2 m/s overshot it).
       stall_time: a robot that has not come ``stall_progress`` closer to its current waypoint
         for this many seconds, with no disc within half of ``block_distance``, creeps: its top
-        speed is ``stall_speed`` until that waypoint is passed, the path is re-planned or a
-        disc comes that near. DWA's scores can make a robot circle at full speed: its 2 s
+        speed is ``stall_speed`` until it passes its current waypoint (it keeps creeping along
+        a re-planned path) or a disc comes that near, and it re-plans from where it stalled
+        (with ``replan``). DWA's scores can make a robot circle at full speed: its 2 s
         rollouts through a near waypoint overshoot it and end facing away, and between close
         obstacles only hard turns stay feasible at speed. Measured on random-32-32-20
         (scenario row 158): a robot circled about a metre across, 5 m short of its waypoint,

@@ -132,7 +132,8 @@ class _Carry(NamedTuple):
     watch: jnp.ndarray  # [B, N, 2] the waypoint whose approach is being watched (m)
     closest: jnp.ndarray  # [B, N] closest approach to that waypoint so far (m)
     progress_t: jnp.ndarray  # [B, N] step of the last approach by NavConfig.stall_progress
-    creep: jnp.ndarray  # [B, N] stalled: top speed corner_speed until the waypoint changes
+    creep: jnp.ndarray  # [B, N] stalled: top speed stall_speed until the waypoint is passed
+    stall_replan: jnp.ndarray  # [B, N] started creeping, its re-plan not attempted yet (no free slot)
     t: jnp.ndarray  # scalar step counter
 
 
@@ -233,7 +234,8 @@ def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp
     re-plan), and while a disc is near (then slow progress is an evasion or a wait, not an orbit).
     """
     target = jnp.take_along_axis(c.waypoints, c.index[..., None, None], axis=2)[:, :, 0]  # [B, N, 2]
-    d = jnp.sqrt(jnp.sum((target - pos) ** 2, axis=-1))
+    # No gradient through the watch: a robot standing on its only waypoint has d = 0, where sqrt's is NaN.
+    d = jnp.sqrt(jnp.sum(lax.stop_gradient(target - pos) ** 2, axis=-1))
     restart = jnp.any(target != c.watch, axis=-1) | crowded  # the initial NaN restarts
     closer = d < c.closest - config.stall_progress
     reset = restart | closer
@@ -241,7 +243,8 @@ def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp
     closest = jnp.where(reset, d, c.closest)
     stalled = (c.t - progress_t).astype(jnp.float32) * config.dwa.period >= config.stall_time
     creep = ~restart & (c.creep | stalled)
-    return c._replace(watch=target, closest=closest, progress_t=progress_t, creep=creep)
+    stall_replan = creep & (c.stall_replan | ~c.creep)
+    return c._replace(watch=target, closest=closest, progress_t=progress_t, creep=creep, stall_replan=stall_replan)
 
 
 def _follow(config: NavConfig, robot, state: jnp.ndarray, subgoal: jnp.ndarray) -> jnp.ndarray:
@@ -374,7 +377,6 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
     # A disc within half the look-ahead: slow progress or drift is then an evasion.
     gap = jnp.sqrt(jnp.sum((pos_all - pos[:, :, None, :]) ** 2, axis=-1)) - rad_all  # [B, N, D]
     crowded = jnp.any(gap < 0.5 * config.block_distance, axis=-1)
-    creeping = c.creep
     c = _watch_progress(config, c, pos, crowded)
 
     if config.replan:
@@ -403,9 +405,10 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
             blocked = jnp.zeros((B, N), bool)
             future, P = pos_all[:, :, :, None, :], 1
         due = (c.t - c.last_replan).astype(jnp.float32) * period >= config.replan_period - 1e-6
-        # A robot that starts creeping also re-plans from where it stalled: momentum may have
-        # carried it into a pocket the old path's next waypoint cannot be reached from in a line.
-        need = (blocked | lost | (c.creep & ~creeping)) & due & ~c.done
+        # A robot that starts creeping also re-plans from where it stalled (once, when a slot is
+        # free): momentum may have carried it into a pocket the old path's next waypoint cannot be
+        # reached from in a line.
+        need = (blocked | lost | c.stall_replan) & due & ~c.done
         closing = future.reshape(B, N, -1, 2), jnp.repeat(reach, P, axis=-1)
         c, tried = lax.cond(jnp.any(need), lambda cc: _replan(config, free, res, cc, inputs, need, *closing),
                             lambda cc: (cc, jnp.zeros_like(need)), c)
@@ -413,7 +416,8 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
         # A creeping robot keeps creeping along its new path, to that path's first waypoint: released
         # by the re-plan, the robot that orbited went back to full speed and orbited again (measured).
         new_target = jnp.take_along_axis(c.waypoints, c.index[..., None, None], axis=2)[:, :, 0]
-        c = c._replace(watch=jnp.where((c.creep & tried)[..., None], new_target, c.watch))
+        c = c._replace(watch=jnp.where((c.creep & tried)[..., None], new_target, c.watch),
+                       stall_replan=c.stall_replan & ~tried)
 
     if config.subgoal == "key_nodes":
         sub = jnp.take_along_axis(c.waypoints, c.index[..., None, None], axis=2)[:, :, 0]
@@ -515,6 +519,7 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
         last_replan=zeros - 10**6, origin=inputs.start[..., :2], sq_error=jnp.zeros((B, N), inputs.start.dtype),
         error=jnp.zeros((B, N), inputs.start.dtype), watch=jnp.full((B, N, 2), jnp.nan, inputs.start.dtype),
         closest=jnp.zeros((B, N), inputs.start.dtype), progress_t=zeros, creep=jnp.zeros((B, N), bool),
+        stall_replan=jnp.zeros((B, N), bool),
         t=jnp.asarray(0, jnp.int32),
     )
     states = jnp.broadcast_to(inputs.start[None], (steps + 1, B, N, 5))
