@@ -99,7 +99,7 @@ class NavConfig:
         rollouts through a near waypoint overshoot it and end facing away, and between close
         obstacles only hard turns stay feasible at speed. Measured on random-32-32-20
         (scenario row 158): a robot circled about a metre across, 5 m short of its waypoint,
-        until the time limit; creeping, it arrived (in 51 s). Creeping costs time when a robot
+        until the time limit; creeping, it arrived (in 52 s). Creeping costs time when a robot
         stalls far from its waypoint, but arrives. ``inf`` disables it.
       stall_progress: metres of approach that count as progress (see ``stall_time``).
       stall_speed: top speed (m/s) while creeping.
