@@ -278,3 +278,41 @@ def test_a_goal_at_the_end_of_a_dead_end_is_reached():
     grid = jp.grid_from_array(free, resolution=1.0)
     ep = jp.navigate(grid, (2, 4), (13, 4), global_planner="astar", config=NavConfig(max_time=60.0))
     assert ep.success and ep.collisions == 0, ep.reason
+
+
+def test_threatened_sees_discs_closing_in():
+    from jaxplan.nav._episode import _threatened
+
+    cfg = NavConfig(threat_distance=3.0, threat_speed=0.2)
+    pos = jnp.asarray([0.0, 0.0])
+    r = jnp.asarray([0.25])
+
+    def threat(centre, velocity, config=cfg):
+        return bool(_threatened(config, pos, jnp.asarray([centre]), jnp.asarray([velocity]), r))
+
+    assert threat([-2.0, 0.0], [1.0, 0.0])  # from behind (or anywhere), 1.75 m away, at 1 m/s
+    assert threat([0.0, 3.0], [0.0, -0.5])  # from the side, 2.75 m to its edge
+    assert not threat([0.0, 3.5], [0.0, -1.0])  # beyond 3 m
+    assert not threat([-2.0, 0.0], [-1.0, 0.0])  # moving away
+    assert not threat([-2.0, 0.0], [0.0, 1.0])  # crossing, not closing
+    assert not threat([-2.0, 0.0], [0.1, 0.0])  # slower than threat_speed
+    assert not threat([-2.0, 0.0], [1.0, 0.0], cfg.replace(threat_distance=0.0))
+
+
+def test_a_walker_from_behind_is_outrun_not_waited_for(movingai):
+    # maze-32-32-2's scenario row 94 with bench_nav's walkers for that row (seed 0): held at the
+    # 0.3 m/s corner speed near a corner, the robot was hit by a walker at 1.0 m/s (measured:
+    # half of such hits on this map came from behind). When a disc closes in, the caps are lifted.
+    grid = jp.load_map(movingai / "maze-32-32-2.map", resolution=1.0)
+    start, goal = (5, 18), (15, 26)
+    avoid = (np.array([start, goal]) + 0.5) * grid.resolution
+    obs = jp.random_obstacles(grid, n=5, speed=1.0, radius=0.25, seed=13, avoid=avoid, avoid_radius=3.0)
+    cfg = NavConfig(max_time=40.0)
+    held = jp.navigate(grid, start, goal, pipeline="iaco_dwa", seed=0, obstacles=obs,
+                       config=cfg.replace(threat_distance=0.0))
+    assert held.reason == "collision"
+    k = len(held.controls)  # the step of the hit
+    assert np.all(held.controls[-10:, 0] <= cfg.corner_speed + 1e-6)  # held at corner speed for its last 2 s
+    ep = jp.navigate(grid, start, goal, pipeline="iaco_dwa", seed=0, obstacles=obs, config=cfg)
+    assert ep.success and ep.collisions == 0, ep.reason
+    assert np.all(ep.controls[k - 5:k, 0] > cfg.corner_speed + 0.5)  # where the other was hit, this one drove fast

@@ -103,6 +103,16 @@ class NavConfig:
         stalls far from its waypoint, but arrives. ``inf`` disables it.
       stall_progress: metres of approach that count as progress (see ``stall_time``).
       stall_speed: top speed (m/s) while creeping.
+      threat_distance: a disc (a moving obstacle, or another robot) within this distance of the
+        robot (to its edge) that moves towards the robot faster than ``threat_speed`` (m/s, its
+        own velocity's component) lifts the corner and creep speed caps: the robot may then
+        drive at full speed, to get out of its way. The walkers do not avoid the robot, and a
+        robot held at corner speed cannot outrun one. Measured on maze-32-32-2 with 5 walkers at
+        1.0 m/s (50 rows, 2 seeds): with the caps kept, the robot drove at a median 0.3 m/s at
+        contact and half of the walkers hit it from behind; with them lifted none did, and
+        success rose from 45 to 63 % (random-32-32-20 81 → 93 %, room-64-64-8 58 → 71 %,
+        random-64-64-20 96 → 99 %, the warehouse unchanged at 98 %). The DWA still keeps d_safe
+        from the map. 0 disables it; no disc, no effect (static runs are unchanged).
     """
 
     dwa: DWAConfig = DWAConfig(keep_rollouts=False, recovery="flee", d_clip=0.5)
@@ -133,6 +143,8 @@ class NavConfig:
     stall_time: float = 4.0
     stall_progress: float = 0.25
     stall_speed: float = 0.3
+    threat_distance: float = 3.0
+    threat_speed: float = 0.2
 
     @property
     def steps(self) -> int:

@@ -247,6 +247,16 @@ def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp
     return c._replace(watch=target, closest=closest, progress_t=progress_t, creep=creep, stall_replan=stall_replan)
 
 
+def _threatened(config: NavConfig, pos: jnp.ndarray, centres: jnp.ndarray, velocities: jnp.ndarray,
+                radii: jnp.ndarray) -> jnp.ndarray:
+    """``bool[...]``: a disc within `NavConfig.threat_distance` of the robot at ``pos [..., 2]`` moves
+    towards it faster than ``threat_speed`` (``centres``, ``velocities [..., D, 2]``, ``radii [..., D]``)."""
+    rel = centres - pos[..., None, :]
+    dist = jnp.sqrt(jnp.maximum(jnp.sum(rel * rel, axis=-1), 1e-12))
+    toward = -jnp.sum(velocities * rel, axis=-1) / dist  # the disc's own speed towards the robot
+    return jnp.any((dist - radii < config.threat_distance) & (toward > config.threat_speed), axis=-1)
+
+
 def _follow(config: NavConfig, robot, state: jnp.ndarray, subgoal: jnp.ndarray) -> jnp.ndarray:
     """Pure path following ``[2]``: turn towards the sub-goal, slow with the heading error, inside the window."""
     win = dynamic_window(robot, state, config.dwa.period)
@@ -426,12 +436,13 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
             pos, c.waypoints, c.n_wp, c.index, config.lookahead)
         c = c._replace(index=seg)
 
-    # Local planner, its top speed capped near corners (and while creeping).
+    # Local planner, its top speed capped near corners (and while creeping) unless a disc closes in.
     flat = lambda x: x.reshape((B * N,) + x.shape[2:])  # noqa: E731
     cap = jax.vmap(lambda p_, w_, n_, i_: _corner_cap(config, p_, w_, n_, i_, robot.decel))(
         flat(pos), flat(c.waypoints), flat(c.n_wp), flat(c.index))
     v_top = jnp.minimum(robot.v_max, jnp.maximum(cap, config.corner_speed))
     v_top = jnp.where(flat(c.creep), jnp.minimum(v_top, config.stall_speed), v_top)
+    v_top = jnp.where(flat(_threatened(config, pos, pos_all, vel_all, rad_all)), robot.v_max, v_top)
     if config.local == "dwa":
         discs = DiscObstacles(flat(pos_all), flat(vel_all), flat(rad_all))
 

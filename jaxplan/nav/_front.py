@@ -277,7 +277,7 @@ def _config(config: NavConfig | None, pipeline: Pipeline, local_planner: str | N
     dwa = validate_config(dwa.replace(keep_rollouts=False))
     for f in ("switch_radius", "switch_min", "lookahead", "goal_tolerance", "max_time", "replan_period", "replan_deviation",
               "block_distance",
-              "block_margin", "follow_gain"):
+              "block_margin", "follow_gain", "threat_distance", "threat_speed"):
         v = getattr(cfg, f)
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
             raise ValueError(f"NavConfig.{f} must be a finite number >= 0, got {v!r}")
