@@ -103,16 +103,21 @@ class NavConfig:
         stalls far from its waypoint, but arrives. ``inf`` disables it.
       stall_progress: metres of approach that count as progress (see ``stall_time``).
       stall_speed: top speed (m/s) while creeping.
-      threat_distance: a disc (a moving obstacle, or another robot) within this distance of the
-        robot (to its edge) that moves towards the robot faster than ``threat_speed`` (m/s, its
-        own velocity's component) lifts the corner and creep speed caps: the robot may then
-        drive at full speed, to get out of its way. The walkers do not avoid the robot, and a
-        robot held at corner speed cannot outrun one. Measured on maze-32-32-2 with 5 walkers at
-        1.0 m/s (50 rows, 2 seeds): with the caps kept, the robot drove at a median 0.3 m/s at
-        contact and half of the walkers hit it from behind; with them lifted none did, and
-        success rose from 45 to 63 % (random-32-32-20 81 → 93 %, room-64-64-8 58 → 71 %,
-        random-64-64-20 96 → 99 %, the warehouse unchanged at 98 %). The DWA still keeps d_safe
-        from the map. 0 disables it; no disc, no effect (static runs are unchanged).
+      threat_distance: a moving obstacle whose edge is within this distance of the robot's
+        centre, and whose own speed component towards that centre exceeds ``threat_speed``
+        (m/s), lifts the corner speed cap of a DWA robot: it may then drive at full speed, to
+        get out of the way. The walkers do not avoid the robot, and a robot held at corner
+        speed cannot outrun one. Measured on maze-32-32-2 with 5 walkers at 1.0 m/s (50 rows,
+        2 seeds): with the cap kept, the robot drove at a median 0.3 m/s at contact and half
+        of the walkers hit it from behind; with it lifted none did, and success rose from 45
+        to 63 % (random-32-32-20 81 → 93 %, room-64-64-8 58 → 71 %, random-64-64-20 96 → 99 %,
+        the warehouse unchanged at 98 %). The DWA still keeps d_safe from the map. The disc's
+        own speed, not the closing speed, decides: the latter would fall as the robot speeds
+        away and put the cap back. Other robots do not count (they avoid each other, and two
+        meeting at a corner should slow down), nor does the ``follow`` planner, which avoids
+        nothing. A creeping robot stops creeping anyway when a disc comes within half of
+        ``block_distance``. Without moving obstacles nothing changes; 0 disables it.
+      threat_speed: see ``threat_distance``.
     """
 
     dwa: DWAConfig = DWAConfig(keep_rollouts=False, recovery="flee", d_clip=0.5)

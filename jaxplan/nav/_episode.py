@@ -249,12 +249,14 @@ def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp
 
 def _threatened(config: NavConfig, pos: jnp.ndarray, centres: jnp.ndarray, velocities: jnp.ndarray,
                 radii: jnp.ndarray) -> jnp.ndarray:
-    """``bool[...]``: a disc within `NavConfig.threat_distance` of the robot at ``pos [..., 2]`` moves
-    towards it faster than ``threat_speed`` (``centres``, ``velocities [..., D, 2]``, ``radii [..., D]``)."""
+    """``bool[...]``: a disc whose edge is within `NavConfig.threat_distance` of the robot's centre
+    ``pos [..., 2]`` moves towards that centre faster than ``threat_speed`` (``centres``,
+    ``velocities [..., D, 2]``, ``radii [..., D]``; D may be 0)."""
     rel = centres - pos[..., None, :]
     dist = jnp.sqrt(jnp.maximum(jnp.sum(rel * rel, axis=-1), 1e-12))
     toward = -jnp.sum(velocities * rel, axis=-1) / dist  # the disc's own speed towards the robot
-    return jnp.any((dist - radii < config.threat_distance) & (toward > config.threat_speed), axis=-1)
+    close = (dist - radii < config.threat_distance) & (config.threat_distance > 0)  # 0 disables, even inside a disc
+    return jnp.any(close & (toward > config.threat_speed), axis=-1)
 
 
 def _follow(config: NavConfig, robot, state: jnp.ndarray, subgoal: jnp.ndarray) -> jnp.ndarray:
@@ -442,8 +444,10 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
         flat(pos), flat(c.waypoints), flat(c.n_wp), flat(c.index))
     v_top = jnp.minimum(robot.v_max, jnp.maximum(cap, config.corner_speed))
     v_top = jnp.where(flat(c.creep), jnp.minimum(v_top, config.stall_speed), v_top)
-    v_top = jnp.where(flat(_threatened(config, pos, pos_all, vel_all, rad_all)), robot.v_max, v_top)
-    if config.local == "dwa":
+    if config.local == "dwa":  # `follow` does not avoid anything: lifting its caps only sends it into walls
+        # Walkers only: robots avoid each other, and two robots meeting at a corner should slow down.
+        threat = _threatened(config, pos, pos_all[:, :, :M], vel_all[:, :, :M], rad_all[:, :, :M])
+        v_top = jnp.where(flat(threat), robot.v_max, v_top)
         discs = DiscObstacles(flat(pos_all), flat(vel_all), flat(rad_all))
 
         def control(state, subgoal, d, wp, vmax, finish):
