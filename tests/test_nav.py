@@ -120,6 +120,8 @@ def test_infeasible_and_unreachable_are_results_not_errors(room):
     (dict(start=(2, 2), goal=(5, 7), local_planner="teleport"), "unknown local planner"),
     (dict(start=(2, 2), goal=(5, 7), time_limit=-1.0), "time_limit"),
     (dict(start=(2, 2), goal=(5, 7), config=NavConfig(goal_tolerance=float("nan"))), "goal_tolerance"),
+    (dict(start=(2, 2), goal=(5, 7), config=NavConfig(threat_distance=-1.0)), "threat_distance"),
+    (dict(start=(2, 2), goal=(5, 7), config=NavConfig(threat_speed=float("inf"))), "threat_speed"),
     (dict(start=(2, 2), goal=(5, 7), params={"heading": -1.0}), "heading"),
 ])
 def test_bad_input_is_a_clear_error(room, kwargs, match):

@@ -438,7 +438,7 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
             pos, c.waypoints, c.n_wp, c.index, config.lookahead)
         c = c._replace(index=seg)
 
-    # Local planner, its top speed capped near corners (and while creeping) unless a disc closes in.
+    # Local planner, its top speed capped near corners (and while creeping) unless a walker closes in.
     flat = lambda x: x.reshape((B * N,) + x.shape[2:])  # noqa: E731
     cap = jax.vmap(lambda p_, w_, n_, i_: _corner_cap(config, p_, w_, n_, i_, robot.decel))(
         flat(pos), flat(c.waypoints), flat(c.n_wp), flat(c.index))
