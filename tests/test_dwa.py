@@ -421,3 +421,36 @@ def test_rollouts_are_checked_only_until_they_enter_the_finish_disc():
                                          finish=finishes)
     np.testing.assert_array_equal(np.asarray(both.clearance[0]), np.asarray(ended.clearance))
     np.testing.assert_array_equal(np.asarray(both.clearance[1]), np.asarray(plain.clearance))
+
+
+def test_flee_keeps_off_the_map_when_it_can():
+    from jaxplan.dwa._core import _flee
+    from jaxplan.dwa._rollout import Rollouts
+
+    def ro(clearance, static):
+        return Rollouts(None, None, jnp.asarray(clearance), None, None if static is None else jnp.asarray(static))
+
+    # Sample 1 keeps the most clearance from anything but runs within d_safe of a wall: take 0.
+    assert int(_flee(ro([0.2, 0.28, 0.1], [0.5, 0.1, 0.4]), 0.3)) == 0
+    # No sample keeps d_safe from the map: the most clearance from anything.
+    assert int(_flee(ro([0.2, 0.28, 0.1], [0.2, 0.1, 0.25]), 0.3)) == 1
+    assert int(_flee(ro([0.2, 0.28, 0.1], None), 0.3)) == 1  # no discs: nothing is split
+
+
+def test_flee_rollouts_split_the_clearance_without_changing_it(clutter):
+    # With discs and recovery="flee" the rollouts keep the map's minimum apart; the combined
+    # clearance, feasibility and choice are those of the unsplit rollouts.
+    rng = np.random.default_rng(3)
+    table = clearance_table(collision_map(clutter))
+    discs = DiscObstacles(jnp.asarray(rng.uniform(2, 10, (3, 2)), jnp.float32),
+                          jnp.asarray(rng.normal(0, 1, (3, 2)), jnp.float32), jnp.full(3, 0.3, jnp.float32))
+    control = jax.jit(dwa_control)
+    states, goals = _states(rng, 4, clutter, Unicycle())
+    for robot in (Unicycle(), Unicycle(footprint=Rectangle(0.6, 0.4))):
+        cfg = DWAConfig(keep_rollouts=False, robot=robot, n_v=6, n_omega=9)
+        for state, goal in zip(jnp.asarray(states, jnp.float32), jnp.asarray(goals, jnp.float32)):
+            a = control(table, cfg, default_params(), state, goal, discs)[1]
+            b = control(table, cfg.replace(recovery="flee"), default_params(), state, goal, discs)[1]
+            np.testing.assert_array_equal(b.clearance, a.clearance)
+            np.testing.assert_array_equal(b.feasible, a.feasible)
+            assert int(b.chosen) == int(a.chosen)

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from typing import Callable, NamedTuple
 
+import jax
 import jax.numpy as jnp
 from jax import lax
 
@@ -48,17 +49,19 @@ class Rollouts(NamedTuple):
       clearance: ``f32[S]`` minimum clearance (m) of the footprint over the T trajectory
         points (the current pose, which no sample can change, is not included).
       poses: ``f32[S, T, 3]`` every trajectory point, or None when not kept.
+      static: ``f32[S]`` the same minimum from the map alone (``split=True``), or None.
     """
 
     end: jnp.ndarray
     end_dir: jnp.ndarray
     clearance: jnp.ndarray
     poses: jnp.ndarray
+    static: jnp.ndarray | None = None
 
 
 def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: ClearanceFn, footprint: Footprint,
             steps: int, dt: float, keep: bool = False, unroll: int = 1,
-            finish: jnp.ndarray | None = None) -> Rollouts:
+            finish: jnp.ndarray | None = None, split: bool = False) -> Rollouts:
     """Rolls out S constant-velocity samples from ``state`` and tracks their clearance.
 
     Args:
@@ -77,6 +80,8 @@ def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: Clear
         or None. A rollout's points after its first point inside the disc do not count towards
         its clearance: the robot stops there, and a constant-velocity rollout that runs on
         past a goal at the end of a dead end would otherwise hit the end wall.
+      split: ``clearance`` returns ``(map, moving discs)`` separately (static); both minima are
+        kept, and `Rollouts.static` holds the map's.
     """
     x0, y0, th0 = state[0], state[1], state[2]
     dtype = v.dtype
@@ -106,21 +111,23 @@ def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: Clear
         clr = None
         for j in range(offsets.shape[0]):
             cj = clearance(x + offsets[j] * h.real, y + offsets[j] * h.imag, t)
-            clr = cj if clr is None else jnp.minimum(clr, cj)
+            clr = cj if clr is None else jax.tree.map(jnp.minimum, clr, cj)
         return x, y, t, clr
 
     # Both initial carries derive from the inputs (not constants), so that the loop also
     # works inside shard_map, where a carry must vary along the sharded axes like its update.
-    init = (rot, v * 0.0 + jnp.inf)
+    init = (rot, (v * 0.0 + jnp.inf,) * 2 if split else v * 0.0 + jnp.inf)
     if finish is not None:
         init = init + ((v * 0.0) > 0.0,)  # inside the finish disc yet: False (and NaN-proof)
 
     def track(carry, x, y, clr):
         """The carry after a point: running minimum clearance (and whether the finish was reached)."""
+        if split:  # (combined, map)
+            clr = (jnp.minimum(clr[0], clr[1]), clr[0])
         if finish is None:
-            return (jnp.minimum(carry[1], clr),)
+            return (jax.tree.map(jnp.minimum, carry[1], clr),)
         inside = carry[2]
-        m = jnp.minimum(carry[1], jnp.where(inside, jnp.inf, clr))
+        m = jax.tree.map(lambda a, b: jnp.minimum(a, jnp.where(inside, jnp.inf, b)), carry[1], clr)
         dx, dy = x - finish[0], y - finish[1]
         return m, inside | (dx * dx + dy * dy <= finish[2] * finish[2])
 
@@ -141,8 +148,9 @@ def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: Clear
         carry = lax.fori_loop(0, steps, body, init, unroll=unroll)
         poses = None
     q, m = carry[0], carry[1]
+    m, m_static = m if split else (m, None)
     q = q * jnp.conj(rot)  # undo the last advance: e^{iTφ}
     x, y = pose(q, jnp.asarray(steps, dtype))
     end = jnp.stack([x, y, th0 + w * (steps * dt)], axis=-1)
     h = e0 * q * q  # e^{i(θ0 + 2Tφ)}
-    return Rollouts(end, jnp.stack([h.real, h.imag], axis=-1), m, poses)
+    return Rollouts(end, jnp.stack([h.real, h.imag], axis=-1), m, poses, m_static)
