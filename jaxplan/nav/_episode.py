@@ -227,13 +227,18 @@ def _corner_cap(config: NavConfig, pos: jnp.ndarray, wp: jnp.ndarray, n: jnp.nda
     return jnp.minimum(cap, jnp.where((index > 0) & turn(prev), behind, jnp.inf))
 
 
+def _current_waypoint(c: _Carry) -> jnp.ndarray:
+    """``[B, N, 2]`` the waypoint each robot is tracking (m)."""
+    return jnp.take_along_axis(c.waypoints, c.index[..., None, None], axis=2)[:, :, 0]
+
+
 def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp.ndarray) -> _Carry:
     """Updates the stall watch (see `NavConfig.stall_time`): ``pos [B, N, 2]``; ``crowded [B, N]``: a disc is near.
 
     The watch restarts whenever the current waypoint changes (passed, or another after a
     re-plan), and while a disc is near (then slow progress is an evasion or a wait, not an orbit).
     """
-    target = jnp.take_along_axis(c.waypoints, c.index[..., None, None], axis=2)[:, :, 0]  # [B, N, 2]
+    target = _current_waypoint(c)  # [B, N, 2]
     # No gradient through the watch: a robot standing on its only waypoint has d = 0, where sqrt's is NaN.
     d = jnp.sqrt(jnp.sum(lax.stop_gradient(target - pos) ** 2, axis=-1))
     restart = jnp.any(target != c.watch, axis=-1) | crowded  # the initial NaN restarts
@@ -427,12 +432,12 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
         c = c._replace(last_replan=jnp.where(tried, c.t, c.last_replan))
         # A creeping robot keeps creeping along its new path, to that path's first waypoint: released
         # by the re-plan, the robot that orbited went back to full speed and orbited again (measured).
-        new_target = jnp.take_along_axis(c.waypoints, c.index[..., None, None], axis=2)[:, :, 0]
+        new_target = _current_waypoint(c)
         c = c._replace(watch=jnp.where((c.creep & tried)[..., None], new_target, c.watch),
                        stall_replan=c.stall_replan & ~tried)
 
     if config.subgoal == "key_nodes":
-        sub = jnp.take_along_axis(c.waypoints, c.index[..., None, None], axis=2)[:, :, 0]
+        sub = _current_waypoint(c)
     else:
         sub, seg = jax.vmap(jax.vmap(_lookahead_point, in_axes=(0, 0, 0, 0, None)), in_axes=(0, 0, 0, 0, None))(
             pos, c.waypoints, c.n_wp, c.index, config.lookahead)
