@@ -258,7 +258,9 @@ def main() -> None:
         return
     steal = Steal()
     results = {}
-    for label in ("default", "pinned", "sharded"):
+    # The sharded child splits batches over two devices: nothing to run with one robot only.
+    labels = ("default", "pinned", "sharded") if any(b > 1 for b in robots) else ("default", "pinned")
+    for label in labels:
         env = dict(os.environ)
         pre = None
         if label == "pinned":
