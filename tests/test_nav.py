@@ -11,6 +11,7 @@ import pytest
 
 import jaxplan as jp
 from jaxplan.nav import NavConfig
+from jaxplan.nav._episode import _corner_cap
 from jaxplan.nav._front import INFEASIBLE_START, UNREACHABLE
 from jaxplan.nav._replan import descend, distance_field, path_blocked, turn_vertices
 
@@ -225,8 +226,9 @@ def test_a_robot_orbiting_a_waypoint_creeps_to_it(movingai):
     # circled 1.1-2.3 m from it until the time limit (measured).
     grid = jp.load_map(movingai / "random-32-32-20.map", resolution=1.0)
     start, goal = (8, 0), (1, 14)
-    cfg = NavConfig(max_time=60.0)
-    orbit = jp.navigate(grid, start, goal, pipeline="iaco_dwa", seed=0, config=cfg.replace(stall_time=math.inf))
+    cfg = NavConfig(max_time=60.0, corner_exponent=0.0)  # as measured (faster gentle corners avoid this orbit)
+    orbit = jp.navigate(grid, start, goal, pipeline="iaco_dwa", seed=0,
+                        config=cfg.replace(stall_time=math.inf, orbit_angle=math.inf))
     assert not orbit.success and orbit.reason == "time limit"
     ep = jp.navigate(grid, start, goal, pipeline="iaco_dwa", seed=0, config=cfg)
     assert ep.success and ep.collisions == 0, ep.reason
@@ -238,10 +240,52 @@ def test_a_robot_orbiting_a_waypoint_creeps_to_it(movingai):
     assert len(creeping) and v[creeping[0]:].max() > cfg.stall_speed + 0.5
 
 
+def test_a_robot_circling_through_replans_creeps_on_its_net_turn(movingai):
+    # random-64-64-20's scenario row 163: past the middle the robot circled 1.5 m across at full
+    # speed, drifting off its path; each re-plan gave it a new waypoint, which restarted the
+    # stall watch (measured: 82 re-plans in 180 s). The orbit watch sums its heading change.
+    grid = jp.load_map(movingai / "random-64-64-20.map", resolution=1.0)
+    start, goal = (3, 33), (53, 41)
+    circling = jp.navigate(grid, start, goal, pipeline="iaco_dwa", seed=0, config=NavConfig(orbit_angle=math.inf))
+    assert not circling.success and circling.reason == "time limit"
+    assert circling.metrics["replans"] > 40 and circling.metrics["path_length"] > 2 * 55
+    ep = jp.navigate(grid, start, goal, pipeline="iaco_dwa", seed=0)
+    assert ep.success and ep.collisions == 0, ep.reason
+    assert ep.metrics["replans"] < 20
+
+
+def test_corner_speed_grows_as_the_turn_gets_gentler():
+    cfg = NavConfig()
+    pos = jnp.asarray([2.5, 0.0])  # 0.5 m before the corner waypoint (3, 0): inside the switch radius
+
+    def cap(degrees, at=pos, **kw):
+        a = math.radians(degrees)
+        after = [3.0 + 20.0 * math.cos(a), 20.0 * math.sin(a)]  # the goal 20 m on: its own cap is far above
+        wp = jnp.asarray([[3.0, 0.0], after, after])
+        return float(_corner_cap(cfg.replace(**kw), jnp.asarray(at), wp, jnp.asarray(3), jnp.asarray(0),
+                                 cfg.dwa.robot.decel))
+
+    v_c = cfg.corner_speed
+    assert cap(90) == pytest.approx(v_c, abs=1e-5) and cap(135) == pytest.approx(v_c, abs=1e-5)
+    assert cap(180) == pytest.approx(v_c, abs=1e-5)
+    assert cap(45) == pytest.approx(v_c / math.sqrt(1 - math.cos(math.radians(45))), rel=1e-4)  # 0.55 m/s
+    assert cap(29) == pytest.approx(v_c / math.sqrt(1 - math.cos(math.radians(29))), rel=1e-4)  # 0.85 m/s
+    assert cap(10) > 3 * cfg.dwa.robot.v_max  # below corner_angle: no corner, only the far goal's braking ramp
+    assert cap(45, corner_exponent=0.0) == pytest.approx(v_c, abs=1e-5)
+    # Farther out, the cap is the braking ramp down to the corner's speed at the switch radius.
+    v45 = v_c / math.sqrt(1 - math.cos(math.radians(45)))
+    assert cap(45, at=[0.0, 0.0]) == pytest.approx(math.sqrt(v45 ** 2 + 2 * cfg.dwa.robot.decel * 2.0), rel=1e-4)
+
+
 def test_stall_settings_must_be_positive(room):
     for bad in (0.0, -1.0, float("nan")):
         with pytest.raises(ValueError, match="stall_time"):
             jp.navigate(room, (2, 2), (21, 8), global_planner="astar", config=NavConfig(stall_time=bad))
+        with pytest.raises(ValueError, match="orbit_angle"):
+            jp.navigate(room, (2, 2), (21, 8), global_planner="astar", config=NavConfig(orbit_angle=bad))
+    for bad in (-0.5, float("nan"), math.inf):
+        with pytest.raises(ValueError, match="corner_exponent"):
+            jp.navigate(room, (2, 2), (21, 8), global_planner="astar", config=NavConfig(corner_exponent=bad))
     for field, bad in (("stall_progress", 0.0), ("stall_progress", math.inf), ("stall_speed", 0.0),
                        ("stall_speed", float("nan"))):
         with pytest.raises(ValueError, match=field):
@@ -319,7 +363,7 @@ def test_a_walker_from_behind_is_outrun_not_waited_for(movingai):
     start, goal = (5, 18), (15, 26)
     avoid = (np.array([start, goal]) + 0.5) * grid.resolution
     obs = jp.random_obstacles(grid, n=5, speed=1.0, radius=0.25, seed=13, avoid=avoid, avoid_radius=3.0)
-    cfg = NavConfig(max_time=40.0)
+    cfg = NavConfig(max_time=40.0, corner_exponent=0.0)  # corner_speed at every corner, as measured
     held = jp.navigate(grid, start, goal, pipeline="iaco_dwa", seed=0, obstacles=obs,
                        config=cfg.replace(threat_distance=0.0))
     assert held.reason == "collision"

@@ -133,6 +133,8 @@ class _Carry(NamedTuple):
     closest: jnp.ndarray  # [B, N] closest approach to that waypoint so far (m)
     progress_t: jnp.ndarray  # [B, N] step of the last approach by NavConfig.stall_progress
     creep: jnp.ndarray  # [B, N] stalled: top speed stall_speed until the waypoint is passed
+    spin: jnp.ndarray  # [B, N] net heading change (rad) since the last approach to the goal (orbit watch)
+    goal_best: jnp.ndarray  # [B, N] that approach: closest distance to the goal so far (m)
     stall_replan: jnp.ndarray  # [B, N] started creeping, its re-plan not attempted yet (no free slot)
     t: jnp.ndarray  # scalar step counter
 
@@ -206,25 +208,32 @@ def _corner_cap(config: NavConfig, pos: jnp.ndarray, wp: jnp.ndarray, n: jnp.nda
                 decel) -> jnp.ndarray:
     """Top speed (m/s) near corners (see `NavConfig.corner_speed`): ``pos [2]``, ``wp [K, 2]``."""
     K = wp.shape[0]
+    v_c = config.corner_speed
 
     def turn(i):  # turn angle at waypoint i: (i-1 or the robot) -> i -> i+1
         prev = jnp.where(i > 0, wp[jnp.maximum(i - 1, 0)], pos)
         a, b = wp[i] - prev, wp[jnp.minimum(i + 1, K - 1)] - wp[i]
         cos = jnp.sum(a * b) / jnp.maximum(jnp.sqrt(jnp.sum(a * a) * jnp.sum(b * b)), 1e-9)
         real = (i + 1 < n) & (jnp.sum(a * a) > 1e-12) & (jnp.sum(b * b) > 1e-12)
-        return real & (cos < jnp.cos(config.corner_angle))
+        return real & (cos < jnp.cos(config.corner_angle)), cos
 
-    v_c = config.corner_speed
+    def speed(cos):  # corner_speed at 90 degrees and sharper, faster through gentler turns
+        return jnp.maximum(v_c, v_c / jnp.maximum(1.0 - cos, 1e-6) ** config.corner_exponent)
+
     d_next = jnp.sqrt(jnp.sum((wp[index] - pos) ** 2))
-    ahead = jnp.sqrt(v_c ** 2 + 2.0 * decel * jnp.maximum(d_next - config.switch_radius, 0.0))
+    is_next, cos_next = turn(index)
+    v_n = speed(cos_next)
+    ahead = jnp.sqrt(v_n ** 2 + 2.0 * decel * jnp.maximum(d_next - config.switch_radius, 0.0))
     prev = jnp.maximum(index - 1, 0)
     d_prev = jnp.sqrt(jnp.sum((wp[prev] - pos) ** 2))
-    behind = jnp.sqrt(v_c ** 2 + 2.0 * decel * jnp.maximum(d_prev - config.switch_radius, 0.0))
-    cap = jnp.where(turn(index), ahead, jnp.inf)
+    is_prev, cos_prev = turn(prev)
+    v_p = speed(cos_prev)
+    behind = jnp.sqrt(v_p ** 2 + 2.0 * decel * jnp.maximum(d_prev - config.switch_radius, 0.0))
+    cap = jnp.where(is_next, ahead, jnp.inf)
     # The goal is a corner too: arrive slowly enough to stop within the tolerance instead of orbiting it.
     d_goal = jnp.sqrt(jnp.sum((wp[jnp.maximum(n - 1, 0)] - pos) ** 2))
     cap = jnp.minimum(cap, jnp.sqrt(v_c ** 2 + 2.0 * decel * jnp.maximum(d_goal - config.goal_tolerance, 0.0)))
-    return jnp.minimum(cap, jnp.where((index > 0) & turn(prev), behind, jnp.inf))
+    return jnp.minimum(cap, jnp.where((index > 0) & is_prev, behind, jnp.inf))
 
 
 def _current_waypoint(c: _Carry) -> jnp.ndarray:
@@ -232,14 +241,19 @@ def _current_waypoint(c: _Carry) -> jnp.ndarray:
     return jnp.take_along_axis(c.waypoints, c.index[..., None, None], axis=2)[:, :, 0]
 
 
-def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp.ndarray) -> _Carry:
-    """Updates the stall watch (see `NavConfig.stall_time`): ``pos [B, N, 2]``; ``crowded [B, N]``: a disc is near.
+def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp.ndarray,
+                    goal: jnp.ndarray) -> _Carry:
+    """Updates the stall and orbit watches (see `NavConfig.stall_time`, `NavConfig.orbit_angle`):
+    ``pos, goal [B, N, 2]``; ``crowded [B, N]``: a disc is near.
 
-    The watch restarts whenever the current waypoint changes (passed, or another after a
-    re-plan), and while a disc is near (then slow progress is an evasion or a wait, not an orbit).
+    The stall watch restarts whenever the current waypoint changes (passed, or another after
+    a re-plan), and while a disc is near (then slow progress is an evasion or a wait, not an
+    orbit). The orbit watch sums the heading change until the robot comes ``switch_radius``
+    closer to its goal than ever before; re-plans do not restart it, so a robot that circles
+    while drifting off its path and re-planning (each re-plan a new waypoint) is caught too.
     """
     target = _current_waypoint(c)  # [B, N, 2]
-    # No gradient through the watch: a robot standing on its only waypoint has d = 0, where sqrt's is NaN.
+    # No gradient through the watches: a robot standing on its only waypoint has d = 0, where sqrt's is NaN.
     d = jnp.sqrt(jnp.sum(lax.stop_gradient(target - pos) ** 2, axis=-1))
     restart = jnp.any(target != c.watch, axis=-1) | crowded  # the initial NaN restarts
     closer = d < c.closest - config.stall_progress
@@ -247,9 +261,17 @@ def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp
     progress_t = jnp.where(reset, c.t, c.progress_t)
     closest = jnp.where(reset, d, c.closest)
     stalled = (c.t - progress_t).astype(jnp.float32) * config.dwa.period >= config.stall_time
-    creep = ~restart & (c.creep | stalled)
+    d_goal = jnp.sqrt(jnp.sum(lax.stop_gradient(goal - pos) ** 2, axis=-1))
+    nearer = d_goal < c.goal_best - config.switch_radius
+    spin = c.spin + lax.stop_gradient(c.state[..., 4]) * config.dwa.period  # the yaw rate just applied
+    orbit = jnp.abs(spin) >= config.orbit_angle
+    fresh = nearer | crowded | orbit
+    spin = jnp.where(fresh, 0.0, spin)
+    goal_best = jnp.where(nearer, d_goal, c.goal_best)
+    creep = (~restart & (c.creep | stalled)) | (orbit & ~crowded)
     stall_replan = creep & (c.stall_replan | ~c.creep)
-    return c._replace(watch=target, closest=closest, progress_t=progress_t, creep=creep, stall_replan=stall_replan)
+    return c._replace(watch=target, closest=closest, progress_t=progress_t, creep=creep, stall_replan=stall_replan,
+                      spin=spin, goal_best=goal_best)
 
 
 def _threatened(config: NavConfig, pos: jnp.ndarray, centres: jnp.ndarray, velocities: jnp.ndarray,
@@ -394,7 +416,7 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
     # A disc within half the look-ahead: slow progress or drift is then an evasion.
     gap = jnp.sqrt(jnp.sum((pos_all - pos[:, :, None, :]) ** 2, axis=-1)) - rad_all  # [B, N, D]
     crowded = jnp.any(gap < 0.5 * config.block_distance, axis=-1)
-    c = _watch_progress(config, c, pos, crowded)
+    c = _watch_progress(config, c, pos, crowded, inputs.goal)
 
     if config.replan:
         reach = rad_all + rr + config.block_margin
@@ -539,6 +561,8 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
         last_replan=zeros - 10**6, origin=inputs.start[..., :2], sq_error=jnp.zeros((B, N), inputs.start.dtype),
         error=jnp.zeros((B, N), inputs.start.dtype), watch=jnp.full((B, N, 2), jnp.nan, inputs.start.dtype),
         closest=jnp.zeros((B, N), inputs.start.dtype), progress_t=zeros, creep=jnp.zeros((B, N), bool),
+        spin=jnp.zeros((B, N), inputs.start.dtype),
+        goal_best=jnp.sqrt(jnp.sum(lax.stop_gradient(inputs.goal - inputs.start[..., :2]) ** 2, axis=-1)),
         stall_replan=jnp.zeros((B, N), bool),
         t=jnp.asarray(0, jnp.int32),
     )

@@ -277,15 +277,16 @@ def _config(config: NavConfig | None, pipeline: Pipeline, local_planner: str | N
     dwa = validate_config(dwa.replace(keep_rollouts=False))
     for f in ("switch_radius", "switch_min", "lookahead", "goal_tolerance", "max_time", "replan_period", "replan_deviation",
               "block_distance",
-              "block_margin", "follow_gain", "threat_distance", "threat_speed"):
+              "block_margin", "follow_gain", "threat_distance", "threat_speed", "corner_exponent"):
         v = getattr(cfg, f)
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
             raise ValueError(f"NavConfig.{f} must be a finite number >= 0, got {v!r}")
     if cfg.goal_tolerance <= 0 or cfg.max_time <= 0:
         raise ValueError("NavConfig.goal_tolerance and max_time must be > 0")
-    v = cfg.stall_time
-    if not (isinstance(v, (int, float)) and not math.isnan(v) and v > 0):
-        raise ValueError(f"NavConfig.stall_time must be a number > 0 (inf disables creeping), got {v!r}")
+    for f, what in (("stall_time", "creeping"), ("orbit_angle", "the orbit watch")):
+        v = getattr(cfg, f)
+        if not (isinstance(v, (int, float)) and not math.isnan(v) and v > 0):
+            raise ValueError(f"NavConfig.{f} must be a number > 0 (inf disables {what}), got {v!r}")
     for f in ("stall_progress", "stall_speed"):
         v = getattr(cfg, f)
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
