@@ -110,7 +110,10 @@ class NavConfig:
         obstacles only hard turns stay feasible at speed. Measured on random-32-32-20
         (scenario row 158): a robot circled about a metre across, 5 m short of its waypoint,
         until the time limit; creeping, it arrived (in 52 s). Creeping costs time when a robot
-        stalls far from its waypoint, but arrives. ``inf`` disables it.
+        stalls far from its waypoint, but arrives. A creeping robot that stalls again re-plans
+        again, once per ``stall_time`` (random-32-32-20 row 375: the robot crept off the cell
+        its path began at into one from which the straight way to its waypoint crosses a
+        blocked cell, and stood facing it until the time limit). ``inf`` disables it.
       stall_progress: metres of approach that count as progress (see ``stall_time``).
       stall_speed: top speed (m/s) while creeping.
       threat_distance: a moving obstacle whose edge is within this distance of the robot's

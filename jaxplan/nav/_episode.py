@@ -261,6 +261,9 @@ def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp
     progress_t = jnp.where(reset, c.t, c.progress_t)
     closest = jnp.where(reset, d, c.closest)
     stalled = (c.t - progress_t).astype(jnp.float32) * config.dwa.period >= config.stall_time
+    # Creeping and stalled again: re-plan again from here (and restart the clock, so once per stall_time).
+    again = c.creep & stalled
+    progress_t = jnp.where(again, c.t, progress_t)
     d_goal = jnp.sqrt(jnp.sum(lax.stop_gradient(goal - pos) ** 2, axis=-1))
     nearer = d_goal < c.goal_best - config.switch_radius
     spin = c.spin + lax.stop_gradient(c.state[..., 4]) * config.dwa.period  # the yaw rate just applied
@@ -269,7 +272,7 @@ def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp
     spin = jnp.where(fresh, 0.0, spin)
     goal_best = jnp.where(nearer, d_goal, c.goal_best)
     creep = (~restart & (c.creep | stalled)) | (orbit & ~crowded)
-    stall_replan = creep & (c.stall_replan | ~c.creep)
+    stall_replan = creep & (c.stall_replan | ~c.creep | again)
     return c._replace(watch=target, closest=closest, progress_t=progress_t, creep=creep, stall_replan=stall_replan,
                       spin=spin, goal_best=goal_best)
 
