@@ -96,7 +96,7 @@ class NavConfig:
         24–25 % less time on random-32-32-20 and random-64-64-20, 17 % less on room-64-64-8 and
         10 % less on maze-32-32-2 (the warehouse's corners are right angles: no change); among
         5 walkers at 1.0 m/s room-64-64-8's time limits fell from 22 to 11 of 100. The exponent is half that of a
-        constant-radius turn's bound (lateral overshoot ∝ v / (1 − cos φ)), which would let
+        constant-radius turn's bound (lateral overshoot ∝ v · (1 − cos φ)), which would let
         a 29° turn be taken at full speed — and that overshot.
       corner_exponent: see ``corner_speed``.
       corner_angle: the smallest turn (rad) that makes a waypoint a corner (15°: entering a 1 m

@@ -133,7 +133,7 @@ class _Carry(NamedTuple):
     closest: jnp.ndarray  # [B, N] closest approach to that waypoint so far (m)
     progress_t: jnp.ndarray  # [B, N] step of the last approach by NavConfig.stall_progress
     creep: jnp.ndarray  # [B, N] stalled: top speed stall_speed until the waypoint is passed
-    spin: jnp.ndarray  # [B, N] net heading change (rad) since the last approach to the goal (orbit watch)
+    spin: jnp.ndarray  # [B, N] net heading change (rad) since the last approach to the goal, a crowd or an orbit
     goal_best: jnp.ndarray  # [B, N] that approach: closest distance to the goal so far (m)
     stall_replan: jnp.ndarray  # [B, N] started creeping, its re-plan not attempted yet (no free slot)
     t: jnp.ndarray  # scalar step counter
@@ -213,7 +213,8 @@ def _corner_cap(config: NavConfig, pos: jnp.ndarray, wp: jnp.ndarray, n: jnp.nda
     def turn(i):  # turn angle at waypoint i: (i-1 or the robot) -> i -> i+1
         prev = jnp.where(i > 0, wp[jnp.maximum(i - 1, 0)], pos)
         a, b = wp[i] - prev, wp[jnp.minimum(i + 1, K - 1)] - wp[i]
-        cos = jnp.sum(a * b) / jnp.maximum(jnp.sqrt(jnp.sum(a * a) * jnp.sum(b * b)), 1e-9)
+        # No gradient through the angle: with a zero-length leg the sqrt's would be 0 * inf.
+        cos = lax.stop_gradient(jnp.sum(a * b) / jnp.maximum(jnp.sqrt(jnp.sum(a * a) * jnp.sum(b * b)), 1e-9))
         real = (i + 1 < n) & (jnp.sum(a * a) > 1e-12) & (jnp.sum(b * b) > 1e-12)
         return real & (cos < jnp.cos(config.corner_angle)), cos
 
@@ -261,9 +262,9 @@ def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp
     progress_t = jnp.where(reset, c.t, c.progress_t)
     closest = jnp.where(reset, d, c.closest)
     stalled = (c.t - progress_t).astype(jnp.float32) * config.dwa.period >= config.stall_time
-    # Creeping and stalled again: re-plan again from here (and restart the clock, so once per stall_time).
+    # Creeping and stalled again: re-plan again from here. The clock restarts at every stall, so once per stall_time.
     again = c.creep & stalled
-    progress_t = jnp.where(again, c.t, progress_t)
+    progress_t = jnp.where(stalled, c.t, progress_t)
     d_goal = jnp.sqrt(jnp.sum(lax.stop_gradient(goal - pos) ** 2, axis=-1))
     nearer = d_goal < c.goal_best - config.switch_radius
     spin = c.spin + lax.stop_gradient(c.state[..., 4]) * config.dwa.period  # the yaw rate just applied
