@@ -296,13 +296,40 @@ def test_stall_settings_must_be_positive(room):
             jp.navigate(room, (2, 2), (21, 8), global_planner="astar", config=NavConfig(stall_time=bad))
         with pytest.raises(ValueError, match="orbit_angle"):
             jp.navigate(room, (2, 2), (21, 8), global_planner="astar", config=NavConfig(orbit_angle=bad))
+        with pytest.raises(ValueError, match="recheck_period"):
+            jp.navigate(room, (2, 2), (21, 8), global_planner="astar", config=NavConfig(recheck_period=bad))
     for bad in (-0.5, float("nan"), math.inf):
         with pytest.raises(ValueError, match="corner_exponent"):
             jp.navigate(room, (2, 2), (21, 8), global_planner="astar", config=NavConfig(corner_exponent=bad))
     for field, bad in (("stall_progress", 0.0), ("stall_progress", math.inf), ("stall_speed", 0.0),
-                       ("stall_speed", float("nan"))):
+                       ("stall_speed", float("nan")), ("recheck_gain", -1.0), ("recheck_gain", math.inf)):
         with pytest.raises(ValueError, match=field):
             jp.navigate(room, (2, 2), (21, 8), global_planner="astar", config=NavConfig(**{field: bad}))
+
+
+def test_a_detour_round_a_walker_that_moved_on_is_dropped():
+    # A wall across the map with a door in the middle and a gap at the far end. A walker leaves
+    # the door as the robot sets off: the first re-plan goes round by the far end (the door and
+    # the walker's next 3 s are closed), and with re-checks the robot turns back to the door.
+    free = np.ones((14, 34), bool)
+    free[0, :] = free[-1, :] = free[:, 0] = free[:, -1] = False
+    free[7, :] = False
+    free[7, 16] = True
+    free[7, 31:33] = True
+    grid = jp.grid_from_array(free, resolution=1.0)
+    walker = jp.moving_obstacles([[[16.5, 7.5], [16.5, 9.5], [2.5, 9.5]]], speeds=1.0, radii=0.25)
+    run = lambda cfg: jp.navigate(grid, (16, 2), (16, 12), global_planner="astar", obstacles=walker,  # noqa: E731
+                                  config=cfg)
+    crossing = lambda ep: ep.trajectory[np.abs(ep.trajectory[:, 1] - 7.5) < 0.5, 0]  # noqa: E731  x in the wall row
+    far = run(NavConfig(recheck_period=math.inf))
+    assert far.success and far.collisions == 0, far.reason
+    assert len(crossing(far)) and np.all(crossing(far) > 30.0)  # went round by the far end
+    ep = run(NavConfig())
+    assert ep.success and ep.collisions == 0, ep.reason
+    assert ep.metrics["replans"] > far.metrics["replans"]
+    assert ep.trajectory[:, 0].max() > 18.0  # it had set off on the way round ...
+    assert len(crossing(ep)) and np.all(np.abs(crossing(ep) - 16.5) < 0.5)  # ... and came back to the door
+    assert ep.time_s < 0.6 * far.time_s
 
 
 def test_a_waypoint_is_passed_early_only_if_the_way_on_is_clear():

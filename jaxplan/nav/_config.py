@@ -139,6 +139,13 @@ class NavConfig:
         a stall does. Measured on random-64-64-20 (scenario row 163) with faster gentle
         corners (``corner_exponent``): the robot circled 1.5 m across for 120 s through 82
         re-plans until the time limit; with this watch it arrived. ``inf`` disables it.
+      recheck_period: a robot whose path was re-planned around discs (a walker in a door, say)
+        re-plans again every this many seconds while it follows that path, and takes the new
+        path only if it is ``recheck_gain`` metres shorter than what is left of the current one:
+        the walker may have moved on, and the way round may be through other rooms. Re-checks
+        take re-planning slots only when no robot must re-plan. Without moving obstacles or
+        other robots nothing changes; ``inf`` disables it.
+      recheck_gain: see ``recheck_period``.
     """
 
     dwa: DWAConfig = DWAConfig(keep_rollouts=False, recovery="flee", d_clip=0.5)
@@ -173,6 +180,8 @@ class NavConfig:
     threat_distance: float = 3.0
     threat_speed: float = 0.2
     orbit_angle: float = 2.0 * math.pi
+    recheck_period: float = 3.0
+    recheck_gain: float = 5.0
 
     @property
     def steps(self) -> int:

@@ -136,6 +136,7 @@ class _Carry(NamedTuple):
     spin: jnp.ndarray  # [B, N] net heading change (rad) since the last approach to the goal, a crowd or an orbit
     goal_best: jnp.ndarray  # [B, N] that approach: closest distance to the goal so far (m)
     stall_replan: jnp.ndarray  # [B, N] started creeping, its re-plan not attempted yet (no free slot)
+    detour: jnp.ndarray  # [B, N] tracking a path planned around discs: re-checked every NavConfig.recheck_period
     t: jnp.ndarray  # scalar step counter
 
 
@@ -301,16 +302,21 @@ def _follow(config: NavConfig, robot, state: jnp.ndarray, subgoal: jnp.ndarray) 
 
 
 def _replan(config: NavConfig, free: jnp.ndarray, resolution, c: _Carry, inputs: EpisodeInputs,
-            need: jnp.ndarray, centres: jnp.ndarray, reach: jnp.ndarray) -> tuple[_Carry, jnp.ndarray]:
-    """Re-plans up to `NavConfig.replan_slots` of the robots flagged in ``need [B, N]`` per group
+            need: jnp.ndarray, centres: jnp.ndarray, reach: jnp.ndarray) -> tuple[_Carry, jnp.ndarray, jnp.ndarray]:
+    """Re-plans up to `NavConfig.replan_slots` of the robots with ``need [B, N] > 0`` per group
     of `NavConfig.replan_group` episodes (0: the whole batch is one group).
+
+    ``need`` is 2 for a robot that must re-plan (path blocked, drifted off, stalled) and 1 for
+    a detour re-check (`NavConfig.recheck_period`); the 2s take the slots first, and a
+    re-check's path replaces the robot's only if it is `NavConfig.recheck_gain` shorter than
+    what is left of the current one.
 
     ``centres [B, N, D, 2]`` / ``reach [B, N, D]``: the discs whose nearby cells are closed.
     Only the chosen robots' fields are computed (a gather into fixed slots), so the cost
     grows with the number of groups, not with the batch; robots left over try again on the
     next step. Groups are consecutive episodes, so a device holding whole groups computes
-    exactly what one device computes for them. Returns the carry and ``bool[B, N]``: the
-    robots that were attempted.
+    exactly what one device computes for them. Returns the carry, ``bool[B, N]``: the
+    robots that were attempted, and ``bool[B, N]``: those whose path was replaced.
     """
     B = need.shape[0]
     G = min(config.replan_group or B, B)
@@ -328,9 +334,9 @@ def _replan(config: NavConfig, free: jnp.ndarray, resolution, c: _Carry, inputs:
         group = lambda x: x.reshape((Bp // G, G) + x.shape[1:])  # noqa: E731
         out = jax.vmap(fn)(*map(group, fields))
         out = jax.tree_util.tree_map(lambda x: x.reshape((Bp,) + x.shape[2:])[:B], out)
-    waypoints, n_wp, index, replans, origin, error, attempted = out
+    waypoints, n_wp, index, replans, origin, error, attempted, replaced = out
     c = c._replace(waypoints=waypoints, n_wp=n_wp, index=index, replans=replans, origin=origin, error=error)
-    return c, attempted
+    return c, attempted, replaced
 
 
 def _replan_group(config: NavConfig, free: jnp.ndarray, resolution, state, waypoints, n_wp, index, replans, origin,
@@ -339,12 +345,13 @@ def _replan_group(config: NavConfig, free: jnp.ndarray, resolution, state, waypo
     H, W = free.shape
     B, N, K = waypoints.shape[:3]
     Q = min(config.replan_slots, B * N)
-    flat_need = need.reshape(-1)
-    _, slot = lax.top_k(flat_need.astype(jnp.int32) * (B * N) - jnp.arange(B * N), Q)  # first Q needing robots
-    use = flat_need[slot]
+    flat_need = need.reshape(-1).astype(jnp.int32)
+    _, slot = lax.top_k(flat_need * (B * N) - jnp.arange(B * N), Q)  # the first Q, must-re-plans first
+    use = flat_need[slot] > 0
+    check = flat_need[slot] == 1
     take = lambda x: x.reshape((B * N,) + x.shape[2:])[slot]  # noqa: E731
 
-    def one(need1, state1, goal_cell1, cen, rch):
+    def one(need1, check1, state1, wp1, n1, index1, goal_cell1, cen, rch):
         closed = disc_cells((H, W), cen, jnp.where(need1, rch, 0.0), resolution, _SPAN)
         cell = jnp.clip(jnp.floor(state1[:2] / resolution).astype(jnp.int32), 0, jnp.asarray([W - 1, H - 1]))
         plan_free = free & ~closed
@@ -352,9 +359,18 @@ def _replan_group(config: NavConfig, free: jnp.ndarray, resolution, state, waypo
         field = distance_field(plan_free, goal_cell1, need1, config.replan_sweeps, until=cell)
         cells, n = descend(field, plan_free, cell, config.replan_cells)
         pts, m = turn_vertices(cells, jnp.maximum(n, 1), K)
-        return (pts + 0.5) * resolution, m, need1 & (n > 1)
+        # A re-check keeps the current path unless the new one is clearly shorter: the field's
+        # length (the same octile grid metric as the turn-vertex polylines) against what is left.
+        new_len = field[cell[1], cell[0]] * resolution
+        legs = jnp.sqrt(jnp.sum((wp1[1:] - wp1[:-1]) ** 2, axis=-1))
+        j = jnp.arange(1, K)
+        left = (jnp.sqrt(jnp.sum((wp1[index1] - state1[:2]) ** 2))
+                + jnp.sum(jnp.where((j > index1) & (j < n1), legs, 0.0)))
+        better = new_len + config.recheck_gain < left
+        return (pts + 0.5) * resolution, m, need1 & (n > 1) & (~check1 | better)
 
-    pts, m, ok = jax.vmap(one)(use, take(state), take(goal_cell), take(centres), take(reach))
+    pts, m, ok = jax.vmap(one)(use, check, take(state), take(waypoints), take(n_wp), take(index), take(goal_cell),
+                               take(centres), take(reach))
     g = take(goal)
     # The last waypoint is the goal itself.
     pts = jnp.where(jnp.arange(K)[None, :, None] >= m[:, None, None] - 1, g[:, None, :], pts)
@@ -365,9 +381,10 @@ def _replan_group(config: NavConfig, free: jnp.ndarray, resolution, state, waypo
         return flat.at[slot].set(upd).reshape(x.shape)
 
     attempted = jnp.zeros(B * N, bool).at[slot].set(use).reshape(B, N)
+    replaced = jnp.zeros(B * N, bool).at[slot].set(ok).reshape(B, N)
     return (put(waypoints, pts, ok), put(n_wp, m, ok), put(index, jnp.zeros_like(m), ok),
             put(replans, take(replans) + 1, ok), put(origin, take(state)[:, :2], ok),
-            put(error, jnp.zeros_like(m, error.dtype), ok), attempted)
+            put(error, jnp.zeros_like(m, error.dtype), ok), attempted, replaced)
 
 
 _SPAN = 3
@@ -451,11 +468,20 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
         # A robot that starts creeping also re-plans from where it stalled (once, when a slot is
         # free): momentum may have carried it into a pocket the old path's next waypoint cannot be
         # reached from in a line.
-        need = (blocked | lost | c.stall_replan) & due & ~c.done
+        must = (blocked | lost | c.stall_replan) & due & ~c.done
+        # A path planned around discs may have been a long way round a walker that has since moved
+        # on: it is re-checked, and replaced by a clearly shorter one (room-64-64-8 among walkers:
+        # robots went on through other rooms, 1.5-2x the way, until the time limit).
+        since = (c.t - c.last_replan).astype(jnp.float32) * period
+        check = c.detour & (since >= config.recheck_period - 1e-6) & due & ~c.done & ~must
+        need = jnp.where(must, 2, jnp.where(check, 1, 0))
         closing = future.reshape(B, N, -1, 2), jnp.repeat(reach, P, axis=-1)
-        c, tried = lax.cond(jnp.any(need), lambda cc: _replan(config, free, res, cc, inputs, need, *closing),
-                            lambda cc: (cc, jnp.zeros_like(need)), c)
+        c, tried, replaced = lax.cond(jnp.any(need > 0),
+                                      lambda cc: _replan(config, free, res, cc, inputs, need, *closing),
+                                      lambda cc: (cc, jnp.zeros_like(must), jnp.zeros_like(must)), c)
         c = c._replace(last_replan=jnp.where(tried, c.t, c.last_replan))
+        if M > 0 or N > 1:  # with no disc at all nothing is closed, and no path goes round anything
+            c = c._replace(detour=c.detour | (replaced & must))
         # A creeping robot keeps creeping along its new path, to that path's first waypoint: released
         # by the re-plan, the robot that orbited went back to full speed and orbited again (measured).
         new_target = _current_waypoint(c)
@@ -567,7 +593,7 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
         closest=jnp.zeros((B, N), inputs.start.dtype), progress_t=zeros, creep=jnp.zeros((B, N), bool),
         spin=jnp.zeros((B, N), inputs.start.dtype),
         goal_best=jnp.sqrt(jnp.sum(lax.stop_gradient(inputs.goal - inputs.start[..., :2]) ** 2, axis=-1)),
-        stall_replan=jnp.zeros((B, N), bool),
+        stall_replan=jnp.zeros((B, N), bool), detour=jnp.zeros((B, N), bool),
         t=jnp.asarray(0, jnp.int32),
     )
     states = jnp.broadcast_to(inputs.start[None], (steps + 1, B, N, 5))

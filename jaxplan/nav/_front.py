@@ -277,13 +277,14 @@ def _config(config: NavConfig | None, pipeline: Pipeline, local_planner: str | N
     dwa = validate_config(dwa.replace(keep_rollouts=False))
     for f in ("switch_radius", "switch_min", "lookahead", "goal_tolerance", "max_time", "replan_period", "replan_deviation",
               "block_distance",
-              "block_margin", "follow_gain", "threat_distance", "threat_speed", "corner_exponent"):
+              "block_margin", "follow_gain", "threat_distance", "threat_speed", "corner_exponent", "recheck_gain"):
         v = getattr(cfg, f)
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
             raise ValueError(f"NavConfig.{f} must be a finite number >= 0, got {v!r}")
     if cfg.goal_tolerance <= 0 or cfg.max_time <= 0:
         raise ValueError("NavConfig.goal_tolerance and max_time must be > 0")
-    for f, what in (("stall_time", "creeping"), ("orbit_angle", "the orbit watch")):
+    for f, what in (("stall_time", "creeping"), ("orbit_angle", "the orbit watch"),
+                    ("recheck_period", "detour re-checks")):
         v = getattr(cfg, f)
         if not (isinstance(v, (int, float)) and not math.isnan(v) and v > 0):
             raise ValueError(f"NavConfig.{f} must be a number > 0 (inf disables {what}), got {v!r}")
