@@ -146,6 +146,14 @@ class NavConfig:
         take re-planning slots only when no robot must re-plan. Without moving obstacles or
         other robots nothing changes; ``inf`` disables it.
       recheck_gain: see ``recheck_period``.
+      recede_speed: a walker moving along the robot's path, the robot's way, at least this fast
+        (m/s) does not block that path, and a walker moving away from the robot that fast is not
+        closed off when re-planning: the robot follows it (the DWA keeps its distance) instead of
+        going round it — and, going round, turning back at the next re-check and round again
+        (measured on warehouse-10-20-10-2-1, scenario row 418: 66 re-plans and the time limit).
+        With this rule and ``recheck_period``, 50 rows x 4 seeds among 5 walkers at 1.0 m/s:
+        room-64-64-8 81 -> 91.5 % success, maze-32-32-2 61 -> 65.5 %, random-32-32-20 87 -> 90 %,
+        warehouse-10-20-10-2-1 98.5 -> 98 %. ``inf`` disables it.
     """
 
     dwa: DWAConfig = DWAConfig(keep_rollouts=False, recovery="flee", d_clip=0.5)
@@ -182,6 +190,7 @@ class NavConfig:
     orbit_angle: float = 2.0 * math.pi
     recheck_period: float = 3.0
     recheck_gain: float = 5.0
+    recede_speed: float = 0.5
 
     @property
     def steps(self) -> int:

@@ -284,7 +284,7 @@ def _config(config: NavConfig | None, pipeline: Pipeline, local_planner: str | N
     if cfg.goal_tolerance <= 0 or cfg.max_time <= 0:
         raise ValueError("NavConfig.goal_tolerance and max_time must be > 0")
     for f, what in (("stall_time", "creeping"), ("orbit_angle", "the orbit watch"),
-                    ("recheck_period", "detour re-checks")):
+                    ("recheck_period", "detour re-checks"), ("recede_speed", "the rule")):
         v = getattr(cfg, f)
         if not (isinstance(v, (int, float)) and not math.isnan(v) and v > 0):
             raise ValueError(f"NavConfig.{f} must be a number > 0 (inf disables {what}), got {v!r}")

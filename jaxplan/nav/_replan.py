@@ -167,7 +167,8 @@ def turn_vertices(cells: jnp.ndarray, n: jnp.ndarray, size: int) -> tuple[jnp.nd
 
 
 def path_blocked(position: jnp.ndarray, waypoints: jnp.ndarray, n: jnp.ndarray, index: jnp.ndarray,
-                 centres: jnp.ndarray, reach: jnp.ndarray, distance: jnp.ndarray) -> jnp.ndarray:
+                 centres: jnp.ndarray, reach: jnp.ndarray, distance: jnp.ndarray,
+                 velocities: jnp.ndarray | None = None, recede=jnp.inf) -> jnp.ndarray:
     """Whether a disc sits on the next ``distance`` metres of the remaining path.
 
     Args:
@@ -176,6 +177,9 @@ def path_blocked(position: jnp.ndarray, waypoints: jnp.ndarray, n: jnp.ndarray, 
       centres: ``[D, 2]`` disc centres (m); ``reach [D]``: the distance (m) from a centre
         within which the path counts as blocked (disc radius + robot radius + margin).
       distance: look-ahead along the path (m).
+      velocities: optional ``[D, 2]`` disc velocities (m/s), with ``recede`` (m/s): a disc
+        moving along the segment it is near, in the path's direction, at least this fast is
+        going the robot's way and does not block that segment.
     """
     K = waypoints.shape[0]
     j = jnp.arange(K)
@@ -190,7 +194,12 @@ def path_blocked(position: jnp.ndarray, waypoints: jnp.ndarray, n: jnp.ndarray, 
     t = jnp.sum((centres[:, None, :] - a[None]) * ab[None], axis=-1) / jnp.maximum(jnp.sum(ab * ab, axis=-1), 1e-12)
     p = a[None] + jnp.clip(t, 0.0, 1.0)[..., None] * ab[None]  # [D, K, 2]
     d = jnp.sqrt(jnp.sum((centres[:, None, :] - p) ** 2, axis=-1))
-    return jnp.any(live[None] & (d < reach[:, None]))
+    near = live[None] & (d < reach[:, None])  # [D, K]
+    if velocities is not None:
+        along = jnp.sum(velocities[:, None, :] * ab[None], axis=-1) / jnp.maximum(seg, 1e-9)[None]
+        rec = jnp.asarray(recede)
+        near = near & ~(along >= (rec[:, None] if rec.ndim == 1 else rec))
+    return jnp.any(near)
 
 
 def disc_cells(shape: tuple[int, int], centres: jnp.ndarray, reach: jnp.ndarray, resolution, span: int) -> jnp.ndarray:
