@@ -156,9 +156,11 @@ class NavConfig:
         closed off when re-planning: the robot follows it (the DWA keeps its distance) instead of
         going round it — and, going round, turning back at the next re-check and round again
         (measured on warehouse-10-20-10-2-1, scenario row 418: 66 re-plans and the time limit).
-        With this rule and ``recheck_period``, 50 rows x 4 seeds among 5 walkers at 1.0 m/s:
-        room-64-64-8 81 -> 91.5 % success, maze-32-32-2 61 -> 65.5 %, random-32-32-20 87 -> 90 %,
-        warehouse-10-20-10-2-1 98.5 -> 98 %. ``inf`` disables it.
+        With this rule and ``recheck_period`` (`bench_nav.py --sections maps`: 5 walkers at
+        1.0 m/s, 50 rows x 5 seeds in one batch, ``replan_group`` 25): room-64-64-8 82.0 ->
+        92.8 % success (time limits 30 -> 2 of 250), maze-32-32-2 68.0 -> 71.2 %,
+        random-64-64-20 97.2 -> 97.6 %, random-32-32-20 88.8 % both, warehouse-10-20-10-2-1
+        98.8 -> 98.0 %. ``inf`` disables it.
     """
 
     dwa: DWAConfig = DWAConfig(keep_rollouts=False, recovery="flee", d_clip=0.5)
