@@ -11,7 +11,7 @@ import pytest
 
 import jaxplan as jp
 from jaxplan.nav import NavConfig
-from jaxplan.nav._episode import _corner_cap
+from jaxplan.nav._episode import _corner_cap, _rewatch
 from jaxplan.nav._front import INFEASIBLE_START, UNREACHABLE
 from jaxplan.nav._replan import descend, distance_field, path_blocked, turn_vertices
 
@@ -256,6 +256,20 @@ def test_a_creeping_robot_stalled_again_replans_again(movingai):
     xy = ep.trajectory[:, :2]
     still = np.linalg.norm(xy[10:] - xy[:-10], axis=1) < 0.1  # under 0.1 m in 2 s (at t = 25-27 s)
     assert still.any() and ep.metrics["replans"] >= 4  # it stalled while creeping, re-planned and got away
+
+
+def test_a_creeping_robot_measures_progress_to_its_new_waypoint_after_a_replan():
+    # Robots: 0 creeping, re-planned, new waypoint 6 m away (the old one's closest approach was 1 m);
+    # 1 creeping, its re-plan failed (same waypoint); 2 not creeping; 3 creeping, not re-planned.
+    replanned = jnp.array([[True, True, False, False]])
+    target = jnp.array([[[6.0, 0.0], [1.0, 0.0], [6.0, 0.0], [6.0, 0.0]]])
+    watch = jnp.array([[[1.0, 0.0], [1.0, 0.0], [1.0, 0.0], [1.0, 0.0]]])
+    pos = jnp.zeros((1, 4, 2))
+    closest, progress_t = jnp.full((1, 4), 1.0), jnp.full((1, 4), 3, jnp.int32)
+    w, c, p = _rewatch(replanned, target, pos, watch, closest, progress_t, jnp.int32(40))
+    np.testing.assert_array_equal(w[0, :, 0], [6.0, 1.0, 1.0, 1.0])  # watches the new waypoint: still creeping
+    np.testing.assert_allclose(c[0], [6.0, 1.0, 1.0, 1.0])  # progress counts from 6 m, not against 1 m
+    np.testing.assert_array_equal(p[0], [40, 3, 3, 3])  # and its stall clock restarts now
 
 
 def test_a_robot_circling_through_replans_creeps_on_its_net_turn(movingai):

@@ -279,6 +279,19 @@ def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp
                       spin=spin, goal_best=goal_best)
 
 
+def _rewatch(replanned: jnp.ndarray, target: jnp.ndarray, pos: jnp.ndarray, watch: jnp.ndarray,
+             closest: jnp.ndarray, progress_t: jnp.ndarray, t: jnp.ndarray):
+    """The stall watch of creeping robots that just re-planned (``replanned [B, N]``): it follows the
+    new current waypoint ``target [B, N, 2]`` (m) without restarting the creep, and, where that
+    waypoint changed, measures progress towards it from ``pos [B, N, 2]`` and from step ``t`` on —
+    against the old waypoint's closest approach a robot whose new waypoint is farther would count
+    as stalled at once and re-plan again. Returns ``(watch, closest, progress_t)``."""
+    moved = replanned & jnp.any(target != watch, axis=-1)
+    d = jnp.sqrt(jnp.sum(lax.stop_gradient(target - pos) ** 2, axis=-1))
+    return (jnp.where(replanned[..., None], target, watch), jnp.where(moved, d, closest),
+            jnp.where(moved, t, progress_t))
+
+
 def _threatened(config: NavConfig, pos: jnp.ndarray, centres: jnp.ndarray, velocities: jnp.ndarray,
                 radii: jnp.ndarray) -> jnp.ndarray:
     """``bool[...]``: a disc whose edge is within `NavConfig.threat_distance` of the robot's centre
@@ -494,9 +507,9 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
             c = c._replace(detour=c.detour | (replaced & must))
         # A creeping robot keeps creeping along its new path, to that path's first waypoint: released
         # by the re-plan, the robot that orbited went back to full speed and orbited again (measured).
-        new_target = _current_waypoint(c)
-        c = c._replace(watch=jnp.where((c.creep & tried)[..., None], new_target, c.watch),
-                       stall_replan=c.stall_replan & ~tried)
+        watch, closest, progress_t = _rewatch(c.creep & tried, _current_waypoint(c), pos, c.watch, c.closest,
+                                              c.progress_t, c.t)
+        c = c._replace(watch=watch, closest=closest, progress_t=progress_t, stall_replan=c.stall_replan & ~tried)
 
     if config.subgoal == "key_nodes":
         sub = _current_waypoint(c)
