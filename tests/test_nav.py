@@ -260,9 +260,10 @@ def test_a_creeping_robot_stalled_again_replans_again(movingai):
 
 def test_a_creeping_robot_measures_progress_to_its_new_waypoint_after_a_replan():
     # Robots: 0 creeping, re-planned, new waypoint 6 m away (the old one's closest approach was 1 m);
-    # 1 creeping, its re-plan failed (same waypoint); 2 not creeping; 3 creeping, not re-planned.
+    # 1 creeping, its re-plan failed (same waypoint); 2 and 3 did not re-plan while creeping (the
+    # caller passes creep & tried), one with a new waypoint in sight, one without.
     replanned = jnp.array([[True, True, False, False]])
-    target = jnp.array([[[6.0, 0.0], [1.0, 0.0], [6.0, 0.0], [6.0, 0.0]]])
+    target = jnp.array([[[6.0, 0.0], [1.0, 0.0], [6.0, 0.0], [1.0, 0.0]]])
     watch = jnp.array([[[1.0, 0.0], [1.0, 0.0], [1.0, 0.0], [1.0, 0.0]]])
     pos = jnp.zeros((1, 4, 2))
     closest, progress_t = jnp.full((1, 4), 1.0), jnp.full((1, 4), 3, jnp.int32)
