@@ -138,6 +138,31 @@ def test_moving_disc_rollouts_are_checked_at_predicted_positions():
     assert abs(u0[1]) < 0.2 and abs(u[1]) > 0.2
 
 
+def test_a_disc_track_replaces_the_constant_velocity_prediction():
+    grid = jp.grid_from_array(np.ones((20, 40), bool), resolution=0.5)
+    state = np.array([2.0, 5.0, 0.0, 1.0, 0.0])
+    pos, vel, rad = np.array([[4.0, 7.0]]), np.array([[1.0, 0.0]]), np.array([0.3])
+    # Constant velocity, the disc passes 2 m to the left of the robot's lane; along its track it
+    # turns after 0.5 s and crosses the lane. Samples 0 .. 20 of the track every dt = 0.1 s.
+    t = np.arange(21) * 0.1
+    turn = np.where(t[:, None] <= 0.5, pos + t[:, None] * vel,
+                    pos + 0.5 * vel + (t[:, None] - 0.5) * np.array([[0.0, -1.0]]))
+    _, cv = dwa_step(state, [18.0, 5.0], grid, obstacles=DiscObstacles(pos, vel, rad))
+    _, tr = dwa_step(state, [18.0, 5.0], grid, obstacles=DiscObstacles(pos, vel, rad, turn[None]))
+    static = _brute_clearance(tr.rollouts[..., :2], np.ones((20, 40), bool), 0.5)
+    gap = np.linalg.norm(tr.rollouts[..., :2] - turn[None, 1:], axis=-1) - 0.3  # rollout point k at t = k·dt
+    np.testing.assert_allclose(tr.clearance, np.minimum(gap, static).min(axis=1), atol=1e-4)
+    assert (~tr.feasible).sum() > (~cv.feasible).sum() + 50  # the turn rules out straight-ahead samples
+    # A track that is the constant-velocity prediction changes nothing.
+    _, same = dwa_step(state, [18.0, 5.0], grid, obstacles=DiscObstacles(pos, vel, rad, (pos + t[:, None] * vel)[None]))
+    np.testing.assert_allclose(same.clearance, cv.clearance, atol=1e-5)
+    assert same.chosen == cv.chosen
+    with pytest.raises(ValueError, match="track must have shape"):
+        dwa_step(state, [18.0, 5.0], grid, obstacles=DiscObstacles(pos, vel, rad, turn))
+    with pytest.raises(ValueError, match="track contains NaN"):
+        dwa_step(state, [18.0, 5.0], grid, obstacles=DiscObstacles(pos, vel, rad, np.full((1, 21, 2), np.nan)))
+
+
 def test_robot_facing_a_wall_in_a_corridor_stops_without_colliding():
     free = np.zeros((7, 30), bool)
     free[2:5, 1:20] = True  # a corridor 3 cells (1.5 m) wide, closed at x = 20 cells
@@ -233,11 +258,11 @@ def test_batched_equals_per_robot(clutter):
         np.testing.assert_array_equal(ii.feasible, info.feasible[i])
     # Per-robot obstacles [B, M, ...]: each robot sees its own discs (e.g. the other robots).
     per = DiscObstacles(states[None, :, :2].repeat(6, 0), np.zeros((6, 6, 2)), np.full((6, 6), 0.25))
-    per = DiscObstacles(*(np.delete(a.reshape(36, -1), np.arange(6) * 7, axis=0).reshape((6, 5) + a.shape[2:])
-                          for a in per))  # drop each robot itself
+    per = jax.tree.map(lambda a: np.delete(a.reshape(36, -1), np.arange(6) * 7, axis=0).reshape((6, 5) + a.shape[2:]),
+                       per)  # drop each robot itself
     u, info = dwa_step(states, goals, clutter, obstacles=per, config=config)
     for i in (0, 3):
-        ui, ii = dwa_step(states[i], goals[i], clutter, obstacles=DiscObstacles(*(a[i] for a in per)), config=config)
+        ui, ii = dwa_step(states[i], goals[i], clutter, obstacles=jax.tree.map(lambda a: a[i], per), config=config)
         np.testing.assert_allclose(ui, u[i], atol=1e-5)
         np.testing.assert_allclose(ii.clearance, info.clearance[i], atol=1e-5)
 

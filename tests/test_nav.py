@@ -11,7 +11,7 @@ import pytest
 
 import jaxplan as jp
 from jaxplan.nav import NavConfig
-from jaxplan.nav._episode import _corner_cap, _rewatch
+from jaxplan.nav._episode import _corner_cap, _oracle_track, _rewatch
 from jaxplan.nav._front import INFEASIBLE_START, UNREACHABLE
 from jaxplan.nav._replan import descend, distance_field, path_blocked, turn_vertices
 
@@ -473,3 +473,46 @@ def test_a_walker_from_behind_is_outrun_not_waited_for(movingai):
     assert ep.success and ep.collisions == 0, ep.reason
     assert len(ep.controls) >= k
     assert np.all(ep.controls[k - 5:k, 0] > cfg.corner_speed + 0.5)  # where the other was hit, this one drove fast
+
+
+def test_the_oracle_track_follows_routes_and_extrapolates_robots():
+    walkers = jp.moving_obstacles([[[2.5, 2.5], [4.5, 2.5], [4.5, 6.5]], [[8.5, 1.5], [8.5, 1.5]]], speeds=[1.0, 0.0],
+                                  radii=0.25)
+    obs = jax.tree.map(lambda a: jnp.asarray(a)[None], walkers)  # B = 1
+    t = jnp.float32(1.5)
+    M, N, T, dt = 2, 2, 20, 0.1
+    opos, ovel = jp.nav.obstacle_state(walkers, t)
+    robots = jnp.array([[[1.0, 1.0], [9.0, 9.0]]])  # [B, N, 2]: robot i sees robot 1 - i
+    rvel = jnp.array([[[0.5, 0.0], [0.0, -0.5]]])
+    pos_all = jnp.concatenate([jnp.broadcast_to(opos, (1, N, M, 2)), robots[:, ::-1, None, :]], axis=2)
+    vel_all = jnp.concatenate([jnp.broadcast_to(ovel, (1, N, M, 2)), rvel[:, ::-1, None, :]], axis=2)
+    track = np.asarray(_oracle_track(obs, t, T, dt, pos_all, vel_all))
+    assert track.shape == (1, N, M + 1, T + 1, 2)
+    taus = np.arange(T + 1) * dt
+    # Walker 0 reaches its corner (4.5, 2.5) at t = 2 s, 0.5 s in, and turns up the y axis.
+    want0 = np.where(taus[:, None] <= 0.5, [[4.0, 2.5]] + taus[:, None] * [[1.0, 0.0]],
+                     [[4.5, 2.5]] + (taus[:, None] - 0.5) * [[0.0, 1.0]])
+    for i in range(N):
+        np.testing.assert_allclose(track[0, i, 0], want0, atol=1e-5)
+        np.testing.assert_allclose(track[0, i, 1], np.broadcast_to([8.5, 1.5], (T + 1, 2)), atol=1e-6)
+        other = np.asarray(robots[0, 1 - i] + taus[:, None] * rvel[0, 1 - i])
+        np.testing.assert_allclose(track[0, i, 2], other, atol=1e-5)  # robots: constant velocity
+
+
+def test_oracle_prediction_sees_a_walker_turn_before_it_does(room):
+    with pytest.raises(ValueError, match="unknown prediction"):
+        jp.navigate(room, STARTS[0], GOALS[0], global_planner="astar", config=NavConfig(prediction="psychic"))
+    # A walker comes towards the robot in the next lane (1.1 m to its left) and turns across the
+    # robot's lane in front of it. At constant velocity it seems to pass by until it turns.
+    free = np.ones((12, 30), bool)
+    free[0, :] = free[-1, :] = free[:, 0] = free[:, -1] = False
+    grid = jp.grid_from_array(free, resolution=1.0)
+    walker = jp.moving_obstacles([[[28.5, 7.6], [14.5, 7.6], [14.5, 1.5]]], speeds=1.0, radii=0.25, offsets=[5.0])
+    run = lambda p: jp.navigate(grid, (3, 6), (26, 6), global_planner="astar", obstacles=walker,  # noqa: E731
+                                config=NavConfig(prediction=p))
+    gap = lambda ep: np.hypot(*(ep.trajectory[:, None, :2] - ep.obstacle_positions).transpose(2, 0, 1)).min()  # noqa: E731
+    cv, oracle = run("constant_velocity"), run("oracle")
+    assert oracle.success and oracle.collisions == 0, oracle.reason
+    assert cv.success, cv.reason
+    assert gap(oracle) > gap(cv) + 0.3  # it kept away from the turn it saw coming ...
+    assert oracle.time_s < cv.time_s  # ... instead of being caught by it and waiting

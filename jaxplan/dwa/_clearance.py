@@ -28,7 +28,9 @@ map on the host (`clearance_table`). Three lookups, selected by name:
 * ``"exact"`` — `jaxplan.grid._collision.point_clearance`: exact up to 2 cells (a
   5×5 window of point-to-square distances); tens of times slower — for checking.
 
-Moving obstacles are discs predicted at constant velocity (`DiscObstacles`).
+Moving obstacles are discs predicted at constant velocity (`DiscObstacles`), or along
+given tracks sampled at the rollout's times (``DiscObstacles.track``: the navigation
+episodes' ``prediction="oracle"`` ablation hands the DWA the walkers' true futures).
 
 All lookups are differentiable almost everywhere in the point (square roots are
 guarded so that points inside obstacles give zero, not NaN, gradients).
@@ -185,12 +187,16 @@ def static_clearance(table: ClearanceTable, x: jnp.ndarray, y: jnp.ndarray, mode
 
 
 class DiscObstacles(NamedTuple):
-    """Moving discs, predicted at constant velocity. A pytree; batch axes lead.
+    """Moving discs, predicted at constant velocity unless a track is given. A pytree; batch axes lead.
 
     Attributes:
       positions: ``f32[M, 2]`` centres (m) at the time of the step.
       velocities: ``f32[M, 2]`` (m/s).
       radii: ``f32[M]`` (m, >= 0).
+      track: None (constant velocity), or ``f32[M, K, 2]`` centres (m) at ``0, dt, …,
+        (K − 1)·dt`` after the step, ``dt`` the DWA's rollout step: the prediction to use
+        instead (`disc_clearance` takes the sample nearest to ``t``, the last one beyond).
+        Navigation's ``prediction="oracle"`` ablation passes the walkers' true futures.
 
     ``M`` may be 0. Padding slots (a fixed M for a varying number of obstacles) should
     sit far away (e.g. 1e6 m) with radius 0 and zero velocity: finite values keep
@@ -200,6 +206,7 @@ class DiscObstacles(NamedTuple):
     positions: jnp.ndarray
     velocities: jnp.ndarray
     radii: jnp.ndarray
+    track: jnp.ndarray | None = None
 
     @property
     def count(self) -> int:
@@ -211,16 +218,24 @@ def no_obstacles() -> DiscObstacles:
     return DiscObstacles(jnp.zeros((0, 2)), jnp.zeros((0, 2)), jnp.zeros((0,)))
 
 
-def disc_clearance(obstacles: DiscObstacles, x: jnp.ndarray, y: jnp.ndarray, t) -> jnp.ndarray:
+def disc_clearance(obstacles: DiscObstacles, x: jnp.ndarray, y: jnp.ndarray, t, dt: float | None = None) -> jnp.ndarray:
     """Distance (m) from points ``x, y [...]`` to the nearest disc edge at time ``t`` (s); +inf if M = 0.
 
-    Negative inside a disc.
+    Negative inside a disc. ``dt`` (s) is the spacing of ``obstacles.track``'s samples, needed
+    only when a track is given.
     """
     M = obstacles.radii.shape[-1]
     if M == 0:
         return jnp.full(jnp.shape(x), jnp.inf, jnp.result_type(x))
-    cx = obstacles.positions[:, 0] + obstacles.velocities[:, 0] * t  # [M]
-    cy = obstacles.positions[:, 1] + obstacles.velocities[:, 1] * t
+    if obstacles.track is not None:
+        if dt is None:
+            raise ValueError("disc_clearance: obstacles with a track need the track's sample spacing dt")
+        k = jnp.clip(jnp.round(jnp.asarray(t, jnp.float32) / dt), 0, obstacles.track.shape[-2] - 1).astype(jnp.int32)
+        c = lax.dynamic_index_in_dim(obstacles.track, k, axis=-2, keepdims=False)  # [M, 2]
+        cx, cy = c[:, 0], c[:, 1]
+    else:
+        cx = obstacles.positions[:, 0] + obstacles.velocities[:, 0] * t  # [M]
+        cy = obstacles.positions[:, 1] + obstacles.velocities[:, 1] * t
     best = None
     for j in range(M) if M <= 8 else ():
         # Few discs: unrolled, so the distance stays inside the caller's elementwise fusion.

@@ -177,7 +177,8 @@ def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, sta
       state: ``f32[5]`` (x, y, theta, v, omega) in m, rad, m/s, rad/s.
       subgoal: ``f32[2]`` (m) the point the heading and goal critics aim at.
       obstacles: `DiscObstacles` with ``M`` discs (``[M, 2]`` positions and velocities,
-        ``[M]`` radii) or None.
+        ``[M]`` radii; a ``[M, K, 2]`` track sampled every ``config.dt`` replaces the
+        constant-velocity prediction) or None.
       path: ``f32[L, 2]`` the global path (m) for the path critic, or None.
       finish: ``f32[3]`` (x, y, radius) the goal region where the robot's run ends, or None:
         rollout points after a rollout enters it are not checked (see `rollout`).
@@ -197,9 +198,9 @@ def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, sta
     def clearance(x, y, t):
         c = static_clearance(table, x, y, config.clearance)
         if split:
-            return c, disc_clearance(obstacles, x, y, t)
+            return c, disc_clearance(obstacles, x, y, t, dt)
         if moving:
-            c = jnp.minimum(c, disc_clearance(obstacles, x, y, t))
+            c = jnp.minimum(c, disc_clearance(obstacles, x, y, t, dt))
         return c
 
     def combined(x, y, t):

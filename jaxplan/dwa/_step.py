@@ -162,8 +162,9 @@ def as_obstacles(obstacles: Any, batch: int | None) -> DiscObstacles | None:
     `DiscObstacles` or a ``(positions, velocities, radii)`` tuple; None passes through."""
     if obstacles is None:
         return None
+    track = obstacles.track if isinstance(obstacles, DiscObstacles) else None
     try:
-        pos, vel, rad = obstacles
+        pos, vel, rad = obstacles[:3] if isinstance(obstacles, DiscObstacles) else obstacles
     except (TypeError, ValueError):
         raise ValueError("obstacles must be DiscObstacles or a (positions, velocities, radii) tuple") from None
     pos = np.asarray(pos, np.float64)
@@ -184,7 +185,15 @@ def as_obstacles(obstacles: Any, batch: int | None) -> DiscObstacles | None:
             raise ValueError(f"obstacle {name} contain NaN or infinite values")
     if not np.isfinite(rad).all() or (rad < 0).any():
         raise ValueError("obstacle radii must be finite and >= 0")
-    return DiscObstacles(*(a.astype(np.float32) for a in (pos, vel, rad)))
+    if track is not None:
+        track = np.asarray(track, np.float64)
+        if track.ndim != len(lead) + 3 or track.shape[:len(lead) + 1] != lead + (M,) or track.shape[-1] != 2 \
+                or track.shape[-2] < 1:
+            raise ValueError(f"obstacle track must have shape {lead + (M,)} + (K, 2) with K >= 1, got {track.shape}")
+        if not np.isfinite(track).all():
+            raise ValueError("obstacle track contains NaN or infinite values")
+        track = track.astype(np.float32)
+    return DiscObstacles(*(a.astype(np.float32) for a in (pos, vel, rad)), track=track)
 
 
 def _check_window(config: DWAConfig, states: np.ndarray) -> None:
@@ -216,7 +225,8 @@ def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any
       grid: the map (`GridMap`); its clearance tables are built on the first call and kept.
       obstacles: moving discs: `DiscObstacles` or ``(positions [M, 2] m, velocities
         [M, 2] m/s, radii [M] m)``, shared by all robots, or ``[B, M, ...]`` per robot
-        (``M`` may be 0); predicted at constant velocity over the horizon.
+        (``M`` may be 0); predicted at constant velocity over the horizon, or along
+        ``DiscObstacles.track`` (``[M, K, 2]`` centres every ``config.dt``) if given.
       params: `DWAParams`, a dict of overrides of the evaluator's defaults
         (e.g. ``{"heading": 0.5}``), or None for the defaults.
       config: `DWAConfig` (robot, window, horizon, evaluator, clearance mode, selection);
@@ -277,7 +287,7 @@ def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any
         Bp = B if B <= CHUNK else -(-B // CHUNK) * CHUNK
         pad = lambda a: np.concatenate([a, np.repeat(a[-1:], Bp - B, axis=0)]) if Bp > B else a
         if obs is not None and obs.radii.ndim == 2:
-            obs = DiscObstacles(*(pad(a) for a in obs))
+            obs = DiscObstacles(*(None if a is None else pad(a) for a in obs))
         if pa is not None and pa.ndim == 3:
             pa = pad(pa)
         out = _batch(table, config, prm, pad(st2).astype(np.float32), pad(sg).astype(np.float32), obs, pa,

@@ -404,6 +404,19 @@ _SPAN = 3
 """Cells around a blocking disc's cell that re-planning examines (reach up to 3.5 cells)."""
 
 
+def _oracle_track(obs: MovingObstacles, t: jnp.ndarray, steps: int, dt: float, pos_all: jnp.ndarray,
+                  vel_all: jnp.ndarray) -> jnp.ndarray:
+    """``[B, N, D, steps + 1, 2]`` centres at ``t, t + dt, …, t + steps·dt``: the obstacles (the first
+    M of the D discs) along their true routes, the other robots at constant velocity."""
+    B, N, D = pos_all.shape[:3]
+    M = obs.radii.shape[-1]
+    taus = jnp.arange(steps + 1, dtype=jnp.float32) * dt
+    fut = jax.vmap(lambda tau: jax.vmap(obstacle_state, in_axes=(0, None))(obs, t + tau)[0])(taus)  # [K, B, M, 2]
+    fut = jnp.broadcast_to(jnp.moveaxis(fut, 0, 2)[:, None], (B, N, M, steps + 1, 2))
+    linear = pos_all[..., None, :] + vel_all[..., None, :] * taus[:, None]  # [B, N, D, K, 2]
+    return jnp.concatenate([fut, linear[:, :, M:]], axis=2) if D > M else fut
+
+
 def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: DWAParams,
           inputs: EpisodeInputs, c: _Carry):
     dwa = config.dwa
@@ -528,7 +541,10 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
         # Walkers only: robots avoid each other, and two robots meeting at a corner should slow down.
         threat = _threatened(config, pos, pos_all[:, :, :M], vel_all[:, :, :M], rad_all[:, :, :M])
         v_top = jnp.where(flat(threat), robot.v_max, v_top)
-        discs = DiscObstacles(flat(pos_all), flat(vel_all), flat(rad_all))
+        track = None
+        if config.prediction == "oracle" and M > 0:
+            track = _oracle_track(obs, t, dwa.steps, dwa.dt, pos_all, vel_all)
+        discs = DiscObstacles(flat(pos_all), flat(vel_all), flat(rad_all), None if track is None else flat(track))
 
         def control(state, subgoal, d, wp, vmax, finish):
             cfg = dataclasses.replace(dwa, robot=dataclasses.replace(robot, v_max=vmax))

@@ -44,7 +44,7 @@ from jaxplan.dwa._step import table_of, validate_config, validate_params
 from jaxplan.grid._fields import clearance_field
 from jaxplan.grid._gridmap import GridMap
 from jaxplan.metrics._episode import EnergyModel, energy
-from jaxplan.nav._config import LOCAL_PLANNERS, SUBGOAL_MODES, NavConfig
+from jaxplan.nav._config import LOCAL_PLANNERS, PREDICTIONS, SUBGOAL_MODES, NavConfig
 from jaxplan.nav._episode import GOAL, REASONS, EpisodeInputs, run_episodes
 from jaxplan.nav._obstacles import MovingObstacles, no_obstacles, obstacle_state, stack_obstacles, trajectories
 from jaxplan.nav._pipelines import Pipeline, get_pipeline
@@ -272,6 +272,8 @@ def _config(config: NavConfig | None, pipeline: Pipeline, local_planner: str | N
         raise ValueError(f"unknown local planner {local!r}; choose from {LOCAL_PLANNERS}")
     if cfg.subgoal not in SUBGOAL_MODES:
         raise ValueError(f"unknown sub-goal mode {cfg.subgoal!r}; choose from {SUBGOAL_MODES}")
+    if cfg.prediction not in PREDICTIONS:
+        raise ValueError(f"unknown prediction {cfg.prediction!r}; choose from {PREDICTIONS}")
     evaluator = cfg.evaluator or pipeline.evaluator
     dwa = cfg.dwa.replace(evaluator=evaluator)
     dwa = validate_config(dwa.replace(keep_rollouts=False))

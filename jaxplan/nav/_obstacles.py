@@ -34,7 +34,9 @@ The DWA does not see routes: `discs_at(obs, t)` hands it a `DiscObstacles` snaps
 (positions and velocities at ``t``), which its rollouts extrapolate at constant
 velocity over the horizon, ``p(t + τ) ≈ p(t) + v(t)·τ``. That prediction is exact
 until the obstacle reaches its next vertex, so near a corner or a bounce it is wrong
-by up to ``2·v·τ``; the episode re-snapshots every control step.
+by up to ``2·v·τ``; the episode re-snapshots every control step. (The ablation
+``NavConfig(prediction="oracle")`` instead hands the DWA each obstacle's true centres at
+its rollout times, ``DiscObstacles.track``.)
 
 Generators (host side, numpy RNG from an integer ``seed``: same seed, same arrays)
 build routes that a disc of the obstacle's radius travels without touching a blocked
