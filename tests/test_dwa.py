@@ -163,6 +163,41 @@ def test_a_disc_track_replaces_the_constant_velocity_prediction():
         dwa_step(state, [18.0, 5.0], grid, obstacles=DiscObstacles(pos, vel, rad, np.full((1, 21, 2), np.nan)))
 
 
+def test_straighten_samples_turn_then_drive_straight_on():
+    grid = jp.grid_from_array(np.ones((20, 40), bool), resolution=0.5)
+    state = np.array([2.0, 5.0, 0.3, 1.0, 0.5])
+    plain = DWAConfig()
+    config = DWAConfig(straighten=(0.25, 0.5), n_omega_straight=10)
+    assert config.samples == 800 + 2 * 20 * 10 and config.turn_steps() == (5, 10)
+    _, base = dwa_step(state, [18.0, 5.0], grid, config=plain)
+    u, info = dwa_step(state, [18.0, 5.0], grid, config=config)
+    assert info.samples.shape == (1200, 2) and info.rollouts.shape == (1200, 20, 3)
+    np.testing.assert_array_equal(info.samples[:800], base.samples)  # the plain grid comes first, unchanged
+    np.testing.assert_allclose(info.rollouts[:800], base.rollouts, atol=1e-5)
+    t = (np.arange(20) + 1) * 0.1
+    for j, k1 in ((800 + 57, 5), (800 + 200 + 131, 10)):
+        v, w = info.samples[j]
+        th = state[2] + w * np.minimum(t, k1 * 0.1)
+        # Exact: arc for the first k1 points, then straight on along the heading reached.
+        chord = v * np.minimum(t, k1 * 0.1) * np.sinc(w * np.minimum(t, k1 * 0.1) / (2 * np.pi))
+        mid = state[2] + w * np.minimum(t, k1 * 0.1) / 2
+        x = state[0] + chord * np.cos(mid) + v * np.maximum(t - k1 * 0.1, 0) * np.cos(th)
+        y = state[1] + chord * np.sin(mid) + v * np.maximum(t - k1 * 0.1, 0) * np.sin(th)
+        np.testing.assert_allclose(info.rollouts[j], np.stack([x, y, th], 1), atol=2e-5)
+    # The end pose the critics score (no rollouts kept) is the last point.
+    lean = config.replace(keep_rollouts=False)
+    u2, info2 = dwa_step(state, [18.0, 5.0], grid, config=lean)
+    np.testing.assert_allclose(u2, u, atol=1e-6)
+    np.testing.assert_allclose(info2.scores, info.scores, atol=1e-5)
+    w_lo, w_hi = info.window[2:]
+    assert w_lo - 1e-6 <= u[1] <= w_hi + 1e-6
+    for bad, match in (((0.01,), "at least one point"), ((1.0,), "at least one point"), ([0.5], "tuple")):
+        with pytest.raises(ValueError, match=match):
+            dwa_step(state, [18.0, 5.0], grid, config=DWAConfig(straighten=bad))
+    with pytest.raises(ValueError, match="n_omega_straight"):
+        dwa_step(state, [18.0, 5.0], grid, config=DWAConfig(straighten=(0.5,), n_omega_straight=0))
+
+
 def test_robot_facing_a_wall_in_a_corridor_stops_without_colliding():
     free = np.zeros((7, 30), bool)
     free[2:5, 1:20] = True  # a corridor 3 cells (1.5 m) wide, closed at x = 20 cells

@@ -69,6 +69,14 @@ class DWAConfig:
         stop and rotate in place towards the sub-goal — or ``"flee"``: take the sample whose
         rollout keeps the largest minimum clearance (against a moving disc heading for the
         robot, standing still is often the worst choice; navigation episodes use this).
+      straighten: fractions f of the horizon (static; default none). For each, an extra
+        ``n_v × n_omega_straight`` grid of samples over the same window whose rollouts turn
+        at ω for the first round(f·T) points and then drive straight on at v: a lane change
+        or a side-step round a disc in a corridor, where every constant-curvature arc long
+        enough to pass reaches a wall within the horizon. The control of such a sample is its
+        (v, ω) for the next period, as for the others: the straight part is only a promise
+        the next steps may keep. Each fraction must leave at least one point on either part.
+      n_omega_straight: yaw-rate samples per speed in each ``straighten`` grid (static).
     """
 
     robot: Robot = Unicycle()
@@ -87,6 +95,8 @@ class DWAConfig:
     unroll: int = dataclasses.field(default=4, metadata=dict(static=True))
     escape: bool = dataclasses.field(default=True, metadata=dict(static=True))
     recovery: str = dataclasses.field(default="rotate", metadata=dict(static=True))
+    straighten: tuple[float, ...] = dataclasses.field(default=(), metadata=dict(static=True))
+    n_omega_straight: int = dataclasses.field(default=20, metadata=dict(static=True))
 
     @property
     def steps(self) -> int:
@@ -95,8 +105,12 @@ class DWAConfig:
 
     @property
     def samples(self) -> int:
-        """Samples per step, S = n_v · n_omega."""
-        return self.n_v * self.n_omega
+        """Samples per step, S = n_v · n_omega (+ n_v · n_omega_straight per ``straighten`` fraction)."""
+        return self.n_v * (self.n_omega + len(self.straighten) * self.n_omega_straight)
+
+    def turn_steps(self) -> tuple[int, ...]:
+        """Points each ``straighten`` grid turns for, round(f·T)."""
+        return tuple(int(round(f * self.steps)) for f in self.straighten)
 
     def replace(self, **changes) -> "DWAConfig":
         return dataclasses.replace(self, **changes)

@@ -35,6 +35,7 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jax import lax
 
 from jaxplan.dwa import _critics as C
@@ -209,6 +210,16 @@ def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, sta
 
     ro = rollout(state, v, w, clearance, robot.footprint, steps, dt, keep=config.keep_rollouts,
                  unroll=config.unroll, finish=finish, split=split)
+    if config.straighten:
+        # The turn-then-straight grids roll out in a loop of their own, so that the default
+        # configuration's constant-curvature loop stays as it is.
+        v2, w2 = sample_controls(robot, window, config.n_v, config.n_omega_straight)
+        k = np.repeat(np.asarray(config.turn_steps(), np.float32), v2.shape[0])
+        v2, w2 = jnp.tile(v2, len(config.straighten)), jnp.tile(w2, len(config.straighten))
+        ro2 = rollout(state, v2, w2, clearance, robot.footprint, steps, dt, keep=config.keep_rollouts,
+                      unroll=config.unroll, finish=finish, split=split, turn_steps=jnp.asarray(k))
+        ro = jax.tree.map(lambda a, b: jnp.concatenate([a, b]), ro, ro2)
+        v, w = jnp.concatenate([v, v2]), jnp.concatenate([w, w2])
     threshold = config.d_safe
     if config.escape:
         threshold = jnp.minimum(threshold, _current_clearance(combined, state, robot.footprint) - ESCAPE_SLACK)

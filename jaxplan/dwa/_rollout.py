@@ -61,7 +61,7 @@ class Rollouts(NamedTuple):
 
 def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: ClearanceFn, footprint: Footprint,
             steps: int, dt: float, keep: bool = False, unroll: int = 1,
-            finish: jnp.ndarray | None = None, split: bool = False) -> Rollouts:
+            finish: jnp.ndarray | None = None, split: bool = False, turn_steps: jnp.ndarray | None = None) -> Rollouts:
     """Rolls out S constant-velocity samples from ``state`` and tracks their clearance.
 
     Args:
@@ -82,6 +82,11 @@ def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: Clear
         past a goal at the end of a dead end would otherwise hit the end wall.
       split: ``clearance`` returns ``(map, moving discs)`` separately (static); both minima are
         kept, and `Rollouts.static` holds the map's.
+      turn_steps: ``f32[S]`` or None: sample i turns at its ω for its first ``turn_steps[i]``
+        points and then drives straight on at v (`DWAConfig.straighten`); ``T + 1`` or None
+        turns for the whole horizon. The rotor then stops advancing, so the position stays
+        exact: ``p_k = p_0 + e^{iθ0}·q·(v·dt·sin(k'φ)/φ + v·dt·(k − k')·q)`` with
+        ``k' = min(k, turn_steps)`` and ``q = e^{ik'φ}``.
     """
     x0, y0, th0 = state[0], state[1], state[2]
     dtype = v.dtype
@@ -96,8 +101,13 @@ def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: Clear
 
     def pose(q, k):
         """Position ``x, y [S]`` after ``k`` steps, ``q = e^{ikφ}``."""
-        arc = jnp.where(small, v * (k * dt), arc_scale * q.imag)  # v·dt·sin(kφ)/φ
-        p = e0 * q * arc
+        if turn_steps is None:
+            arc = jnp.where(small, v * (k * dt), arc_scale * q.imag)  # v·dt·sin(kφ)/φ
+            p = e0 * q * arc
+            return x0 + p.real, y0 + p.imag
+        kk = jnp.minimum(k, turn_steps)
+        arc = jnp.where(small, v * (kk * dt), arc_scale * q.imag)
+        p = e0 * q * (arc + v * dt * jnp.maximum(k - turn_steps, 0.0) * q)
         return x0 + p.real, y0 + p.imag
 
     def point(q, k):
@@ -135,7 +145,11 @@ def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: Clear
         def body(carry, k):
             q = carry[0]  # q = e^{i(k+1)φ}: the rotor of this step's point
             x, y, t, clr = point(q, k + 1)
-            return (q * rot,) + track(carry, x, y, clr), jnp.stack([x, y, th0 + w * t], axis=-1)
+            if turn_steps is None:
+                return (q * rot,) + track(carry, x, y, clr), jnp.stack([x, y, th0 + w * t], axis=-1)
+            nq = jnp.where(k + 2 <= turn_steps, q * rot, q)
+            th = th0 + w * jnp.minimum(t, turn_steps * dt)
+            return (nq,) + track(carry, x, y, clr), jnp.stack([x, y, th], axis=-1)
 
         carry, poses = lax.scan(body, init, jnp.arange(steps, dtype=jnp.int32), unroll=unroll)
         poses = jnp.swapaxes(poses, 0, 1)
@@ -143,14 +157,20 @@ def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: Clear
         def body(k, carry):  # the loop counter itself gives k: no per-step index kernel
             q = carry[0]
             x, y, _, clr = point(q, k + 1)
-            return (q * rot,) + track(carry, x, y, clr)
+            nq = q * rot if turn_steps is None else jnp.where(k + 2 <= turn_steps, q * rot, q)
+            return (nq,) + track(carry, x, y, clr)
 
         carry = lax.fori_loop(0, steps, body, init, unroll=unroll)
         poses = None
     q, m = carry[0], carry[1]
     m, m_static = m if split else (m, None)
-    q = q * jnp.conj(rot)  # undo the last advance: e^{iTφ}
+    if turn_steps is None:
+        q = q * jnp.conj(rot)  # undo the last advance: e^{iTφ}
+        turned = steps * dt
+    else:
+        q = jnp.where(steps + 1 <= turn_steps, q * jnp.conj(rot), q)
+        turned = jnp.minimum(steps, turn_steps) * dt
     x, y = pose(q, jnp.asarray(steps, dtype))
-    end = jnp.stack([x, y, th0 + w * (steps * dt)], axis=-1)
+    end = jnp.stack([x, y, th0 + w * turned], axis=-1)
     h = e0 * q * q  # e^{i(θ0 + 2Tφ)}
     return Rollouts(end, jnp.stack([h.real, h.imag], axis=-1), m, poses, m_static)

@@ -110,7 +110,7 @@ def validate_config(config: DWAConfig) -> DWAConfig:
     if d_clip <= d_safe:
         raise ValueError(f"config.d_clip ({d_clip} m) must exceed d_safe ({d_safe} m)")
     _number("config.path_clip", config.path_clip, positive=True)
-    for field in ("n_v", "n_omega", "unroll"):
+    for field in ("n_v", "n_omega", "unroll", "n_omega_straight"):
         n = getattr(config, field)
         if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 1:
             raise ValueError(f"config.{field} must be a positive integer, got {n!r}")
@@ -118,6 +118,14 @@ def validate_config(config: DWAConfig) -> DWAConfig:
     dt = _number("config.dt", config.dt, positive=True)
     if abs(horizon / dt - round(horizon / dt)) > 1e-6 * max(1.0, horizon / dt):
         raise ValueError(f"config.horizon ({horizon} s) must be a whole number of steps dt ({dt} s)")
+    if not isinstance(config.straighten, tuple):
+        raise ValueError(f"config.straighten must be a tuple of fractions of the horizon, got {config.straighten!r}")
+    steps = int(round(horizon / dt))
+    for f in config.straighten:
+        f = _number("config.straighten fraction", f)
+        if not 1 <= round(f * steps) <= steps - 1:
+            raise ValueError(f"config.straighten fraction {f} turns for {round(f * steps)} of the {steps} rollout points: "
+                             "it must leave at least one point on each part")
     if float(r.omega_max) * dt > 2 * MAX_ROTOR_ANGLE:
         raise ValueError(f"{name}.omega_max · config.dt = {float(r.omega_max) * dt:.3g} rad: a sample may turn at most "
                          f"π rad per rollout step (shorten dt)")
