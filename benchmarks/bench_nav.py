@@ -119,11 +119,12 @@ def section_maps(d: Path, args) -> None:
         grid, scen = load(d, name)
         sel = rows(scen, args.rows)
         S, G = scen.starts[sel], scen.goals[sel]
-        cases = [("static", None, None), ("walkers", walkers(grid, S, G, 5, 1.0), None)]
+        moving = walkers(grid, S, G, 5, 1.0)
+        cases = [("static", None, None), ("walkers", moving, None)]
         if args.oracle:
             from jaxplan.nav import NavConfig
 
-            cases.append(("walk oracle", walkers(grid, S, G, 5, 1.0), NavConfig(prediction="oracle")))
+            cases.append(("walk oracle", moving, NavConfig(prediction="oracle")))
         for label, obs, cfg in cases:
             b, wall = run(grid, S, G, "iaco_dwa", seeds, obs, cfg)
             print(row(f"{name[:16]} {label[:11]}", b, wall), flush=True)

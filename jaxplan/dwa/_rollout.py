@@ -141,15 +141,16 @@ def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: Clear
         dx, dy = x - finish[0], y - finish[1]
         return m, inside | (dx * dx + dy * dy <= finish[2] * finish[2])
 
+    def advance(q, k):
+        """The rotor of point ``k + 2`` from that of point ``k + 1``: frozen once a sample stops turning."""
+        return q * rot if turn_steps is None else jnp.where(k + 2 <= turn_steps, q * rot, q)
+
     if keep:
         def body(carry, k):
             q = carry[0]  # q = e^{i(k+1)φ}: the rotor of this step's point
             x, y, t, clr = point(q, k + 1)
-            if turn_steps is None:
-                return (q * rot,) + track(carry, x, y, clr), jnp.stack([x, y, th0 + w * t], axis=-1)
-            nq = jnp.where(k + 2 <= turn_steps, q * rot, q)
-            th = th0 + w * jnp.minimum(t, turn_steps * dt)
-            return (nq,) + track(carry, x, y, clr), jnp.stack([x, y, th], axis=-1)
+            th = th0 + w * (t if turn_steps is None else jnp.minimum(t, turn_steps * dt))
+            return (advance(q, k),) + track(carry, x, y, clr), jnp.stack([x, y, th], axis=-1)
 
         carry, poses = lax.scan(body, init, jnp.arange(steps, dtype=jnp.int32), unroll=unroll)
         poses = jnp.swapaxes(poses, 0, 1)
@@ -157,8 +158,7 @@ def rollout(state: jnp.ndarray, v: jnp.ndarray, w: jnp.ndarray, clearance: Clear
         def body(k, carry):  # the loop counter itself gives k: no per-step index kernel
             q = carry[0]
             x, y, _, clr = point(q, k + 1)
-            nq = q * rot if turn_steps is None else jnp.where(k + 2 <= turn_steps, q * rot, q)
-            return (nq,) + track(carry, x, y, clr)
+            return (advance(q, k),) + track(carry, x, y, clr)
 
         carry = lax.fori_loop(0, steps, body, init, unroll=unroll)
         poses = None
