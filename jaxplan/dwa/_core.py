@@ -275,6 +275,12 @@ def dwa_control_batch(table: ClearanceTable, config: DWAConfig, params: DWAParam
     slower: every kernel launch is amortised over fewer points). ``chunk=None``, or a
     chunk of at least B, vmaps the whole batch (what a GPU wants). Returns controls
     ``[B, 2]`` and a `DWAInfo` with a leading ``B`` axis.
+
+    The per-sample fields of `DWAInfo` (scores, feasible, samples, clearance) are
+    about 14 MB per step for 1,024 robots. A jitted caller that returns only what it
+    reads (say the controls and ``info.recovery``, as a navigation episode does) lets
+    XLA skip writing them: measured at 1,024 robots on 2 CPU cores, about 10 % less
+    time per step and 0.15 s less compilation.
     """
     ob_batched = obstacles is not None and obstacles.radii.ndim == 2
     path_batched = path is not None and path.ndim == 3
