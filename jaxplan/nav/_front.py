@@ -294,7 +294,7 @@ def _config(config: NavConfig | None, pipeline: Pipeline, local_planner: str | N
         v = getattr(cfg, f)
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise ValueError(f"NavConfig.{f} must be a finite number > 0, got {v!r}")
-    for f in ("chunk", "replan_sweeps", "replan_cells", "replan_slots"):
+    for f in ("chunk", "replan_sweeps", "replan_cells", "replan_slots", "contact_checks"):
         if not isinstance(getattr(cfg, f), int) or getattr(cfg, f) < 1:
             raise ValueError(f"NavConfig.{f} must be a positive integer, got {getattr(cfg, f)!r}")
     if not isinstance(cfg.replan_group, int) or cfg.replan_group < 0:
@@ -426,6 +426,16 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
     from jaxplan.dwa._robot import footprint_radius
 
     radius = float(footprint_radius(robot.footprint))
+    if N > 1:  # teammates may not overlap at the start, nor share a goal (one would park on it)
+        for what, cells in (("start", starts), ("goal", goals)):
+            xy = (cells + 0.5) * res  # [E, N, 2]
+            d = xy[:, :, None] - xy[:, None, :]  # [E, N, N, 2]
+            gap = np.where(np.eye(N, dtype=bool), np.inf, np.hypot(d[..., 0], d[..., 1]))
+            if np.any(gap < 2 * radius):
+                e, i, j = np.unravel_index(int(np.argmin(gap)), gap.shape)
+                raise ValueError(f"team {e}: robots {i} and {j} have {what} cells {cells[e, i].tolist()} and "
+                                 f"{cells[e, j].tolist()}, {gap[e, i, j]:.3g} m apart: closer than two footprint "
+                                 f"radii ({2 * radius:g} m)")
 
     # 1. Planning map and feasibility.
     plan_grid = planning_grid(grid, d_safe)
