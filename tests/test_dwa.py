@@ -396,6 +396,9 @@ def test_path_critic_pulls_towards_the_global_path():
     (dict(obstacles=(np.zeros((2, 2)), np.zeros((2, 2)), np.array([0.3, -1.0]))), "radii"),
     (dict(obstacles=(np.zeros((2, 2)), np.zeros((3, 2)), np.array([0.3, 0.3]))), "velocities"),
     (dict(path=np.zeros((4, 3))), "path"),
+    (dict(state=[-0.2, 1.0, 0.0, 0.5, 0.0]), "outside the map"),
+    (dict(state=[[1.0, 1.0, 0.0, 0.5, 0.0], [1.0, 9.0, 0.0, 0.5, 0.0]], subgoal=[[3.0, 3.0]] * 2),
+     r"state\[1\].*outside"),
 ])
 def test_bad_input_is_a_clear_error(bad, match):
     grid = jp.grid_from_array(np.ones((8, 8), bool), resolution=0.5)
@@ -514,3 +517,34 @@ def test_flee_rollouts_split_the_clearance_without_changing_it(clutter):
             np.testing.assert_array_equal(b.clearance, a.clearance)
             np.testing.assert_array_equal(b.feasible, a.feasible)
             assert int(b.chosen) == int(a.chosen)
+
+
+def test_a_robot_on_a_blocked_cell_is_an_error():
+    # Its clearance is 0 all round, and the escape rule would then call every rollout feasible.
+    free = np.ones((12, 12), bool)
+    free[5, 5] = False
+    grid = jp.grid_from_array(free, resolution=1.0)
+    with pytest.raises(ValueError, match=r"blocked cell \[5, 5\]"):
+        dwa_step([5.5, 5.5, 0.0, 0.3, 0.0], [9.0, 9.0], grid)
+    dwa_step([4.5, 5.5, 0.0, 0.3, 0.0], [9.0, 9.0], grid)  # the next cell is fine
+
+
+def test_an_ackermann_robot_never_turns_tighter_than_it_can():
+    kappa = lambda r: np.tan(r.steer_max) / r.wheelbase  # noqa: E731
+    # The classic stuck-escape rule at rest facing a wall: a car cannot turn on the spot.
+    free = np.ones((10, 10), bool)
+    free[:, 6:] = False
+    grid = jp.grid_from_array(free, resolution=1.0)
+    car = Ackermann()
+    u, info = dwa_step([6.0 - 0.267 - 0.36, 5.0, 0.0, 0.0, 0.0], [5.9, 5.0], grid,
+                       config=DWAConfig(robot=car, evaluator="classic"))
+    assert info.stuck and abs(u[1]) <= kappa(car) * abs(u[0]) + 1e-6
+    # Softmax blends of forward and reverse samples: |ω| <= κ|v| is not convex across v = 0.
+    open_ = jp.grid_from_array(np.ones((20, 20), bool), resolution=1.0)
+    car = Ackermann(v_min=-0.5)
+    for temperature in (0.05, 0.2, 1.0):
+        u, info = dwa_step([10.0, 10.0, 0.0, 0.0, 0.0], [10.0, 14.0], open_,
+                           config=DWAConfig(robot=car, selection="softmax", n_v=5, n_omega=9),
+                           params={"temperature": temperature, "velocity": 0.0})
+        assert abs(u[1]) <= kappa(car) * abs(u[0]) + 1e-6, (temperature, u)
+        assert info.window[2] - 1e-6 <= u[1] <= info.window[3] + 1e-6

@@ -10,7 +10,9 @@ Selection:
   * ``"softmax"`` — the temperature-relaxed choice for differentiable tuning: the
     control is the average of the feasible samples' controls weighted by
     ``softmax(score / temperature)``; it lies in the window (a convex combination of
-    points of a convex set) and tends to the argmax as the temperature goes to 0.
+    points of a convex set) and tends to the argmax as the temperature goes to 0. An
+    `Ackermann` robot that may reverse has its blended yaw rate clipped to its curvature
+    limit (|ω| <= κ|v| is not convex across v = 0).
 
 Recovery (DESIGN §5): when no sample is feasible the robot brakes as hard as the
 window allows towards v = 0 and turns as fast as it allows towards the sub-goal's
@@ -71,7 +73,8 @@ class DWAInfo(NamedTuple):
       clearance: ``f32[S]`` minimum clearance of each rollout (m).
       window: ``f32[4]`` (v_lo, v_hi, ω_lo, ω_hi) of the dynamic window.
       recovery: ``bool`` no sample was feasible; the control is the recovery manoeuvre.
-      stuck: ``bool`` the classic stuck-escape rule changed the control.
+      stuck: ``bool`` the classic stuck-escape rule fired (it turns the robot, within an
+        `Ackermann` robot's curvature limit: at rest, not at all).
     """
 
     scores: jnp.ndarray
@@ -233,10 +236,16 @@ def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, sta
     chosen = jnp.argmax(masked).astype(jnp.int32)
     any_feasible = feasible[chosen]  # the argmax of the masked scores is feasible if any sample is
     u_samples = jnp.stack([v, w], axis=-1)  # [S, 2]
+    kappa = curvature_limit(robot)
     if config.selection == "softmax":
         logits = jnp.where(feasible, scores / params.temperature, -jnp.inf)
         weights = jax.nn.softmax(jnp.where(any_feasible, logits, 0.0))
         u = weights @ u_samples
+        if kappa is not None:
+            # With reversing (v_min < 0), |ω| <= κ|v| is a bow-tie, not a convex set: a blend of
+            # forward and backward samples can turn tighter than the car can (without, a no-op).
+            u = jnp.stack([u[0], jnp.clip(jnp.clip(u[1], -kappa * jnp.abs(u[0]), kappa * jnp.abs(u[0])),
+                                          window.w_lo, window.w_hi)])
     elif config.selection == "argmax":
         u = u_samples[chosen]
     else:
@@ -245,7 +254,11 @@ def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, sta
     stuck = any_feasible & False  # derived from the inputs, not a constant: shard_map needs it varying
     if config.evaluator == "classic":
         stuck = (jnp.abs(u[0]) < STUCK_SPEED) & (jnp.abs(state[3]) < STUCK_SPEED) & any_feasible
-        u = jnp.where(stuck, jnp.stack([u[0], window.w_lo]), u)
+        w_escape = window.w_lo
+        if kappa is not None:  # a car cannot turn on the spot: the escape turn obeys its curvature limit
+            w_escape = jnp.clip(jnp.clip(w_escape, -kappa * jnp.abs(u[0]), kappa * jnp.abs(u[0])), window.w_lo,
+                                window.w_hi)
+        u = jnp.where(stuck, jnp.stack([u[0], w_escape]), u)
 
     if config.recovery == "flee":
         u_rec = u_samples[_flee(ro, config.d_safe)]

@@ -221,6 +221,22 @@ def _check_window(config: DWAConfig, states: np.ndarray) -> None:
                              f"({P} s) of acceleration cannot bring into [{float(lims[0]):.4g}, {float(lims[1]):.4g}]")
 
 
+def _check_on_free_cells(grid: GridMap, states: np.ndarray, single: bool) -> None:
+    """Raises if a robot's centre is off the map or on a blocked cell: no rollout can then be
+    judged (the clearance is 0 everywhere around it, and the escape rule would pass them all)."""
+    H, W = grid.shape
+    cell = np.floor(states[:, :2] / float(grid.resolution)).astype(np.int64)  # (x, y) = (column, row)
+    inside = (cell[:, 0] >= 0) & (cell[:, 0] < W) & (cell[:, 1] >= 0) & (cell[:, 1] < H)
+    free = np.asarray(grid.free)
+    ok = inside.copy()
+    ok[inside] = free[cell[inside, 1], cell[inside, 0]]
+    if not ok.all():
+        i = int(np.argmin(ok))
+        where = "outside the map" if not inside[i] else f"on the blocked cell {cell[i].tolist()}"
+        raise ValueError(f"state{'' if single else f'[{i}]'} puts the robot {where} "
+                         f"(x, y = {states[i, 0]:.4g}, {states[i, 1]:.4g} m)")
+
+
 def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any = None,
              params: DWAParams | Mapping[str, float] | None = None, *, config: DWAConfig | None = None,
              path: ArrayLike | None = None) -> tuple[np.ndarray, DWAInfo]:
@@ -249,7 +265,8 @@ def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any
     Raises:
       ValueError: non-finite or mis-shaped state, sub-goal, obstacles or path; an
         invalid robot or config (non-positive limits, v_min >= v_max, d_safe below the
-        footprint radius, …); negative, NaN or infinite weights; an empty dynamic window.
+        footprint radius, …); negative, NaN or infinite weights; an empty dynamic window; a
+        robot centred off the map or on a blocked cell.
 
     Example:
       >>> import numpy as np, jaxplan as jp
@@ -287,6 +304,7 @@ def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any
         pa = pa.astype(np.float32)
     if not isinstance(grid, GridMap):
         raise ValueError(f"grid must be a GridMap, got {type(grid).__name__}")
+    _check_on_free_cells(grid, st2, single)
     table = table_of(grid)
     if single:
         out = _single(table, config, prm, st.astype(np.float32), sg.astype(np.float32), obs, pa)
