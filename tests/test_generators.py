@@ -102,3 +102,29 @@ def test_poisson_risk_layer():
     assert jp.poisson_risk(g, jax.random.key(1), lam=0.01).risk.mean() < 0.05
     with pytest.raises(ValueError, match="lam must be finite and >= 0"):
         jp.poisson_risk(g, 0, lam=-1)
+
+
+@pytest.mark.parametrize(
+    "make, match",
+    [
+        (lambda: jp.WarehouseGenerator(n_blocked=-5),
+         r"WarehouseGenerator.n_blocked must be None or an integer >= 0, got -5"),
+        (lambda: jp.WarehouseGenerator(n_blocked=2.5), r"n_blocked must be None or an integer >= 0, got 2.5"),
+        (lambda: jp.UrbanGenerator(n_interventions=1000),
+         r"UrbanGenerator.n_interventions must be an integer in \[0, 192\].*got 1000"),
+        (lambda: jp.UrbanGenerator(n_interventions=-1), r"n_interventions must be an integer in \[0, 192\]"),
+        (lambda: jp.UrbanGenerator(n_dynamic=-1), r"UrbanGenerator.n_dynamic must be an integer in \[0, 248\].*got -1"),
+        (lambda: jp.UrbanGenerator(n_interventions=0, n_dynamic=255), r"n_dynamic must be an integer in \[0, 254\]"),
+        (lambda: jp.UrbanGenerator(park_prob=1.5), r"UrbanGenerator.park_prob must be in \[0, 1\], got 1.5"),
+    ],
+)
+def test_generator_counts_are_validated_up_front(make, match):
+    # Refused when the generator is made, not with a numpy error at the first draw.
+    with pytest.raises(ValueError, match=match):
+        make()
+
+
+def test_urban_counts_at_their_limits_draw():
+    scene = jp.UrbanGenerator(n_interventions=0, n_dynamic=254)(0)
+    assert len(scene.dynamic_slots) == 254
+    assert jp.UrbanGenerator(n_dynamic=0)(0).dynamic_slots.shape == (0, 2)

@@ -32,6 +32,26 @@ def test_grid_from_array_validates_layers():
         jp.grid_from_array(free, turn_rule=np.full((3, 4), 2))
 
 
+def test_grid_from_array_refuses_infinite_height_and_risk():
+    # One inf makes every cost through the cell inf (opt_ant then fails silently).
+    free = np.ones((3, 4), bool)
+    h = np.zeros((3, 4))
+    h[1, 2] = np.inf
+    with pytest.raises(ValueError, match=r"layer 'height' must be finite, got inf at cell \(2, 1\)"):
+        jp.grid_from_array(free, height=h)
+    with pytest.raises(ValueError, match=r"layer 'height' must be finite, got -inf"):
+        jp.grid_from_array(free, height=-h)
+    with pytest.raises(ValueError, match=r"layer 'height' must be finite, got 1e\+39"):  # inf in float32
+        jp.grid_from_array(free, height=np.where(np.isinf(h), 1e39, 0.0))
+    with pytest.raises(ValueError, match=r"layer 'risk' must be finite, got inf at cell \(2, 1\)"):
+        jp.grid_from_array(free, risk=h)
+    # A roof-less cell is documented as +inf headroom.
+    g = jp.grid_from_array(free, clearance_height=h)
+    assert g.clearance_height[1, 2] == np.inf
+    with pytest.raises(ValueError, match=r"layer 'height' must be finite"):
+        g.replace(height=h)
+
+
 def test_gridmap_is_a_pytree_and_maps_cells():
     import jax
 

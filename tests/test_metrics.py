@@ -183,6 +183,55 @@ def test_integer_and_float_vertices_give_the_same_clearance(pillar):
     assert float(jnp.min(a)) == 0.0  # the pillar itself
 
 
+def _brute_clearance(free: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Distance (cells) from points to every blocked square, the outside ring included."""
+    by, bx = np.nonzero(np.pad(~free, 1, constant_values=True))
+    c = np.stack([bx - 1.0, by - 1.0], 1)
+    d = np.maximum(np.abs(pts[:, None] - c[None]) - 0.5, 0.0)
+    return np.sqrt((d ** 2).sum(-1)).min(1)
+
+
+def test_float_vertex_clearance_is_exact_far_from_obstacles():
+    # One blocked cell in a 21x21 map: (13.4, 12.6) is 3.5805 cells from it, beyond the JAX
+    # 2-cell window, where the centre field + offset bound read 4.1012.
+    free = np.ones((21, 21), bool)
+    free[10, 10] = False
+    grid = jp.grid_from_array(free, resolution=0.5)
+    pts = np.array([[13.4, 12.6], [13.4, 13.4], [7.4, 13.4], [13.45, 7.45], [3.2, 17.9]])
+    want = _brute_clearance(free, pts) * 0.5
+    assert want[0] == pytest.approx(0.5 * math.hypot(13.4 - 10.5, 12.6 - 10.5))
+    for p, w in zip(pts, want):
+        m = M.path_metrics(p[None], grid)
+        assert m["min_clearance"] == m["mean_clearance"] == pytest.approx(w, rel=1e-6)
+    rng = np.random.default_rng(5)
+    free = rng.random((30, 40)) > 0.15
+    pts = rng.uniform(-0.5, [39.5, 29.5], size=(300, 2))
+    got = M.path_metrics(pts[:, None, :], jp.grid_from_array(free))["min_clearance"]
+    np.testing.assert_allclose(got, _brute_clearance(free, pts), rtol=1e-6, atol=1e-7)
+
+
+def test_float_path_clearance_is_measured_along_segments():
+    # Line-of-sight output passes the blocked cell (4, 3) between its vertices: the segment
+    # (0,2)-(4,4) comes within 0.25/√1.25 = √0.05 of the corner (3.5, 3.5); the vertices are 0.5 away.
+    free = np.ones((7, 9), bool)
+    free[3, 4] = False
+    grid = jp.grid_from_array(free)
+    m = M.path_metrics(np.array([[0.0, 2.0], [4.0, 4.0], [8.0, 4.0]]), grid)
+    assert m["min_clearance"] == pytest.approx(math.sqrt(0.05), rel=1e-6)
+    # The mean is weighted by arc length: along y = 1 of a 3x7 map the clearance is
+    # min(x + 0.5, 6.5 − x, 1.5), whose integral over [0, 6] is 8; sparse and dense
+    # vertices of the same line agree.
+    open3 = open_grid(3, 7, res=0.5)
+    for xs in ([0.0, 6.0], [0.0, 3.0, 6.0], np.linspace(0, 6, 13)):
+        line = np.stack([np.asarray(xs, float), np.ones(len(xs))], 1)
+        m = M.path_metrics(line, open3)
+        assert m["mean_clearance"] == pytest.approx(0.5 * 8 / 6, rel=1e-6)
+        assert m["min_clearance"] == pytest.approx(0.25, rel=1e-6)
+    # Raw grid (integer) paths keep the per-vertex values at the cell centres.
+    m = M.path_metrics(np.array([[0, 1], [3, 1], [6, 1]]), open3)
+    assert m["mean_clearance"] == pytest.approx(0.5 * (0.5 + 1.5 + 0.5) / 3, rel=1e-6)
+
+
 # --------------------------------------------------------------------------------------------
 # Hausdorff.
 
@@ -262,10 +311,9 @@ def test_optimality_gap_of_raw_grid_paths_is_automatic():
 def test_optimality_gap_rejects_bad_optimum_and_broken_paths():
     grid = open_grid()
     path = np.array([[0, 0], [1, 0]])
-    with pytest.raises(ValueError, match="optimal must be >= 0 and not NaN"):
-        M.path_metrics(path, grid, optimal=-1.0)
-    with pytest.raises(ValueError, match="optimal must be >= 0 and not NaN"):
-        M.path_metrics(path, grid, optimal=float("nan"))
+    for bad in (-1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match=f"optimal must be finite and >= 0 \\(metres\\), got {bad}"):
+            M.path_metrics(path, grid, optimal=bad)
     with pytest.raises(ValueError, match="optimal must be a number"):
         M.path_metrics(path, grid, optimal=[1.0, 2.0])
     free = np.ones((3, 3), bool)
@@ -274,6 +322,26 @@ def test_optimality_gap_rejects_bad_optimum_and_broken_paths():
     walled = jp.grid_from_array(free)
     with pytest.raises(ValueError, match="cuts a corner"):
         M.path_metrics(np.array([[0, 0], [1, 1]]), walled)
+
+
+def test_optimality_gap_rejects_illegal_moves_whose_ends_are_connected():
+    # Cell (0, 1) blocked: (0,0) and (1,1) are still joined around it (√2 + ... > √2), so the
+    # shortcut would read a negative gap.
+    free = np.ones((4, 4), bool)
+    free[1, 0] = False
+    grid = jp.grid_from_array(free)
+    with pytest.raises(ValueError, match=r"path step 0, \[0, 0\] -> \[1, 1\], cuts a corner of blocked cell \[0, 1\]"):
+        M.path_metrics(np.array([[0, 0], [1, 1]]), grid)
+    with pytest.raises(ValueError, match=r"path step 0, \[0, 0\] -> \[0, 1\], enters \[0, 1\], a blocked cell"):
+        M.path_metrics(np.array([[0, 0], [0, 1], [0, 2]]), grid)
+    with pytest.raises(ValueError, match=r"path 1 starts at \[0, 1\], a blocked cell"):
+        M.path_metrics(np.array([[[0, 0], [1, 0]], [[0, 1], [1, 1]]]), grid)
+    with pytest.raises(ValueError, match=r"path step 1, \[3, 0\] -> \[4, 0\], enters \[4, 0\], outside the map"):
+        M.path_metrics(np.array([[2, 0], [3, 0], [4, 0]]), grid)
+    # Padding beyond n is not checked; given an optimum, nothing is.
+    ok = M.path_metrics(np.array([[[1, 0], [2, 1], [0, 1]]]), grid, n=np.array([2]))
+    assert abs(ok["optimality_gap"][0]) < 1e-6
+    assert M.path_metrics(np.array([[0, 0], [1, 1]]), grid, optimal=2.0)["optimality_gap"] == pytest.approx(SQ2 / 2 - 1)
 
 
 # --------------------------------------------------------------------------------------------

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -153,3 +155,23 @@ def test_fuzz_parse_scenarios_only_raises_value_error(text):
     except ValueError:
         return
     assert s.starts.shape == s.goals.shape and len(s.optimal) == len(s.starts)
+
+
+@pytest.mark.parametrize("ch", ["\x0b", "\x0c", "\x1c", "\x1d", "\x1e", "\x85"])
+def test_control_characters_do_not_split_map_rows(ch):
+    # One physical row of 7 characters is not two rows of 3 (str.splitlines would split it).
+    with pytest.raises(ValueError, match=re.escape(f"bad.map:5: unknown map character {ch!r} at column 3")):
+        parse_map(f"type octile\nheight 2\nwidth 3\nmap\n.@.{ch}...\n", where="bad.map")
+    # Line numbers after it stay right; Windows line ends are still fine.
+    with pytest.raises(ValueError, match=r"bad.map:6: row 1 has 4 characters"):
+        parse_map(f"type octile\r\nheight 2\r\nwidth 3\r\nmap\r\n.@.\r\n..{ch}.\r\n".replace(ch, "."), where="bad.map")
+    assert parse_map("type octile\r\nheight 2\r\nwidth 3\r\nmap\r\n.@.\r\n...\r\n").shape == (2, 3)
+
+
+def test_control_characters_do_not_split_scenario_rows():
+    text = "version 1\n0\tm.map\t4\t3\t0\t0\t3\t2\t1\x0c1\n0\tm.map\t4\t3\t0\tz\t3\t2\t1\n"
+    with pytest.raises(ValueError, match=r"bad.scen:2: non-numeric field"):
+        parse_scenarios(text, where="bad.scen")
+    text = "version 1\n0\tm.map\t4\t3\t0\t0\t3\t2\t1\x0c\n0\tm.map\t4\t3\t0\tz\t3\t2\t1\n"
+    with pytest.raises(ValueError, match=r"bad.scen:3: non-numeric field"):
+        parse_scenarios(text, where="bad.scen")

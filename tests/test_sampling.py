@@ -510,3 +510,27 @@ def test_kng_failures_and_bad_input(corridor):
             jp.plan(corridor, (0, 4), (21, 4), planner="astar_kng", **kw)
     with pytest.raises(ValueError, match="blocked"):
         astar_kng(corridor, (0, 0), (21, 4))
+
+
+def test_float64_accepted_segments_pass_float32_segment_free_on_wide_maps():
+    # Segments grazing the corner (499.5, 19.5) of a blocked cell on a 600-wide map, from
+    # 1.2e-5 cells out (float32 coordinates there are 6e-5 apart) to just beyond the margin.
+    from jaxplan.grid._collision import collision_map, segment_free
+
+    free = np.ones((40, 600), bool)
+    free[20, 500] = False
+    grid = jp.grid_from_array(free)
+    check = jax.jit(jax.vmap(lambda p, q: segment_free(collision_map(grid), p, q, 0.0)))
+    rng = np.random.default_rng(1)
+    N = 4000
+    ang = rng.uniform(0.2, 1.3, N)
+    d = np.stack([np.cos(ang), -np.sin(ang)], 1)
+    away = np.stack([-d[:, 1], d[:, 0]], 1)
+    away *= np.sign(away @ np.array([-1.0, -1.0]))[:, None]  # towards the outside of the square
+    off = np.concatenate([rng.uniform(1.2e-5, 4e-5, N // 2), rng.uniform(3e-4, 6e-4, N - N // 2)])
+    c = np.array([499.5, 19.5]) + off[:, None] * away
+    p, q = c - d * rng.uniform(2, 8, N)[:, None], c + d * rng.uniform(2, 8, N)[:, None]
+    accepted = np.array([S.segment_clear(grid, a, b) for a, b in zip(p, q)])
+    ok32 = np.asarray(check(p.astype(np.float32), q.astype(np.float32)))
+    assert accepted.sum() > N // 4  # the margin is not so wide that it rejects everything
+    assert not np.any(accepted & ~ok32), np.flatnonzero(accepted & ~ok32)[:5]

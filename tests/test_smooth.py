@@ -207,6 +207,11 @@ def test_short_paths_unchanged():
         (dict(path=L_PATH, method="fillet", radius_max=-1.0), "radius_max"),
         (dict(path=L_PATH, radius=float("nan")), "radius"),
         (dict(path=L_PATH[None], n=[5]), "n must"),
+        (dict(path=L_PATH, method=[]), r"method must name at least one smoother, got \[\]"),
+        (dict(path=L_PATH, method=()), "method must name at least one smoother"),
+        (dict(path=L_PATH, method="bezier", kappa=5.0), r"bezier'?: kappa must lie in \(0, 1\], got 5.0"),
+        (dict(path=L_PATH, method="bezier", kappa=1.0001), "kappa must lie in"),
+        (dict(path=L_PATH, method="bezier", kappa=0.0), "kappa must be a finite positive"),
     ],
 )
 def test_bad_input(kwargs, match):
@@ -214,6 +219,23 @@ def test_bad_input(kwargs, match):
     path = kwargs.pop("path")
     with pytest.raises(ValueError, match=match):
         smooth(path, _open(), **kwargs)
+
+
+@pytest.mark.parametrize("method", ["fillet", "bezier"])
+def test_repeated_corner_vertex_is_still_curved(method):
+    grid = _open()
+    plain = smooth(L_PATH, grid, method)
+    for i in (1, 0, 2):  # the corner, and the ends, repeated
+        repeated = np.insert(L_PATH, i, L_PATH[i], axis=0)
+        out = smooth(repeated, grid, method)
+        assert (out.removed, out.fallbacks) == (1, 0), i
+        np.testing.assert_allclose(out.points, plain.points, atol=1e-6)
+        assert count_sharp_turns(out.points) == 0
+
+
+def test_bezier_kappa_one_stays_inside_the_corner():
+    out = smooth(L_PATH, _open(), "bezier", kappa=1.0)
+    assert out.points[:, 0].max() <= 8 + 1e-5 and out.points[:, 1].min() >= 1 - 1e-5
 
 
 def test_blocked_input_is_returned_unchanged():

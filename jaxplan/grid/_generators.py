@@ -107,6 +107,9 @@ class WarehouseGenerator:
                 raise ValueError(f"WarehouseGenerator.{name} must be >= 1, got {getattr(self, name)}")
         if not 0.0 <= self.missing_prob < 1.0:
             raise ValueError(f"missing_prob must be in [0, 1), got {self.missing_prob}")
+        # The upper limit (the shelf cells of the layout) depends on the draw: checked in __call__.
+        if self.n_blocked is not None and (not _is_int(self.n_blocked) or self.n_blocked < 0):
+            raise ValueError(f"WarehouseGenerator.n_blocked must be None or an integer >= 0, got {self.n_blocked!r}")
 
     def blocks(self) -> list[tuple[int, int]]:
         """Top-left cells ``(x, y)`` of every shelf slot of the lattice, centred in the map."""
@@ -245,6 +248,10 @@ class RandomMapGenerator:
         return cells
 
 
+def _is_int(v: Any) -> bool:
+    return isinstance(v, (int, np.integer)) and not isinstance(v, bool)
+
+
 @dataclass(frozen=True)
 class UrbanGenerator:
     """Seed 002's 20x20 urban map: a street grid with right-turn cells and moving-car slots.
@@ -267,13 +274,35 @@ class UrbanGenerator:
     hill_height: float = 3.0
     resolution: float = 1.0
 
+    _SIZE, _PERIOD, _ROAD = 20, 6, 2
+
+    @classmethod
+    def _streets(cls) -> tuple[np.ndarray, np.ndarray]:
+        """``(street_cell, crossing)``, each ``bool[20, 20]``: the fixed street layout."""
+        street = (np.arange(cls._SIZE) % cls._PERIOD) < cls._ROAD
+        return street[None, :] | street[:, None], street[None, :] & street[:, None]
+
+    def __post_init__(self) -> None:
+        for name in ("park_prob", "right_turn_prob"):
+            if not 0.0 <= getattr(self, name) <= 1.0:
+                raise ValueError(f"UrbanGenerator.{name} must be in [0, 1], got {getattr(self, name)!r}")
+        street_cell, crossing = self._streets()
+        # Interventions go on street cells off the crossings, never on start or goal (crossings);
+        # cars start on the street cells left free, other than start and goal.
+        plain = int((street_cell & ~crossing).sum())
+        if not _is_int(self.n_interventions) or not 0 <= self.n_interventions <= plain:
+            raise ValueError(f"UrbanGenerator.n_interventions must be an integer in [0, {plain}] (the street cells "
+                             f"off the crossings), got {self.n_interventions!r}")
+        slots = int(street_cell.sum()) - 2 - self.n_interventions
+        if not _is_int(self.n_dynamic) or not 0 <= self.n_dynamic <= slots:
+            raise ValueError(f"UrbanGenerator.n_dynamic must be an integer in [0, {slots}] (the free street cells "
+                             f"other than start and goal with {self.n_interventions} interventions), got "
+                             f"{self.n_dynamic!r}")
+
     def __call__(self, key: Any) -> Scene:
         rng = as_rng(key)
-        size, period, road = 20, 6, 2
-        idx = np.arange(size)
-        street = (idx % period) < road
-        street_cell = street[None, :] | street[:, None]
-        crossing = street[None, :] & street[:, None]
+        size, period, road = self._SIZE, self._PERIOD, self._ROAD
+        street_cell, crossing = self._streets()
         start, goal = (0, 0), (size - 1, size - 1)
         for _ in range(100):
             free = street_cell.copy()

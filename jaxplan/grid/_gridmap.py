@@ -86,7 +86,10 @@ class GridMap(NamedTuple):
         )
 
 
-def _layer(name: str, value: ArrayLike | None, shape: tuple[int, int], dtype, default) -> np.ndarray:
+def _layer(name: str, value: ArrayLike | None, shape: tuple[int, int], dtype, default,
+           finite: bool = False) -> np.ndarray:
+    """The layer as ``dtype[H, W]``; with ``finite``, ±inf is refused too (checked after the cast,
+    so a float64 value beyond float32's range is caught as the inf it becomes)."""
     if value is None:
         return np.full(shape, default, dtype=dtype)
     arr = np.asarray(value)
@@ -94,7 +97,12 @@ def _layer(name: str, value: ArrayLike | None, shape: tuple[int, int], dtype, de
         raise ValueError(f"layer '{name}' has shape {arr.shape}, but the map is {shape} (rows, columns)")
     if np.issubdtype(dtype, np.floating) and np.isnan(arr.astype(np.float64)).any():
         raise ValueError(f"layer '{name}' contains NaN")
-    return arr.astype(dtype)
+    with np.errstate(over="ignore"):  # an overflow becomes inf, reported below or documented (headroom)
+        out = arr.astype(dtype)
+    if finite and np.issubdtype(dtype, np.floating) and not np.isfinite(out).all():
+        y, x = np.argwhere(~np.isfinite(out))[0]
+        raise ValueError(f"layer '{name}' must be finite, got {float(arr[y, x])} at cell ({x}, {y})")
+    return out
 
 
 def grid_from_array(
@@ -110,7 +118,12 @@ def grid_from_array(
     Args:
       free: ``bool[H, W]`` (row y, column x), True where passable.
       resolution: metres per cell, finite and > 0.
-      height, risk, clearance_height, turn_rule: optional ``[H, W]`` layers (see `GridMap`).
+      height, risk, clearance_height, turn_rule: optional ``[H, W]`` layers (see `GridMap`);
+        height and risk finite, clearance_height ``+inf`` where there is no roof.
+
+    Raises:
+      ValueError: naming the layer, for a wrong shape, NaN, an infinite height or risk,
+        a negative risk or clearance height, or a turn rule other than 0/1.
 
     Returns:
       A `GridMap` holding numpy arrays (convert with ``jax.numpy.asarray`` inside programs).
@@ -126,7 +139,8 @@ def grid_from_array(
     if not np.isfinite(res) or res <= 0:
         raise ValueError(f"resolution must be a finite number of metres per cell > 0, got {resolution!r}")
     shape = f.shape
-    r = _layer("risk", risk, shape, np.float32, 0.0)
+    # Costs add height differences and risk: one inf makes every path through it cost inf.
+    r = _layer("risk", risk, shape, np.float32, 0.0, finite=True)
     if (r < 0).any():
         raise ValueError("layer 'risk' must be >= 0")
     ch = _layer("clearance_height", clearance_height, shape, np.float32, np.inf)
@@ -137,7 +151,7 @@ def grid_from_array(
         raise ValueError("layer 'turn_rule' must hold 0 (none) or 1 (right turn required)")
     return GridMap(
         free=f.copy(),
-        height=_layer("height", height, shape, np.float32, 0.0),
+        height=_layer("height", height, shape, np.float32, 0.0, finite=True),
         clearance_height=ch,
         risk=r,
         turn_rule=tr,

@@ -60,6 +60,16 @@ def _header_int(line: str, key: str, lineno: int, where: str) -> int:
     return v
 
 
+def _lines(text: str) -> list[str]:
+    """Lines split at "\\n" only, each less a trailing "\\r" (Windows files).
+
+    Not `str.splitlines`, which also breaks at \\x0b, \\x0c and \\x1c–\\x1e (and \\x85,
+    \\u2028, ...): a control character inside a row would split it in two and shift every
+    later line number, where it should be reported as what it is.
+    """
+    return [line[:-1] if line.endswith("\r") else line for line in text.split("\n")]
+
+
 def parse_map(text: str, resolution: float = 1.0, where: str = "<map>") -> GridMap:
     """Parses the text of a MovingAI ``.map`` file into a `GridMap`.
 
@@ -67,7 +77,7 @@ def parse_map(text: str, resolution: float = 1.0, where: str = "<map>") -> GridM
       ValueError: naming the line of a malformed header, a wrong row count or
         width, or an unknown character.
     """
-    lines = text.splitlines()
+    lines = _lines(text)
     if len(lines) < 4:
         raise ValueError(f"{where}: a map needs 4 header lines (type, height, width, map), found {len(lines)} lines")
     if lines[0].split() != ["type", "octile"]:
@@ -79,13 +89,8 @@ def parse_map(text: str, resolution: float = 1.0, where: str = "<map>") -> GridM
     rows = lines[4:]
     while rows and rows[-1].strip() == "":
         rows.pop()
-    if len(rows) != h:
-        raise ValueError(f"{where}: header says height {h} but {len(rows)} map rows follow")
-    free = np.zeros((h, w), dtype=bool)
+    # Characters first: a stray control character is the cause a row count or width would hide.
     for y, row in enumerate(rows):
-        row = row.rstrip("\r")
-        if len(row) != w:
-            raise ValueError(f"{where}:{y + 5}: row {y} has {len(row)} characters, header says width {w}")
         unknown = set(row) - PASSABLE - BLOCKED
         if unknown:
             c = sorted(unknown)[0]
@@ -93,6 +98,12 @@ def parse_map(text: str, resolution: float = 1.0, where: str = "<map>") -> GridM
                 f"{where}:{y + 5}: unknown map character {c!r} at column {row.index(c)} "
                 f"(passable: . G S; blocked: @ O T W)"
             )
+    if len(rows) != h:
+        raise ValueError(f"{where}: header says height {h} but {len(rows)} map rows follow")
+    free = np.zeros((h, w), dtype=bool)
+    for y, row in enumerate(rows):
+        if len(row) != w:
+            raise ValueError(f"{where}:{y + 5}: row {y} has {len(row)} characters, header says width {w}")
         free[y] = np.isin(np.frombuffer(row.encode("ascii"), dtype=np.uint8), _PASSABLE_BYTES)
     return grid_from_array(free, resolution=resolution)
 
@@ -170,7 +181,7 @@ def parse_scenarios(text: str, where: str = "<scen>", grid: GridMap | None = Non
         or from ``grid``, a cell outside the map, or (with ``grid``) a blocked start
         or goal.
     """
-    lines = text.splitlines()
+    lines = _lines(text)
     if not lines or not lines[0].strip().lower().startswith("version"):
         raise ValueError(f"{where}:1: expected a 'version' line first, got {lines[0] if lines else ''!r}")
     vparts = lines[0].split()

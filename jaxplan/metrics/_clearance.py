@@ -1,13 +1,14 @@
-"""Clearance of a padded path's vertices from the blocked cells of a map (DESIGN §6).
+"""Clearance of a padded path's vertices from the blocked cells of a map (DESIGN §6), in JAX.
 
-The clearance of a point is its exact distance to the nearest blocked unit square (the
-map's outside counts as blocked), from `jaxplan.grid._collision.point_clearance`, in
-metres. The points measured are the path's **vertices**: for a raw grid path these are
-its cell centres, where the distance is exact; for a continuous (smoothed, any-angle or
-executed) path the vertices alone do not see an obstacle that a long segment passes
-closely, so a caller that wants the clearance along the curve samples it first (the
-smoothers emit dense samples), or checks segments with
-`jaxplan.grid._collision.segment_clearance`.
+The clearance of a point is its distance to the nearest blocked unit square (the map's
+outside counts as blocked), in metres. The points measured are the path's **vertices**.
+For a raw (integer) grid path they are cell centres, read from the exact centre field:
+this is how `path_metrics` measures grid paths, and what the tuner uses inside ``jit``.
+Float points go through `jaxplan.grid._collision.point_clearance`, exact within its
+2-cell window and beyond it an upper bound (up to √2 cells high) — a static shape cannot
+hold an exact search whose reach grows with the answer. `path_metrics` therefore measures
+float (smoothed, any-angle, executed) paths on the host, exactly and along their segments
+(`jaxplan.metrics._exact_clearance.polyline_clearance`).
 """
 
 from __future__ import annotations
@@ -39,7 +40,9 @@ def vertex_clearance(cmap: CollisionMap, path: jnp.ndarray, n: jnp.ndarray) -> j
         10,000 x 256 points on two cores).
       n: ``int[...]`` valid points.
 
-    A vertex outside the map gets 0 (it is in the blocked outside).
+    A vertex outside the map gets 0 (it is in the blocked outside). Float vertices more
+    than 2 cells from every blocked square read up to √2 cells high (`point_clearance`);
+    `jaxplan.metrics._exact_clearance.exact_point_clearance` is the exact host version.
     """
     path = jnp.asarray(path)
     valid = jnp.arange(path.shape[-2]) < jnp.asarray(n)[..., None]

@@ -2,9 +2,10 @@
 
 The host side validates the input (the compiled core cannot raise), pads the path length
 up to a power of two so that one compilation serves every length in a bucket, and calls
-two jitted cores: the per-path geometry and clearance metrics, and — only with a
-reference — the Hausdorff distance. Compiled functions are cached by JAX per input shape,
-so a second call with the same ``(B, L-bucket)`` and map shape does not trace again.
+two jitted cores: the per-path geometry and (grid paths') clearance metrics, and — only
+with a reference — the Hausdorff distance; a float path's clearance is measured along its
+segments on the host (`jaxplan.metrics._exact_clearance`). Compiled functions are cached by
+JAX per input shape, so a second call with the same ``(B, L-bucket)`` and map shape does not trace again.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from numpy.typing import ArrayLike
 from jaxplan.grid._collision import CollisionMap, cached_collision_map
 from jaxplan.grid._gridmap import GridMap
 from jaxplan.metrics._clearance import clearance_metrics
+from jaxplan.metrics._exact_clearance import polyline_clearance
 from jaxplan.metrics._path import geometry_metrics
 from jaxplan.metrics._polyline import HAUSDORFF_SAMPLES, hausdorff_bounds
 
@@ -41,11 +43,13 @@ def bucket(length: int) -> int:
     return max(MIN_BUCKET, 1 << max(int(length) - 1, 0).bit_length())
 
 
-@jax.jit
-def _core(cmap: CollisionMap, paths: jnp.ndarray, n: jnp.ndarray) -> dict:
-    """Geometry and clearance metrics of ``paths [B, L, 2]`` with ``n [B]`` valid points."""
+@functools.partial(jax.jit, static_argnames="clearance")
+def _core(cmap: CollisionMap, paths: jnp.ndarray, n: jnp.ndarray, clearance: bool = True) -> dict:
+    """Geometry and (with ``clearance``, static) vertex clearance metrics of ``paths [B, L, 2]``
+    with ``n [B]`` valid points. `path_metrics` measures float paths' clearance on the host instead."""
     out = geometry_metrics(paths, n, cmap.resolution)
-    out["min_clearance"], out["mean_clearance"] = clearance_metrics(cmap, paths, n)
+    if clearance:
+        out["min_clearance"], out["mean_clearance"] = clearance_metrics(cmap, paths, n)
     return out
 
 
@@ -107,6 +111,49 @@ def _is_grid_path(paths: np.ndarray, n: np.ndarray) -> bool:
     return bool(np.all(step[valid] <= 1))
 
 
+def _check_grid_moves(free: np.ndarray, paths: np.ndarray, n: np.ndarray) -> None:
+    """Raises unless every valid point of the integer ``paths [B, L, 2]`` is a free cell and every
+    diagonal step keeps both orthogonal neighbours free (the move rule, `jaxplan.grid._neighbours`).
+
+    The octile optimum is only a lower bound for paths made of legal moves: a path through a
+    blocked cell or across a blocked corner can be shorter, and its gap would read negative.
+    """
+    H, W = free.shape
+    B, L = paths.shape[:2]
+    p = paths.astype(np.int64)
+    x, y = p[..., 0], p[..., 1]
+    inside = (x >= 0) & (x < W) & (y >= 0) & (y < H)
+    ok = inside & free[np.clip(y, 0, H - 1), np.clip(x, 0, W - 1)]
+    valid = np.arange(L)[None, :] < n[:, None]
+
+    def where(b: int) -> str:
+        return "path" if B == 1 else f"path {b}"
+
+    bad = valid & ~ok
+    if bad.any():
+        b, i = np.argwhere(bad)[0]
+        what = "outside the map" if not inside[b, i] else "a blocked cell"
+        if i == 0:
+            raise ValueError(f"{where(b)} starts at {p[b, 0].tolist()}, {what}; pass optimal= explicitly")
+        raise ValueError(f"{where(b)} step {i - 1}, {p[b, i - 1].tolist()} -> {p[b, i].tolist()}, enters "
+                         f"{p[b, i].tolist()}, {what}; pass optimal= explicitly")
+    if L < 2:
+        return
+    d = np.diff(p, axis=1)  # [B, L-1, 2]
+    diag = (np.abs(d) == 1).all(axis=-1) & (np.arange(L - 1)[None, :] < (n[:, None] - 1))
+    # Both orthogonal neighbours of a diagonal step: (x + dx, y) and (x, y + dy), inside the map here.
+    x0, y0 = np.clip(x[:, :-1], 0, W - 1), np.clip(y[:, :-1], 0, H - 1)
+    side_x = free[y0, np.clip(x0 + d[..., 0], 0, W - 1)]
+    side_y = free[np.clip(y0 + d[..., 1], 0, H - 1), x0]
+    cut = diag & ~(side_x & side_y)
+    if cut.any():
+        b, i = np.argwhere(cut)[0]
+        a = p[b, i]
+        corner = [int(a[0] + d[b, i, 0]), int(a[1])] if not side_x[b, i] else [int(a[0]), int(a[1] + d[b, i, 1])]
+        raise ValueError(f"{where(b)} step {i}, {a.tolist()} -> {p[b, i + 1].tolist()}, cuts a corner of blocked "
+                         f"cell {corner} (no corner cutting, DESIGN §2); pass optimal= explicitly")
+
+
 def _optimal(grid: GridMap, paths: np.ndarray, n: np.ndarray, optimal: ArrayLike | None, single: bool):
     """``f64[B]`` optimal lengths (m), or None when there is no sound reference."""
     B = paths.shape[0]
@@ -117,11 +164,14 @@ def _optimal(grid: GridMap, paths: np.ndarray, n: np.ndarray, optimal: ArrayLike
         if opt.shape != (B,):
             raise ValueError(f"optimal must be a number{'' if single else f' or have shape [{B}]'}, got shape "
                              f"{np.shape(optimal)}")
-        if np.isnan(opt).any() or (opt < 0).any():
-            raise ValueError(f"optimal must be >= 0 and not NaN, got {opt[np.isnan(opt) | (opt < 0)][0]}")
+        # 0 stays legal: it is the optimum of a start = goal scenario (gap 0 for a path that stays).
+        bad = ~np.isfinite(opt) | (opt < 0)
+        if bad.any():
+            raise ValueError(f"optimal must be finite and >= 0 (metres), got {opt[bad][0]}")
         return opt
     if not _is_grid_path(paths, n):
         return None
+    _check_grid_moves(np.asarray(grid.free, bool), paths, n)
     from jaxplan.search import shortest_lengths  # deferred: search imports the host metrics
 
     opt = np.full(B, np.inf)
@@ -129,13 +179,8 @@ def _optimal(grid: GridMap, paths: np.ndarray, n: np.ndarray, optimal: ArrayLike
     if has.any():
         idx = np.flatnonzero(has)
         starts, goals = paths[idx, 0], paths[idx, n[idx] - 1]
+        # Legal moves join the ends, so every optimum here is finite.
         opt[idx] = shortest_lengths(grid, starts, goals, connectivity=8)
-        if np.isinf(opt[idx]).any():
-            b = idx[np.isinf(opt[idx])][0]
-            raise ValueError(
-                f"path {b} joins {paths[b, 0].tolist()} to {paths[b, n[b] - 1].tolist()}, which are not connected "
-                "by 8-connected moves without corner cutting: the path crosses blocked cells or cuts a corner; "
-                "pass optimal= explicitly")
     return opt
 
 
@@ -165,7 +210,8 @@ def path_metrics(
       grid: the map (its resolution turns cells into metres; its blocked cells give clearance).
       reference: optional path to compare with (cells): ``[R, 2]`` (shared by a whole
         batch) or ``[B, R, 2]``.
-      optimal: optional optimal length(s) in metres, a number or ``[B]``, ``>= 0``.
+      optimal: optional optimal length(s) in metres, a number or ``[B]``, finite and ``>= 0``
+        (0 for a start = goal scenario).
       n: ``int[B]`` (or a number for one path) valid points per path; default: all ``L``.
       reference_n: ``int[B]`` valid points per reference (for a padded ``[B, R, 2]``);
         default: all ``R``.
@@ -179,16 +225,24 @@ def path_metrics(
       * ``length`` (m), ``turns`` (heading change > 1e-6 rad), ``sharp_turns`` (>= 45°),
         ``smoothness`` (1 − mean|Δheading|/π), ``max_curvature`` (1/m, Menger, at the
         vertices) — see `jaxplan.metrics._path`; repeated points are skipped;
-      * ``min_clearance``, ``mean_clearance`` (m) over the **vertices** (exact at cell
-        centres); a continuous path should be sampled densely first;
+      * ``min_clearance``, ``mean_clearance`` (m), exact distances to the nearest blocked
+        square (the outside counts). The dtype decides where they are measured: an
+        integer (raw grid) path at its vertices, the cell centres — minimum and plain mean
+        over the vertices; a float (smoothed, any-angle, executed) path along its
+        segments — the minimum over the whole polyline, and the mean weighted by arc
+        length (∫ clearance ds / length, midpoint rule on pieces of at most 1/4 cell, see
+        `jaxplan.metrics._exact_clearance`), so a line-of-sight path with few vertices
+        still sees the obstacle its long segment passes, and sparse and dense samplings of
+        one curve agree. A float path without length reads its point's clearance;
       * ``hausdorff`` (m) between the path and ``reference`` as polylines (a lower bound
         within ``segment/(2·hausdorff_samples)`` of the exact value, usually exact); None
         without a reference;
       * ``optimality_gap`` = length / optimal − 1 with ``optimal`` as given; without it,
-        for integer raw grid paths (every step to one of the 8 neighbours) the optimum is
-        `jaxplan.shortest_lengths` between each path's ends (8-connected, octile, no
-        corner cutting); for any other path None — a smoothed or any-angle path must be
-        compared with the same smoothing of the exact path (DESIGN §6), so pass it. A
+        for integer raw grid paths (every step to one of the 8 neighbours, or staying) the
+        optimum is `jaxplan.shortest_lengths` between each path's ends (8-connected,
+        octile, no corner cutting), and each step must be a legal move on the map; for any
+        other path None — a smoothed or any-angle path must be compared with the same
+        smoothing of the exact path (DESIGN §6), so pass it. A
         start = goal path has gap 0.
 
       Degenerate paths: with no point or one point, length 0, turns 0, sharp turns 0,
@@ -198,9 +252,10 @@ def path_metrics(
 
     Raises:
       ValueError: a path or reference of the wrong shape or dtype, NaN or infinite
-        coordinates among the valid points, ``n`` outside ``[0, L]``, a negative or NaN
-        ``optimal``, an empty reference, or (automatic gap) path ends that are not
-        connected on the map.
+        coordinates among the valid points, ``n`` outside ``[0, L]``, a negative, infinite
+        or NaN ``optimal``, an empty reference, or (automatic gap) a grid path with a point
+        on a blocked cell or outside the map, or a diagonal step that cuts a blocked corner
+        (the message names the step).
 
     The compiled cores (`jit`) see the paths padded to a power-of-two length, so each
     ``(B, bucket(L))`` and map shape compiles once. Called directly inside ``jit``, they
@@ -243,7 +298,14 @@ def path_metrics(
     cmap = cached_collision_map(grid)
     padded = jnp.asarray(_pad(paths, bucket(L)))
     n_dev = jnp.asarray(counts, jnp.int32)
-    out = {k: np.asarray(v) for k, v in _core(cmap, padded, n_dev).items()}
+    grid_path = np.issubdtype(paths.dtype, np.integer)
+    out = {k: np.asarray(v) for k, v in _core(cmap, padded, n_dev, clearance=grid_path).items()}
+    if not grid_path:
+        # A continuous path passes obstacles between its vertices: measured along the segments.
+        lo, mean = polyline_clearance(np.asarray(grid.free, bool), paths, counts)
+        res = float(grid.resolution)
+        dtype = out["length"].dtype
+        out["min_clearance"], out["mean_clearance"] = (lo * res).astype(dtype), (mean * res).astype(dtype)
     out["hausdorff"] = None
     if refs is not None:
         out["hausdorff"] = np.asarray(_hausdorff_core(

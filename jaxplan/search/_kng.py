@@ -78,7 +78,7 @@ def key_node_path(free: np.ndarray, path: np.ndarray, threshold_deg: float = 20.
     """
     path = np.asarray(path, np.int64).reshape(-1, 2)
     keep = _key_node_mask(~np.asarray(free, dtype=bool), path.astype(np.float64), math.radians(threshold_deg),
-                          _threshold(0.0))
+                          _threshold(0.0, np.shape(free)))
     nodes = path[keep]
     if count_sharp_turns(nodes) > count_sharp_turns(path):
         return path, True

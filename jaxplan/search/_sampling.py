@@ -18,8 +18,8 @@ cells from every blocked unit square (outside the map counts as blocked), the se
 of `jaxplan.grid._collision.segment_free`, computed exactly in float64 over the squares
 near the segment (a compiled numba loop, about 1 µs per short edge; one call of the
 jitted JAX test costs about 55 µs of dispatch, and RRT* tests tens of edges per
-iteration). A margin of ``CLEAR_MARGIN`` cells on top keeps every accepted segment free
-under the float32 JAX test too.
+iteration). A margin of `clear_margin` cells on top (growing with the map, as float32
+spacing does) keeps every accepted segment free under the float32 JAX test too.
 
 Sampling (seed 001, Eq. 9–12). Each iteration draws four uniforms ``u [4]``; `mrbs_sample`
 maps them to a point and a region:
@@ -82,15 +82,33 @@ from jaxplan.result import PlanResult
 
 __all__ = [
     "rrt_star", "mrbs_rrt", "SamplingRegions", "sampling_regions", "region_probabilities", "mrbs_sample",
-    "segment_clear", "polyline_cells", "REGIONS", "CLEAR_MARGIN",
+    "segment_clear", "polyline_cells", "REGIONS", "CLEAR_MARGIN", "clear_margin",
 ]
 
 REGIONS = ("goal", "start", "end", "obs", "norm")
 """Region labels returned by `mrbs_sample`, in order (0 = the goal point of the goal bias)."""
 
 CLEAR_MARGIN = 1e-5
-"""Cells added to the clearance threshold of the float64 test, so that an accepted segment
-also passes the float32 JAX test (`segment_free`) whatever its rounding."""
+"""Least margin (cells) added to the clearance threshold of the float64 test; the margin
+used grows with the map (`clear_margin`)."""
+
+_F32_ULPS = 4.0
+"""float32 rounding, in units of the spacing of float32 numbers near the map's largest
+coordinate, that the JAX test's distance may be off by: the end points' rounding (half a
+unit each) and the few operations of the segment-to-square distance. Measured: 2 units
+already held for 20,000 segments passing a blocked corner just outside the margin on
+maps 64 to 5,000 cells wide; 4 leaves a factor of two."""
+
+
+def clear_margin(shape: tuple[int, int]) -> float:
+    """Cells added to the float64 clearance threshold on a map of ``shape (H, W)``, so that an
+    accepted segment also passes the float32 JAX test (`segment_free`) whatever its rounding.
+
+    float32 coordinates near ``x`` are ``x·2⁻²³`` apart, so the error of the JAX distance
+    grows with the map: a fixed 1e-5 cells failed 4 of 4000 near-touching segments at
+    x ≈ 500 (spacing 6e-5). 3e-5 cells on a 64-wide map, 2.9e-4 at 600 wide.
+    """
+    return max(CLEAR_MARGIN, _F32_ULPS * max(shape) * 2.0 ** -23)
 
 _QUICK = 0.70711  # > √2/2: a square is at least (distance to its centre − √2/2) away
 
@@ -160,17 +178,17 @@ def _clear(blocked, px, py, qx, qy, thr):
     return True
 
 
-def _threshold(radius_cells: float) -> float:
-    return max(float(radius_cells), TOUCH) + CLEAR_MARGIN
+def _threshold(radius_cells: float, shape: tuple[int, int]) -> float:
+    return max(float(radius_cells), TOUCH) + clear_margin(shape)
 
 
 def segment_clear(grid: GridMap, p: ArrayLike, q: ArrayLike, robot_radius: float = 0.0) -> bool:
     """Whether the segment ``p``–``q`` (cell coordinates, ``[2]`` each) keeps ``robot_radius``
-    metres (and more than touching, plus `CLEAR_MARGIN`) from every blocked cell — the test
+    metres (and more than touching, plus `clear_margin`) from every blocked cell — the test
     the sampling planners apply to each edge."""
     blocked = ~np.asarray(grid.free, dtype=bool)
     p, q = np.asarray(p, np.float64), np.asarray(q, np.float64)
-    return bool(_clear(blocked, p[0], p[1], q[0], q[1], _threshold(robot_radius / float(grid.resolution))))
+    return bool(_clear(blocked, p[0], p[1], q[0], q[1], _threshold(robot_radius / float(grid.resolution), grid.shape)))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -625,7 +643,7 @@ def _plan(name: str, grid: GridMap, start, goal, seed, probabilities: np.ndarray
     res = float(grid.resolution)
     s = check_cell(grid, start, "start")
     g = check_cell(grid, goal, "goal")
-    thr = _threshold(robot_radius / res)
+    thr = _threshold(robot_radius / res, grid.shape)
     field = np.asarray(cached_collision_map(grid).field, np.float64)  # exact at cell centres (cells)
     for what, c in (("start", s), ("goal", g)):
         if field[c[1], c[0]] < thr:

@@ -91,7 +91,10 @@ def _bezier(v, u1, u2, theta, t, K: int, kappa: float):
 def _corners(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, radius: float, K: int, size_of, curve) -> Smoothed:
     if K < 6:
         raise ValueError(f"corner samples must be >= 6 (so no smoothed corner is a sharp turn), got {K}")
-    points = jnp.asarray(points, jnp.float32)
+    given, n_given = jnp.asarray(points, jnp.float32), n
+    # A repeated vertex has a zero-length segment on one side, so it would not count as a
+    # corner and the turn it carries would stay sharp; the curves are built on the path without repeats.
+    points, n = drop_repeats(given, n)
     L = points.shape[0]
     u1, u2, l1, l2, theta, corner = _corner_frames(points, n)
     # Each neighbouring corner may take half of a shared segment; the ends may take all of theirs.
@@ -125,13 +128,14 @@ def _corners(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, radius: fl
     keep = jnp.where(curved[:, None], True, jnp.arange(K)[None, :] == 0) & (i < n)[:, None]
     out, m = compact(slots.reshape(L * K, 2), keep.reshape(L * K))
     out, m = drop_repeats(out, m)
-    free_in = jnp.all(polyline_free(cmap, points, n, radius))
-    pad = jnp.concatenate([points, jnp.broadcast_to(points[-1], (L * K - L, 2))]) if K > 1 else points
-    last = points[jnp.maximum(n - 1, 0)]
-    pad = jnp.where((jnp.arange(L * K) < n)[:, None], pad, last)
+    # A path that is not free comes back as given, repeats included.
+    free_in = jnp.all(polyline_free(cmap, given, n_given, radius))
+    pad = jnp.concatenate([given, jnp.broadcast_to(given[-1], (L * K - L, 2))]) if K > 1 else given
+    last = given[jnp.maximum(n_given - 1, 0)]
+    pad = jnp.where((jnp.arange(L * K) < n_given)[:, None], pad, last)
     res = cmap.resolution
     return Smoothed(
-        points=jnp.where(free_in, out, pad), n=jnp.where(free_in, m, n),
+        points=jnp.where(free_in, out, pad), n=jnp.where(free_in, m, n_given),
         removed=jnp.where(free_in, jnp.sum(curved), 0), fallbacks=jnp.where(free_in, jnp.sum(corner & ~ok), 0),
         max_curvature=jnp.where(free_in, jnp.max(jnp.where(curved, kappa, 0.0)), 0.0) / res, input_free=free_in,
     )
@@ -162,7 +166,8 @@ def bezier_corners(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, cut_
     """Replaces each corner by a cubic Bezier that leaves the path ``<= cut_max`` cells before it.
 
     The control points sit on the two segments at ``κ`` of the way from the tangent points
-    to the corner (``κ = 2/3`` is the parabola; smaller is rounder). ``max_curvature`` is
+    to the corner, ``0 < κ <= 1`` (``κ = 2/3`` is the parabola; smaller is rounder; above 1
+    the control points pass the corner and the curve loops beyond it). ``max_curvature`` is
     the maximum of the analytic curvature over 65 parameter values per curve, in 1/m.
     """
     size = lambda theta: jnp.full_like(theta, cut_max)

@@ -29,6 +29,9 @@ SMOOTHERS: dict[str, tuple[Callable[..., Smoothed], dict[str, tuple[Any, str]]]]
     "bspline": (bspline, {"spacing": (0.25, "m"), "max_samples": (16, "static"), "rounds": (8, "static")}),
 }
 _STATIC_ALWAYS = {"threshold"}  # used to pick branches at trace time
+# Options with an upper bound besides being positive: past κ = 1 the Bezier's control points
+# pass the corner and the curve loops beyond it.
+_AT_MOST = {"kappa": 1.0}
 
 _FNS: dict = {}
 
@@ -68,6 +71,8 @@ def _options(name: str, res: float, given: dict) -> tuple[tuple, dict]:
         v = float(v)
         if not math.isfinite(v) or v <= 0:
             raise ValueError(f"smoother {name!r}: {k} must be a finite positive number, got {v!r}")
+        if k in _AT_MOST and v > _AT_MOST[k]:
+            raise ValueError(f"smoother {name!r}: {k} must lie in (0, {_AT_MOST[k]:g}], got {v!r}")
         v = v / res if unit == "m" else math.radians(v) if unit == "deg" else v
         if k in _STATIC_ALWAYS:
             static.append((k, v))
@@ -90,7 +95,7 @@ def smooth(path: ArrayLike, grid: GridMap, method: str | Sequence[str] = "los", 
         this clearance (and never touches a blocked cell).
       **options: the smoothers' options, lengths in metres and angles in degrees:
         ``threshold`` (key_nodes, 20°), ``radius_max`` (fillet, 1 m), ``cut_max`` and
-        ``kappa`` (bezier, 1 m, 0.5), ``spacing`` (bspline, 0.25 m), and the static
+        ``kappa`` (bezier, 1 m, 0.5, in (0, 1]), ``spacing`` (bspline, 0.25 m), and the static
         ``samples`` / ``max_samples`` / ``rounds``. An option no chosen smoother takes is
         an error.
 
@@ -102,9 +107,11 @@ def smooth(path: ArrayLike, grid: GridMap, method: str | Sequence[str] = "los", 
 
     Raises:
       ValueError: empty paths, NaN/inf coordinates, points outside the map, bad ``n``,
-        unknown methods or options, negative radius.
+        no or unknown methods, unknown or out-of-range options, negative radius.
     """
     methods = (method,) if isinstance(method, str) else tuple(method)
+    if not methods:
+        raise ValueError(f"method must name at least one smoother, got {method!r}")
     for m in methods:
         if m not in SMOOTHERS:
             raise ValueError(f"unknown smoother {m!r}; choose from {sorted(SMOOTHERS)}")
