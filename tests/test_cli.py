@@ -26,3 +26,26 @@ def test_tune_lists_every_config_problem_before_any_work(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "tune.kind" in err and "tune.space" in err and "maps" in err
     assert not (tmp_path / "runs").exists()
+
+
+def _tiny_map(tmp_path):
+    m = tmp_path / "tiny.map"
+    m.write_text("type octile\nheight 6\nwidth 6\nmap\n......\n......\n..@@..\n..@@..\n......\n......\n")
+    return m
+
+
+def test_plan_with_a_sampling_planner_needs_no_connectivity(tmp_path, capsys):
+    # rrt_star has no `connectivity` parameter: the CLI must not pass its own default to it.
+    rc = main(["plan", str(_tiny_map(tmp_path)), "--start", "0", "0", "--goal", "5", "5", "--planner", "rrt_star"])
+    out = capsys.readouterr()
+    assert rc == 0, out.err
+    assert "rrt_star on" in out.out
+
+
+def test_plan_passes_an_explicit_connectivity(tmp_path, capsys):
+    rc = main(["plan", str(_tiny_map(tmp_path)), "--start", "0", "0", "--goal", "5", "0", "--connectivity", "4"])
+    assert rc == 0
+    assert "5.000" in capsys.readouterr().out
+    rc = main(["plan", str(_tiny_map(tmp_path)), "--start", "0", "0", "--goal", "5", "5", "--planner", "rrt_star",
+               "--connectivity", "4"])
+    assert rc == 2 and "connectivity" in capsys.readouterr().err

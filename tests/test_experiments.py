@@ -208,6 +208,54 @@ def test_single_problems(text, problem, tmp_path):
     assert any(problem in p for p in ei.value.problems), ei.value.problems
 
 
+@pytest.mark.parametrize("override, problem", [
+    ("alpha = [1.0, 2.0]", "parameter 'alpha' must be a single number, got (1.0, 2.0)"),
+    ("rho = [0.1]", "parameter 'rho' must be a single number, got (0.1,)"),
+    ("alpha = true", "parameter 'alpha' must be a real number (not a bool or a string), got True"),
+    ("alpha = '1.0'", "parameter 'alpha' must be a real number (not a bool or a string), got '1.0'"),
+    ("lambdas = [0.5, true, 0.2]", "parameter 'lambdas' must be a real number (not a bool or a string) per component"),
+    ("lambdas = [0.5, 0.3]", "lambdas must be three weights"),
+])
+def test_planner_weights_need_their_default_shape_and_real_numbers(override, problem, tmp_path):
+    text = TINY.replace('name = "aco"\noverrides = { ants = 6,', f'name = "iaco"\noverrides = {{ {override}, ants = 6,')
+    with pytest.raises(ConfigError) as ei:
+        parse_config(text, data_dir=tmp_path)
+    assert len(ei.value.problems) == 1 and ei.value.problems[0].startswith("planners[1].overrides: planner 'iaco': ")
+    assert problem in ei.value.problems[0], ei.value.problems
+
+
+NAV = """
+[experiment]
+name = "quicknav"
+seeds = 2
+[experiment.quick]
+seeds = 1
+nav = { max_time = %s }
+[[maps]]
+name = "g"
+generator = "random"
+params = { width = 12, height = 12, obstacle_ratio = 0.1 }
+scenarios = { source = "random", count = 1, min_distance = 4.0 }
+[[planners]]
+label = "nav"
+kind = "navigate"
+name = "iaco_dwa"
+overrides = { ants = 8, iterations = 3 }
+"""
+
+
+@pytest.mark.parametrize("value", ["-5.0", "nan", "'x'"])
+def test_quick_nav_values_are_checked_at_load_time(value, tmp_path):
+    with pytest.raises(ConfigError) as ei:
+        parse_config(NAV % value, data_dir=tmp_path)
+    assert len(ei.value.problems) == 1, ei.value.problems
+    assert ei.value.problems[0].startswith("experiment.quick.nav.max_time: for 'nav': NavConfig.max_time must be")
+
+
+def test_good_quick_nav_values_pass(tmp_path):
+    assert dict(apply_quick(parse_config(NAV % "7.5", data_dir=tmp_path)).planners[0].nav) == {"max_time": 7.5}
+
+
 def test_quick_changes_seeds_counts_and_overrides(tiny_config):
     cfg = load_config(tiny_config)
     q = apply_quick(cfg)
@@ -242,6 +290,45 @@ def test_run_folder(reference):
 def test_same_config_twice_gives_identical_trials(reference, tiny_config, tmp_path):
     again = run_experiment(tiny_config, tmp_path, progress=False)
     assert (again / "trials.csv").read_bytes() == (reference / "trials.csv").read_bytes()
+
+
+CHUNK_BITS = """
+metrics = ["success", "length", "optimality_gap"]
+[experiment]
+name = "chunkbits"
+seeds = 2
+[[maps]]
+name = "r"
+generator = "random"
+seed = 1
+params = { width = 30, height = 30, obstacle_ratio = 0.2 }
+scenarios = { source = "random", count = 5, seed = 3, min_distance = 20.0 }
+[[planners]]
+label = "AS"
+kind = "plan"
+name = "aco"
+overrides = { ants = 6, iterations = 3, dead_end = "retreat", max_steps = 600 }
+"""
+
+
+def test_chunk_size_does_not_change_lengths_or_gaps(tmp_path):
+    """Same seeds, same paths: a trial's length and gap are float64 sums of its stored cells. The float32 device
+    sums they were before moved in the last bits with the batch (here: 2 vs 10 paths of 601 padded points)."""
+    cfg = _write(tmp_path / "c.toml", CHUNK_BITS)
+    one, five = (_csv(run_experiment(cfg, tmp_path / f"c{k}", progress=False, chunk=k) / "trials.csv") for k in (1, 5))
+    assert [(r["scenario"], r["seed"]) for r in one] == [(r["scenario"], r["seed"]) for r in five]
+    assert any(r["success"] == "1" for r in one)
+    for col in ("length", "optimality_gap"):
+        assert [r[col] for r in one] == [r[col] for r in five], col
+
+
+def test_grid_path_lengths_are_exact_float64_sums():
+    from jaxplan.experiments.runner import grid_path_lengths, optimality_gaps
+
+    paths = np.array([[[0, 0], [1, 1], [2, 1], [-1, -1]], [[3, 3], [-1, -1], [-1, -1], [-1, -1]]], np.int32)
+    got = grid_path_lengths(paths, np.array([3, 1]), 0.5)
+    assert got.dtype == np.float64 and got.tolist() == [(np.sqrt(2.0) + 1.0) * 0.5, 0.0]
+    assert optimality_gaps(np.array([2.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0])).tolist() == [1.0, 0.0, np.inf]
 
 
 def test_a_different_experiment_in_the_same_folder_is_refused(reference, tiny_config, tmp_path):
@@ -349,6 +436,61 @@ def test_resume_after_sigkill_gives_identical_trials(reference, tiny_config, tmp
         assert final["chunks"][uid]["session"] == 1 and final["chunks"][uid]["sha256"] == entry["sha256"]
     assert {e["session"] for uid, e in final["chunks"].items() if uid not in first} == {2}
     assert (tmp_path / "tiny" / "trials.csv").read_bytes() == (reference / "trials.csv").read_bytes()
+
+
+# ---------------------------------------------------------------------------------------------
+# Figures whose scenario the run does not have
+
+SCENARIO_FIGURES = """
+[[figures]]
+kind = "paths"
+name = "paths_sc3"
+scenario = 3
+
+[[figures]]
+kind = "convergence"
+name = "conv_sc3"
+scenario = 3
+
+[[figures]]
+kind = "box"
+metric = "length"
+
+[[figures]]
+kind = "bar"
+metric = "length"
+"""
+
+
+def test_figure_scenario_past_the_configured_count_is_a_config_error(tmp_path):
+    text = TINY + "[[figures]]\nkind = 'paths'\nscenario = 5\n[[figures]]\nkind = 'convergence'\nscenario = 4\n"
+    with pytest.raises(ConfigError) as ei:
+        parse_config(text, data_dir=tmp_path)
+    assert ei.value.problems == ("figures[0].scenario: figure 'paths': scenario 5 is past map 'wh''s 5 scenarios "
+                                 "(0..4)",)
+
+
+def test_figure_scenario_past_a_quick_run_is_reported_and_the_other_figures_drawn(tmp_path, monkeypatch, capsys):
+    from jaxplan.experiments import figures
+
+    cfg = _write(tmp_path / "f.toml", TINY.replace('name = "tiny"', 'name = "tinyfig"') + SCENARIO_FIGURES)
+    run = run_experiment(cfg, tmp_path / "runs", quick=True, progress=False)  # 2 scenarios: 3 is valid only in full
+
+    def boom(run, spec):
+        raise RuntimeError("a bug in one figure")
+
+    monkeypatch.setitem(figures.DRAW, "bar", boom)
+    drawn, problems = figures.draw_figures(run, tmp_path / "figs")
+    assert [d.name for d in drawn] == ["box"]
+    assert problems == [
+        "paths_sc3 (paths): figure 'paths_sc3': scenario 3 is past map 'wh''s 2 scenarios in this --quick run (0..1)",
+        "conv_sc3 (convergence): figure 'conv_sc3': scenario 3 is past map 'wh''s 2 scenarios in this --quick run "
+        "(0..1)",
+        "bar (bar): RuntimeError: a bug in one figure",
+    ]
+    assert not (tmp_path / "figs" / run.name / "conv_sc3.png").exists()  # no empty plot
+    assert main(["figures", str(run), "--out", str(tmp_path / "figs")]) == 1
+    assert "not drawn: paths_sc3" in capsys.readouterr().err
 
 
 # ---------------------------------------------------------------------------------------------

@@ -94,3 +94,49 @@ overrides = { ants = 6, iterations = 3, dead_end = "retreat" }
     assert np.all(t["hausdorff"][astar] == 0.0)
     h = t["hausdorff"][~astar & (t["success"] == 1)]
     assert h.size and np.all(np.isfinite(h) & (h >= 0))
+
+
+def _fake_reproduction(tmp_path, monkeypatch, run_fails=(), figures_fail=()):
+    """Three empty configs; `run_experiment` and `draw_figures` replaced by stand-ins that fail where asked."""
+    from jaxplan.experiments import figures, runner
+
+    for n in ("seedA", "seedB", "seedC"):
+        (tmp_path / f"{n}.toml").write_text("")
+
+    def run(cfg, out, **kw):
+        if Path(cfg).stem in run_fails:
+            raise FloatingPointError("broke mid-run")
+        d = Path(out) / Path(cfg).stem
+        d.mkdir(parents=True, exist_ok=True)
+        return d
+
+    def draw(run_dir, out, **kw):
+        if Path(run_dir).name in figures_fail:
+            raise IndexError("index 9 is out of bounds")
+        return [object()], ["paths_sc9 (paths): figure 'paths_sc9': scenario 9 is past map 'm''s 4 scenarios"]
+
+    monkeypatch.setattr(runner, "run_experiment", run)
+    monkeypatch.setattr(figures, "draw_figures", draw)
+    return sorted(tmp_path.glob("seed*.toml"))
+
+
+def test_reproduce_goes_on_after_a_config_fails_to_run_or_draw(tmp_path, monkeypatch):
+    from jaxplan.experiments.reproduce import reproduce
+
+    configs = _fake_reproduction(tmp_path, monkeypatch, run_fails=("seedA",), figures_fail=("seedB",))
+    done = reproduce(configs, tmp_path / "runs", tmp_path / "figs", progress=False)
+    assert [d.config.stem for d in done] == ["seedA", "seedB", "seedC"]
+    assert done[0].run_dir is None and done[0].error == "FloatingPointError: broke mid-run"
+    assert done[1].run_dir is not None and done[1].error == "figures: IndexError: index 9 is out of bounds"
+    assert done[2].error is None and done[2].figures == 1 and len(done[2].problems) == 1
+
+
+def test_reproduce_reports_every_failure_and_exits_2_at_the_end(tmp_path, monkeypatch, capsys):
+    _fake_reproduction(tmp_path, monkeypatch, run_fails=("seedA",), figures_fail=("seedB",))
+    argv = ["reproduce", "--configs", str(tmp_path), "--out", str(tmp_path / "runs"), "--figures",
+            str(tmp_path / "figs"), "--no-progress", "--no-cache"]
+    assert main(argv) == 2
+    out, err = capsys.readouterr()
+    assert "seedA.toml: FloatingPointError: broke mid-run" in err
+    assert "seedB.toml: figures: IndexError: index 9 is out of bounds" in err
+    assert "seedC.toml: not drawn: paths_sc9" in err and "seedC.toml  seedC" in out  # the last config still ran

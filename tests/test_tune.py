@@ -347,3 +347,90 @@ def test_run_tuning_writes_log_checkpoints_fragment_and_figure(tmp_path):
 def test_bad_tuning_configs_name_the_key(edit, match):
     with pytest.raises(ConfigError, match=match):
         parse_tune_config(CONFIG.replace(*edit))
+
+
+@pytest.mark.parametrize("strategy, options, match", [
+    ("cma_es", "{ sigm = 0.3 }", r"tune\.options\.sigm: strategy 'cma_es' has no option 'sigm' .*did you mean 'sigma'"),
+    ("cma_es", "{ sigma = -1.0 }", r"tune\.options: cma_es: option 'sigma' must be a finite number > 0, got -1\.0"),
+    ("cma_es", "{ sigma = nan }", r"tune\.options\.sigma: must be a finite number, got nan"),
+    ("snes", "{ sigma = \"0.3\" }", r"tune\.options\.sigma: expected a number, got '0\.3'"),
+    ("issa", "{ pd = true }", r"tune\.options\.pd: expected a number, got True"),
+    ("issa", "{ levy_scale = 0.0 }", r"tune\.options: issa: option 'levy_scale' must be a finite number > 0"),
+    ("surrogate", "{ steps = 2.5 }", r"tune\.options\.steps: expected an integer, got 2\.5"),
+    ("reinforce", "{ learning_rate = inf }", r"tune\.options\.learning_rate: must be a finite number"),
+    ("random", "{ sigma = 0.3 }", r"strategy 'random' has no option 'sigma' \(it takes none\)"),
+])
+def test_bad_strategy_options_name_the_option(strategy, options, match):
+    text = CONFIG.replace('strategy = "issa"', f'strategy = "{strategy}"').replace(
+        "overrides = { ants = 4", f"options = {options}\noverrides = {{ ants = 4")
+    with pytest.raises(ConfigError, match=match):
+        parse_tune_config(text)
+
+
+def test_good_strategy_options_pass():
+    text = CONFIG.replace('strategy = "issa"', 'strategy = "cma_es"').replace(
+        "overrides = { ants = 4", "options = { sigma = 1 }\noverrides = { ants = 4")
+    assert dict(parse_tune_config(text).options) == {"sigma": 1}
+
+
+def test_a_weight_vector_with_nan_costs_inf_and_is_never_best(box, tmp_path):
+    # The function swallows the NaN (as a planner turns NaN weights into failed runs of finite cost).
+    obj = function_objective(lambda x, s: jnp.sum((jnp.nan_to_num(x, nan=0.0) - C) ** 2), box)
+    pop = np.array([[0.0, 0.0, 0.0], [np.nan, 0.0, 0.0], [0.0, np.inf, 0.0]], np.float32)
+    ev = obj.evaluate(pop)
+    assert np.isfinite(ev.fitness[0]) and np.all(np.isinf(ev.fitness[1:])) and np.all(np.isinf(ev.per_seed[1:]))
+
+    class Nan:  # a strategy whose every proposal has a NaN coordinate
+        name, population_size = "nan", 4
+        init = staticmethod(make_strategy("random", 4, 1).init)
+        tell = staticmethod(make_strategy("random", 4, 1).tell)
+
+        @staticmethod
+        def ask(key, state):
+            return jnp.full((4, 3), jnp.nan)
+
+    res = tune_loop(obj, Nan(), 2, tmp_path / "nan", progress=False, x0=None)
+    assert res["n_bad"] == 8 and np.all(np.isfinite(res["best_x"]))
+
+
+@pytest.mark.parametrize("quick, shared", [
+    ("test_seeds = [0, 5]", "[0]"),  # the main train seeds 0, 1 meet the quick test seeds
+    ("train_seeds = [51, 2]\ntest_seeds = [51]", "[51]"),
+    ("train_seeds = [1000, 7]", "[1000]"),  # the quick default test seeds are 1000, 1001
+])
+def test_quick_test_seeds_must_not_meet_the_quick_train_seeds(quick, shared):
+    text = CONFIG.replace("[tune.space]", f"[tune.quick]\n{quick}\n[tune.space]")
+    with pytest.raises(ConfigError, match=rf"tune\.quick\.test_seeds: .*must not share seeds .*: \{shared}"):
+        parse_tune_config(text)
+
+
+def test_apply_tune_quick_checks_the_seeds_of_a_config_built_in_code():
+    import dataclasses
+
+    from jaxplan.tune import apply_tune_quick
+
+    cfg = parse_tune_config(CONFIG.replace("[tune.space]", "[tune.quick]\ntrain_seeds = [3]\n[tune.space]"))
+    q = apply_tune_quick(cfg)
+    assert q.train_seeds == (3,) and q.test_seeds == (1000,)
+    bad = dataclasses.replace(cfg, quick={**cfg.quick, "test_seeds": (3,)})
+    with pytest.raises(ConfigError, match="must not share seeds"):
+        apply_tune_quick(bad)
+
+
+def test_one_test_seed_has_no_spread(box):
+    from jaxplan.tune._workflow import compare
+
+    obj = function_objective(toy, box, train_seeds=(0, 1), test_seeds=(7,))
+    one = compare(obj, obj.defaults, "test")
+    assert np.isnan(one["tuned"]["seed_sd"]) and np.isnan(one["defaults"]["seed_sd"])  # not "± 0"
+    assert np.isfinite(compare(obj, obj.defaults, "train")["tuned"]["seed_sd"])
+
+
+def test_a_missing_spread_reads_as_a_dash_and_null_in_json():
+    import math
+
+    from jaxplan.tune._workflow import _json_safe, _sd_text
+
+    assert _sd_text(math.nan) == "–" and _sd_text(0.25) == "0.25"
+    assert json.loads(json.dumps(_json_safe({"a": [math.nan, 1.0], "b": math.inf}), allow_nan=False)) == {
+        "a": [None, 1.0], "b": None}

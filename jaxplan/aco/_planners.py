@@ -99,6 +99,20 @@ def aco_defaults(name: str) -> dict[str, Any]:
     return dict(_DEFAULTS[name])
 
 
+def _real(name: str, key: str, value: Any, default: Any) -> np.ndarray:
+    """``value`` as float64, checked to be real numbers of ``default``'s shape: NumPy would read ``True`` or
+    ``"1.0"`` as 1.0, and a list where a scalar belongs passes until it breaks a broadcast mid-run."""
+    items = value if isinstance(value, (list, tuple)) else [value]
+    arr = np.asarray(value)
+    if arr.dtype.kind not in "iuf" or any(isinstance(x, (bool, np.bool_, str)) for x in items):
+        raise ValueError(f"planner {name!r}: parameter {key!r} must be a real number (not a bool or a string)"
+                         f"{'' if np.ndim(default) == 0 else ' per component'}, got {value!r}")
+    if arr.shape != np.shape(default):
+        want = "a single number" if np.ndim(default) == 0 else f"{np.size(default)} numbers"
+        raise ValueError(f"planner {name!r}: parameter {key!r} must be {want}, got {value!r}")
+    return arr.astype(np.float64)
+
+
 def _validate(name: str):
     def check(p: Mapping[str, Any]) -> None:
         for k in ("ants", "iterations", "colonies"):
@@ -118,18 +132,18 @@ def _validate(name: str):
         vh = p["vehicle_height"]
         if vh is not None and (not math.isfinite(vh) or vh < 0):
             raise ValueError(f"planner {name!r}: vehicle_height must be a finite height >= 0, got {vh!r}")
+        if "lambdas" in p and np.shape(p["lambdas"]) != (3,):
+            raise ValueError(f"planner {name!r}: lambdas must be three weights (λ1, λ2, λ3), got {p['lambdas']!r}")
         for k, v in p.items():
             if k in _STATIC:
                 continue
-            arr = np.asarray(v, dtype=np.float64)
+            arr = _real(name, k, v, _DEFAULTS[name][k])
             if not np.all(np.isfinite(arr)):
                 raise ValueError(f"planner {name!r}: parameter {k!r} must be finite, got {v!r}")
             if np.any(arr < 0):
                 raise ValueError(f"planner {name!r}: parameter {k!r} must be >= 0, got {v!r}")
             if k in _UNIT and np.any(arr > 1):
                 raise ValueError(f"planner {name!r}: parameter {k!r} must lie in [0, 1], got {v!r}")
-        if "lambdas" in p and np.shape(p["lambdas"]) != (3,):
-            raise ValueError(f"planner {name!r}: lambdas must be three weights (λ1, λ2, λ3), got {p['lambdas']!r}")
         if "tau_min" in p and not (0 < p["tau_min"] <= p["tau_max"]):
             raise ValueError(f"planner {name!r}: need 0 < tau_min <= tau_max, got {p['tau_min']}, {p['tau_max']}")
         for k in ("q", "tau0", "u", "a", "omega1", "f0", "c_init"):

@@ -137,7 +137,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Mapping, Sequence
 
 __all__ = [
     "ConfigError", "ExperimentConfig", "MapSpec", "ScenarioSpec", "PlannerConfig", "ObstacleSpec", "StatsSpec",
@@ -249,6 +249,11 @@ FIGURE_KINDS: Mapping[str, frozenset] = MappingProxyType({
 })
 """Figure kinds and the keys each accepts besides ``kind name title maps planners format``."""
 _FIGURE_COMMON = frozenset({"kind", "name", "title", "maps", "planners", "format"})
+_SCENARIO_FIGURE_PLANNERS: Mapping[str, tuple[str, ...]] = MappingProxyType({
+    "convergence": ("plan", "tsp"), "diversity": ("plan", "tsp"), "paths": ("plan", "navigate"),
+    "pheromone": ("plan",), "trajectories": ("navigate",), "controls": ("navigate",), "fan": ("navigate",),
+})
+"""Figure kinds with a ``scenario`` key -> the planner kinds they draw (as `figures` selects them)."""
 
 
 def _generators() -> dict[str, tuple[Callable[..., Any], bool]]:
@@ -1007,19 +1012,28 @@ def nav_config(planner: PlannerConfig):
     return base.replace(dwa=dwa, **dict(planner.nav)), dict(planner.params)
 
 
-def _check_nav(r: _Reader, p: str, pipeline: str, nav: dict, dwa: dict, robot: dict, params: dict) -> None:
+def _check_nav(r: _Reader, p: str, pipeline: str, nav: Mapping, dwa: Mapping, robot: Mapping,
+               params: Mapping) -> None:
+    problem = _nav_problem(pipeline, nav, dwa, robot, params)
+    if problem is not None:
+        r.bad(p, f"navigation settings: {problem}")
+
+
+def _nav_problem(pipeline: str, nav: Mapping, dwa: Mapping, robot: Mapping, params: Mapping) -> str | None:
+    """Why pipeline ``pipeline`` would refuse these settings, or None."""
     from jaxplan.dwa._step import validate_params
     from jaxplan.nav._front import _config
     from jaxplan.nav._pipelines import get_pipeline
 
-    probe = PlannerConfig("probe", "navigate", pipeline, _frozen({}), _frozen(nav), _frozen(dwa), _frozen(robot),
-                          _frozen(params))
+    probe = PlannerConfig("probe", "navigate", pipeline, _frozen({}), _frozen(dict(nav)), _frozen(dict(dwa)),
+                          _frozen(dict(robot)), _frozen(dict(params)))
     try:
         cfg, weights = nav_config(probe)
         cfg = _config(cfg, get_pipeline(pipeline), None)
         validate_params(weights or None, cfg.dwa.evaluator)
     except (ValueError, TypeError) as e:
-        r.bad(p, f"navigation settings: {e}")
+        return str(e)
+    return None
 
 
 def _read_metrics(r: _Reader, raw: dict, kinds: frozenset) -> tuple[str, ...]:
@@ -1067,7 +1081,36 @@ def _read_stats(r: _Reader, raw: dict, metrics: tuple[str, ...]) -> StatsSpec:
     )
 
 
-def _read_figures(r: _Reader, raw: dict, metrics: tuple, maps: set, labels: set) -> tuple[FigureSpec, ...]:
+def scenario_bound(spec: MapSpec) -> int | None:
+    """How many scenarios ``spec`` has at most, when the config alone tells (None: only the data does)."""
+    sc = spec.scenarios
+    if spec.is_tsp or sc.source == "scene":
+        return 1
+    if sc.source == "random":
+        return sc.count or 10  # `runner._random_pairs` finds exactly this many or fails
+    return sc.count  # scen rows: count is an upper bound; the filters may keep fewer
+
+
+def _check_figure_scenario(r: _Reader, p: str, name: str | None, kind: str | None, t: dict,
+                           sites: Sequence[MapSpec], planners: Sequence[PlannerConfig]) -> None:
+    """A figure's ``scenario`` past a map's scenarios would crash the drawing (or leave an empty panel)."""
+    sc = t.get("scenario")
+    if kind not in _SCENARIO_FIGURE_PLANNERS or not isinstance(sc, int) or isinstance(sc, bool):
+        return
+    labels = t.get("planners") if isinstance(t.get("planners"), list) else None
+    named = t.get("maps") if isinstance(t.get("maps"), list) else None
+    drawn = [pc for pc in planners
+             if pc.kind in _SCENARIO_FIGURE_PLANNERS[kind] and (labels is None or pc.label in labels)]
+    for m in sites:
+        n = scenario_bound(m)
+        if (named is None or m.name in named) and any(applies(pc, m) for pc in drawn) and n is not None and sc >= n:
+            r.bad(_join(p, "scenario"), f"figure {name!r}: scenario {sc} is past map {m.name!r}'s {n} scenario"
+                                        f"{'s' if n > 1 else ''} (0..{n - 1})")
+            return
+
+
+def _read_figures(r: _Reader, raw: dict, metrics: tuple, maps: set, labels: set,
+                  sites: Sequence[MapSpec] = (), planners: Sequence[PlannerConfig] = ()) -> tuple[FigureSpec, ...]:
     figs = raw.get("figures", [])
     if not isinstance(figs, list):
         r.bad("figures", f"expected [[figures]] tables, got {_describe(figs)}")
@@ -1102,6 +1145,7 @@ def _read_figures(r: _Reader, raw: dict, metrics: tuple, maps: set, labels: set)
         r.get(t, p, "title", "str", None)
         for k in ("scenario", "seed"):
             r.get(t, p, k, "int", None, lo=0)
+        _check_figure_scenario(r, p, name, kind, t, sites, planners)
         if "band" in t and t["band"] not in ("iqr", "sd", "minmax", False):
             r.bad(_join(p, "band"), f"must be 'iqr', 'sd', 'minmax' or false, got {t['band']!r}")
         r.get(t, p, "log", "bool", None)
@@ -1202,14 +1246,16 @@ def _read_quick(r: _Reader, q: dict, planners: tuple[PlannerConfig, ...], map_na
         if not takers and planners:
             r.bad(f"experiment.quick.overrides.{k}", "no configured planner accepts this parameter")
         for pc in takers:
+            own = {k2: _tuple(v2) for k2, v2 in pc.overrides.items()}
             try:
                 if pc.kind == "tsp":
-                    tsp_resolve(pc.name, {**dict(pc.overrides), k: _tuple(v)})
+                    tsp_resolve(pc.name, {**own, k: _tuple(v)})
                     continue
                 base = dict(get_pipeline(pc.name).planner_overrides) if pc.kind == "navigate" else {}
-                resolve(_global(pc), {**base, **dict(pc.overrides), k: _tuple(v)})
+                resolve(_global(pc), {**base, **own, k: _tuple(v)})
             except (ValueError, TypeError) as e:
-                r.bad(f"experiment.quick.overrides.{k}", f"for {pc.label!r}: {e}")
+                if _overrides_ok(pc, own):  # else the planner's own overrides are at fault, reported at them
+                    r.bad(f"experiment.quick.overrides.{k}", f"for {pc.label!r}: {e}")
     if q["nav"]:
         navs = [pc for pc in planners if pc.kind == "navigate"]
         if not navs:
@@ -1218,6 +1264,8 @@ def _read_quick(r: _Reader, q: dict, planners: tuple[PlannerConfig, ...], map_na
         for k in q["nav"]:
             if k not in fields:
                 r.bad(f"experiment.quick.nav.{k}", "unknown NavConfig field" + _close(k, list(fields)))
+        if all(k in fields for k in q["nav"]):
+            _check_quick_nav(r, q["nav"], navs)
     labels, names = [pc.label for pc in planners], map_names
     for key, known in (("planners", labels), ("maps", names)):
         for j, x in enumerate(q.get(key) or []):
@@ -1225,6 +1273,45 @@ def _read_quick(r: _Reader, q: dict, planners: tuple[PlannerConfig, ...], map_na
                 r.bad(f"experiment.quick.{key}[{j}]", f"unknown {key[:-1]} {x!r} (configured: {', '.join(known)})")
     return QuickSpec(q["seeds"], q["count"], q["chunk"], _frozen(q["overrides"]), _frozen(q["nav"]),
                      tuple(q["planners"]) if q.get("planners") else None, tuple(q["maps"]) if q.get("maps") else None)
+
+
+def _overrides_ok(pc: PlannerConfig, overrides: Mapping) -> bool:
+    """Whether planner ``pc`` accepts ``overrides`` (its own, without the quick ones)."""
+    from jaxplan.aco._tsp import _resolve as tsp_resolve
+    from jaxplan.nav import get_pipeline
+    from jaxplan.registry import resolve
+
+    try:
+        if pc.kind == "tsp":
+            tsp_resolve(pc.name, dict(overrides))
+        else:
+            base = dict(get_pipeline(pc.name).planner_overrides) if pc.kind == "navigate" else {}
+            resolve(_global(pc), {**base, **overrides})
+    except (ValueError, TypeError):
+        return False
+    return True
+
+
+def _check_quick_nav(r: _Reader, quick_nav: Mapping, navs: Sequence[PlannerConfig]) -> None:
+    """The quick nav values merged into each navigate planner's own, checked as `_check_nav` checks those: else a
+    bad value surfaces only mid-run, after a chunk is committed, under no config key."""
+    import jaxplan as jp
+
+    for pc in navs:
+        if pc.name not in jp.pipelines():
+            continue  # reported at its planners[i].name
+        own = (pc.nav, pc.dwa, pc.robot, pc.params)
+        if _nav_problem(pc.name, *own) is not None:
+            continue  # reported at its planners[i]; the quick values are not to blame
+        found = False
+        for k, v in quick_nav.items():  # one key at a time, to name it
+            problem = _nav_problem(pc.name, {**dict(pc.nav), k: v}, *own[1:])
+            if problem is not None:
+                found = True
+                r.bad(f"experiment.quick.nav.{k}", f"for {pc.label!r}: {problem}")
+        problem = None if found else _nav_problem(pc.name, {**dict(pc.nav), **dict(quick_nav)}, *own[1:])
+        if problem is not None:  # fine alone, not together
+            r.bad("experiment.quick.nav", f"for {pc.label!r}: {problem}")
 
 
 def _accepted(pc: PlannerConfig) -> tuple[str, ...]:
@@ -1284,7 +1371,7 @@ def parse_config(text: str, *, data_dir: str | os.PathLike | None = None, source
     metrics = _read_metrics(r, raw, kinds)
     stats = _read_stats(r, raw, metrics)
     map_names, labels = {m.name for m in maps}, {p.label for p in planners}
-    figures = _read_figures(r, raw, metrics, map_names, labels)
+    figures = _read_figures(r, raw, metrics, map_names, labels, maps, planners)
     paper_source, paper = _read_paper(r, raw, metrics, map_names, labels)
     quick = _read_quick(r, exp["quick_raw"], planners, sorted(map_names))
     if r.problems:

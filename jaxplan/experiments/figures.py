@@ -179,10 +179,23 @@ def _need_trials(run: RunData) -> dict:
     return run.trials
 
 
-def _scenario_seed(run: RunData, spec: FigureSpec) -> tuple[int, int, int]:
+def _scenario(run: RunData, spec: FigureSpec, maps: Sequence[int]) -> int:
+    """The figure's ``scenario`` (default 0), checked against each of ``maps``' scenarios (the config cannot
+    always tell: scen filters and ``--quick`` counts keep fewer)."""
+    sc = int(spec.params.get("scenario", 0))
+    for m in maps:
+        n = len(run.prep.maps[m].starts)
+        if sc >= n:
+            quick = " in this --quick run" if run.config.is_quick else ""
+            raise ValueError(f"figure {spec.name!r}: scenario {sc} is past map {run.prep.maps[m].spec.name!r}'s "
+                             f"{n} scenario{'s' if n > 1 else ''}{quick} (0..{n - 1})")
+    return sc
+
+
+def _scenario_seed(run: RunData, spec: FigureSpec, maps: Sequence[int] = ()) -> tuple[int, int, int]:
     """(scenario, seed value, seed column) of a per-trial figure (defaults: scenario 0, the first seed)."""
     seeds = run.config.seeds
-    sc = int(spec.params.get("scenario", 0))
+    sc = _scenario(run, spec, maps)
     seed = int(spec.params.get("seed", seeds[0]))
     if seed not in seeds:
         raise ValueError(f"figure {spec.name!r}: seed {seed} is not one of the run's seeds {list(seeds)}")
@@ -218,7 +231,7 @@ def _curves(run: RunData, spec: FigureSpec, key: str, ylabel: str, what: str):
     pi = [p for p in pi if run.config.planners[p].name not in ("astar", "dijkstra")]
     if not pi:
         raise ValueError(f"figure {spec.name!r}: no iterative plan planner selected")
-    sc = int(spec.params.get("scenario", 0))
+    sc = _scenario(run, spec, mi)
     band = spec.params.get("band", "iqr") or None
     fig, axes = _panels(len(mi))
     for ax, m in zip(axes[0], mi):
@@ -372,7 +385,7 @@ def _paths(run, spec):
     from jaxplan.smooth import smooth
 
     mi, pi = _selected(run, spec, ("plan", "navigate"))
-    sc, seed, r = _scenario_seed(run, spec)
+    sc, seed, r = _scenario_seed(run, spec, mi)
     smoother = spec.params.get("smoothing")
     fig, axes = _panels(len(mi), w=6.0, h=4.8)
     for ax, m in zip(axes[0], mi):
@@ -417,7 +430,7 @@ def _pheromone(run, spec):
     from jaxplan.aco._planners import COLONIES  # the ant colony planners (as the runner tells them apart)
 
     mi, pi = _selected(run, spec, "plan")
-    sc, seed, _ = _scenario_seed(run, spec)
+    sc, seed, _ = _scenario_seed(run, spec, mi)
     todo = [(m, p) for m in mi for p in pi if run.config.planners[p].name in COLONIES]
     if not todo:
         raise ValueError(f"figure {spec.name!r}: no ant colony planner selected")
@@ -453,7 +466,7 @@ def _trajectories(run, spec):
     mi, pi = _selected(run, spec, "navigate")
     if not pi:
         raise ValueError(f"figure {spec.name!r}: no navigate planner selected")
-    sc, seed, r = _scenario_seed(run, spec)
+    sc, seed, r = _scenario_seed(run, spec, mi)
     fig, axes = _panels(len(mi) * len(pi), w=6.0, h=4.8)
     k = 0
     for m in mi:
@@ -491,7 +504,7 @@ def _controls(run, spec):
     mi, pi = _selected(run, spec, "navigate")
     if not pi:
         raise ValueError(f"figure {spec.name!r}: no navigate planner selected")
-    sc, seed, r = _scenario_seed(run, spec)
+    sc, seed, r = _scenario_seed(run, spec, mi)
     fig, axes = plt.subplots(2, len(mi), figsize=(7 * len(mi), 5.5), constrained_layout=True, squeeze=False,
                              sharex="col")
     for c, m in enumerate(mi):
@@ -519,7 +532,7 @@ def _fan(run, spec):
     mi, pi = _selected(run, spec, "navigate")
     if not pi:
         raise ValueError(f"figure {spec.name!r}: no navigate planner selected")
-    sc, seed, r = _scenario_seed(run, spec)
+    sc, seed, r = _scenario_seed(run, spec, mi)
     panels = [(m, p) for m in mi for p in pi]
     fig, axes = _panels(len(panels), w=6.0, h=4.8)
     for ax, (m, p) in zip(axes[0], panels):
@@ -642,6 +655,26 @@ def write_index(out: Path, run_name: str, title: str, drawn: Sequence[Drawn], pr
     return d / "index.md"
 
 
+def _draw_one(run: RunData, spec: FigureSpec, d: Path) -> Drawn:
+    """Draws and saves one figure into ``d``."""
+    before = set(plt.get_fignums())
+    try:
+        fig, caption = DRAW[spec.kind](run, spec)
+    except Exception:
+        for num in set(plt.get_fignums()) - before:  # a half-drawn figure would stay open for the whole batch
+            plt.close(num)
+        raise
+    try:
+        fmts = [spec.params["format"]] if spec.params.get("format") else ["png", "svg"]
+        files = []
+        for ext in fmts:
+            plots.save_figure(fig, str(d / f"{spec.name}.{ext}"))
+            files.append(f"{spec.name}.{ext}")
+    finally:
+        plt.close(fig)
+    return Drawn(spec.name, spec.kind, tuple(files), caption)
+
+
 def draw_figures(run_dir: str | os.PathLike, out: str | os.PathLike = "figures", *,
                  data_dir: str | os.PathLike | None = None, strict: bool = False) -> tuple[list[Drawn], list[str]]:
     """Draws every ``[[figures]]`` entry of a run folder's config.
@@ -650,7 +683,7 @@ def draw_figures(run_dir: str | os.PathLike, out: str | os.PathLike = "figures",
       run_dir: a folder written by `run_experiment`.
       out: figure root; files go to ``out/RUN/`` (RUN = the run folder's name).
       data_dir: where the config's relative map paths resolve (as for `run_experiment`).
-      strict: raise on the first figure that cannot be drawn (default: list it and go on).
+      strict: raise on the first figure that cannot be drawn (default: list it, whatever the error, and go on).
 
     Returns:
       (the figures written, the problems of those not drawn — one line each).
@@ -665,18 +698,11 @@ def draw_figures(run_dir: str | os.PathLike, out: str | os.PathLike = "figures",
     drawn, problems = [], []
     for spec in run.config.figures:
         try:
-            fig, caption = DRAW[spec.kind](run, spec)
-        except (ValueError, KeyError, FileNotFoundError) as e:
+            drawn.append(_draw_one(run, spec, d))
+        except Exception as e:  # noqa: BLE001 - one figure's failure (even a bug) must not cost the others
             if strict:
                 raise
-            problems.append(f"{spec.name} ({spec.kind}): {e}")
-            continue
-        fmts = [spec.params["format"]] if spec.params.get("format") else ["png", "svg"]
-        files = []
-        for ext in fmts:
-            plots.save_figure(fig, str(d / f"{spec.name}.{ext}"))
-            files.append(f"{spec.name}.{ext}")
-        plt.close(fig)
-        drawn.append(Drawn(spec.name, spec.kind, tuple(files), caption))
+            known = isinstance(e, (ValueError, KeyError, FileNotFoundError))
+            problems.append(f"{spec.name} ({spec.kind}): {e if known else f'{type(e).__name__}: {e}'}")
     write_index(Path(out), run_name, run.config.description or run.config.name, drawn, problems)
     return drawn, problems

@@ -51,21 +51,35 @@ def reproduce(configs: Sequence[str | os.PathLike], out: str | os.PathLike = "ru
     """Runs each config (resuming finished chunks) and draws its figures; one failing config does not stop the rest.
 
     Returns:
-      One `Reproduced` per config, in order (``error`` set when the run itself failed).
+      One `Reproduced` per config, in order (``error`` set when the run, or drawing its figures at all,
+      failed; ``problems`` lists single figures not drawn).
     """
-    from jaxplan.experiments.config import ConfigError
     from jaxplan.experiments.figures import draw_figures
-    from jaxplan.experiments.runner import RunFolderError, run_experiment
+    from jaxplan.experiments.runner import run_experiment
 
     done = []
     for cfg in map(Path, configs):
         t0 = time.perf_counter()
         try:
             run_dir = run_experiment(cfg, out, quick=quick, data_dir=data_dir, progress=progress)
-        except (ConfigError, RunFolderError, ValueError, FileNotFoundError) as e:
-            done.append(Reproduced(cfg, None, time.perf_counter() - t0, 0.0, 0, (), str(e)))
+        except Exception as e:  # noqa: BLE001 - reported in the outcome; the next config still runs
+            done.append(Reproduced(cfg, None, time.perf_counter() - t0, 0.0, 0, (), _describe_error(e)))
             continue
         t1 = time.perf_counter()
-        drawn, problems = draw_figures(run_dir, figures, data_dir=data_dir)
+        try:
+            drawn, problems = draw_figures(run_dir, figures, data_dir=data_dir)
+        except Exception as e:  # noqa: BLE001 - as above: the run folder stands, its figures failed
+            done.append(Reproduced(cfg, run_dir, t1 - t0, time.perf_counter() - t1, 0, (),
+                                   f"figures: {_describe_error(e)}"))
+            continue
         done.append(Reproduced(cfg, run_dir, t1 - t0, time.perf_counter() - t1, len(drawn), tuple(problems)))
     return done
+
+
+def _describe_error(e: Exception) -> str:
+    """The message of an expected failure (bad config, data, run folder); the type too for anything else."""
+    from jaxplan.experiments.config import ConfigError
+    from jaxplan.experiments.runner import RunFolderError
+
+    return str(e) if isinstance(e, (ConfigError, RunFolderError, ValueError, FileNotFoundError)) \
+        else f"{type(e).__name__}: {e}"

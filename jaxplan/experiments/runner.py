@@ -424,6 +424,22 @@ def _los_metrics(grid, paths: np.ndarray, n: np.ndarray, ok: np.ndarray, fill: n
             "los_turns": np.where(ok, np.asarray(pm["turns"], np.float64), np.nan)}
 
 
+def grid_path_lengths(paths: np.ndarray, n: np.ndarray, resolution: float) -> np.ndarray:
+    """``f64[B]`` metres of grid paths ``int[B, P, 2]`` (cells) with ``n [B]`` valid points: exactly rounded float64
+    sums (`math.fsum`), so that a length depends on its own cells only, not on the batch or the padding."""
+    seg = np.hypot(*np.moveaxis(np.diff(np.asarray(paths, np.float64), axis=1), -1, 0))  # [B, P - 1]
+    keep = np.arange(seg.shape[1])[None, :] < np.asarray(n)[:, None] - 1
+    return np.array([math.fsum(row[k]) for row, k in zip(seg, keep)], np.float64) * resolution
+
+
+def optimality_gaps(length: np.ndarray, optimal: np.ndarray) -> np.ndarray:
+    """``length / optimal − 1`` in float64; 0 for 0/0 (start = goal), inf for x/0 (as `jaxplan.path_metrics`)."""
+    length, optimal = np.broadcast_arrays(np.asarray(length, np.float64), np.asarray(optimal, np.float64))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        gap = length / optimal - 1.0
+    return np.where(optimal == 0, np.where(length == 0, 0.0, np.inf), gap)
+
+
 def _hausdorff(mw: MapWork, idx: np.ndarray, paths: np.ndarray, n_cells: np.ndarray) -> np.ndarray:
     """``f64[n, R]`` Hausdorff distance (m) of each trial's global path ``[n, R, P, 2]`` (cells, ``n_cells``
     valid points) to the scenario's exact A* path (deterministic; nan where a path is empty)."""
@@ -459,6 +475,12 @@ def _run_plan(mw: MapWork, pc: PlannerConfig, idx: np.ndarray, seeds: tuple[int,
         pm = jp.path_metrics(br.paths[:n].reshape(n * R, P, 2), mw.grid, optimal=np.repeat(mw.optimal[idx], R),
                              n=br.n_cells[:n].reshape(-1))
         raw = {k: np.where(ok, np.asarray(pm[k], np.float64).reshape(n, R), np.nan) for k in _PATH_KEYS}
+        # The device's float32 sums depend on the batch's layout, so a --chunk change moved the last bits of a
+        # stored path's length; DESIGN promises same seed, same result: recompute from the integer cells.
+        length = grid_path_lengths(br.paths[:n].reshape(n * R, P, 2), br.n_cells[:n].reshape(-1),
+                                   float(mw.grid.resolution)).reshape(n, R)
+        raw["length"] = np.where(ok, length, np.nan)
+        raw["optimality_gap"] = np.where(ok, optimality_gaps(length, mw.optimal[idx][:, None]), np.nan)
         out.update({k: v for k, v in raw.items() if k in metrics})
         if "accuracy" in metrics:  # the raw grid path against the exact octile optimum
             out["accuracy"] = accuracy(ok, raw["optimality_gap"])

@@ -141,7 +141,7 @@ def parse_tune_config(text: str, *, data_dir: str | os.PathLike | None = None, s
     planners = tuple(sorted(COLONIES)) if kind == "aco" else ("weighted", "fuzzy")
     planner = r.get(t, "tune", "planner", "str", "iaco" if kind == "aco" else "weighted", choices=planners)
     train_seeds = r.seeds(t, "tune", "train_seeds", (0, 1, 2, 3))
-    test_seeds = r.seeds(t, "tune", "test_seeds", None) or tuple(1000 + i for i in range(len(train_seeds)))
+    test_seeds = r.seeds(t, "tune", "test_seeds", None) or _default_test_seeds(train_seeds)
     if set(train_seeds) & set(test_seeds):
         r.bad("tune.test_seeds", f"must not share seeds with tune.train_seeds: {sorted(set(train_seeds) & set(test_seeds))}")
     metrics = ACO_METRICS if kind == "aco" else DWA_METRICS
@@ -188,9 +188,26 @@ def parse_tune_config(text: str, *, data_dir: str | os.PathLike | None = None, s
         quick=MappingProxyType(quick),
         text=text, path=path,
     )
+    _check_options(r, cfg)
+    if any(quick[k] is not None for k in ("train_seeds", "test_seeds")):
+        shared = _shared_seeds(*_quick_seeds(train_seeds, test_seeds, quick))
+        if shared:
+            r.bad("tune.quick.test_seeds", f"the quick run's test seeds must not share seeds with its train seeds: "
+                                           f"{shared}")
     if r.problems:
         raise ConfigError(r.problems, source)
     return cfg
+
+
+def _check_options(r: _Reader, cfg: TuneConfig) -> None:
+    """``[tune] options`` against the strategy's signature and ranges (else: a raw TypeError, or NaN weights that
+    run to the end)."""
+    from jaxplan.tune._strategies import STRATEGIES, option_problems
+
+    if cfg.strategy not in STRATEGIES:
+        return  # already reported
+    for key, problem in option_problems(cfg.strategy, dict(cfg.options), cfg.population, cfg.generations):
+        r.bad("tune.options" + (f".{key}" if key else ""), problem)
 
 
 def load_tune_config(path: str | os.PathLike, *, data_dir: str | os.PathLike | None = None) -> TuneConfig:
@@ -201,15 +218,40 @@ def load_tune_config(path: str | os.PathLike, *, data_dir: str | os.PathLike | N
     return parse_tune_config(p.read_text(), data_dir=data_dir, source=str(p), path=p.resolve())
 
 
+def _default_test_seeds(train_seeds: tuple[int, ...]) -> tuple[int, ...]:
+    return tuple(1000 + i for i in range(len(train_seeds)))
+
+
+def _quick_seeds(train: tuple[int, ...], test: tuple[int, ...], quick: Mapping[str, Any]
+                 ) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """(train seeds, test seeds) of the quick run: its own where given; new train seeds alone bring default test
+    seeds (1000..), as in the main section."""
+    q_train, q_test = quick.get("train_seeds"), quick.get("test_seeds")
+    train_q = q_train if q_train is not None else train
+    test_q = q_test if q_test is not None else (_default_test_seeds(q_train) if q_train is not None else test)
+    return tuple(train_q), tuple(test_q)
+
+
+def _shared_seeds(train: tuple[int, ...], test: tuple[int, ...]) -> list[int]:
+    return sorted(set(train) & set(test))
+
+
 def apply_tune_quick(cfg: TuneConfig) -> TuneConfig:
-    """The config with its ``[tune.quick]`` settings applied (a smoke run: run folder NAME-quick)."""
+    """The config with its ``[tune.quick]`` settings applied (a smoke run: run folder NAME-quick).
+
+    Raises:
+      ConfigError: the quick run's test seeds meet its train seeds (the test set would not be held out).
+    """
     q = cfg.quick
     ch: dict[str, Any] = {"is_quick": True}
-    for k in ("population", "generations", "train_count", "test_count", "train_seeds", "test_seeds", "max_time"):
+    for k in ("population", "generations", "train_count", "test_count", "max_time"):
         if q.get(k) is not None:
             ch[k] = q[k]
     if q.get("overrides"):
         ch["overrides"] = MappingProxyType({**cfg.overrides, **q["overrides"]})
-    if "train_seeds" in ch and "test_seeds" not in ch:
-        ch["test_seeds"] = tuple(1000 + i for i in range(len(ch["train_seeds"])))
+    ch["train_seeds"], ch["test_seeds"] = _quick_seeds(cfg.train_seeds, cfg.test_seeds, q)
+    shared = _shared_seeds(ch["train_seeds"], ch["test_seeds"])
+    if shared:  # parse_tune_config reports this too; a config built in code reaches here unchecked
+        raise ConfigError([f"tune.quick.test_seeds: the quick run's test seeds must not share seeds with its train "
+                           f"seeds: {shared}"], cfg.name)
     return dataclasses.replace(cfg, **ch)

@@ -36,7 +36,7 @@ import numpy as np
 import optax
 
 from jaxplan.tune._bounds import Bounds, reflect
-from jaxplan.tune._strategies import Strategy, _box, _track_best, sanitize
+from jaxplan.tune._strategies import Strategy, _box, _track_best, require_positive, sanitize
 
 __all__ = ["score_function_grad", "reinforce", "surrogate", "relaxed_dwa_loss", "relaxed_dwa", "RelaxedResult",
            "quadratic_features"]
@@ -82,6 +82,7 @@ def reinforce(population_size: int, sigma: float = 0.1, learning_rate: float = 0
     and applies ``optax.adam(learning_rate)`` with μ clipped to the cube. Fitness is
     standardised (divided by its std) before the estimate: the step then does not depend on
     the cost's units (a positive rescaling of f leaves the gradient's direction unbiased)."""
+    require_positive("reinforce", sigma=sigma, learning_rate=learning_rate)
     opt = optax.adam(learning_rate)
 
     def init(key, bounds: Bounds, x0=None):
@@ -139,6 +140,8 @@ def surrogate(population_size: int, generations: int, ridge: float = 1e-3, steps
     """Quadratic-surrogate search (see the module docstring): ``steps`` Adam steps on the fitted
     model from the best ``P/2`` points seen and ``P/2`` uniform starts, then a ``jitter`` (unit cube)
     Gaussian perturbation so that the proposals stay diverse."""
+    require_positive("surrogate", ridge=ridge, steps=steps, learning_rate=learning_rate)  # ridge 0: singular fits
+    require_positive("surrogate", strict=False, jitter=jitter)
     cap = population_size * generations
     opt = optax.adam(learning_rate)
 

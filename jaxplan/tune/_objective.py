@@ -24,8 +24,9 @@ max(0, 1 − min clearance / 1 m). Episodes are `dwa_episodes`: a fixed-length
 velocity (the seeds draw the discs and the start heading) — a reverse-differentiable
 program (no early exit), which the relaxed-DWA gradient route reuses.
 
-Non-finite costs (a failing configuration) are returned as they are; strategies map them
-to the worst value (`jaxplan.tune.sanitize`) and the workflow counts them.
+Non-finite costs (a failing configuration) are returned as they are, and a weight vector with a
+non-finite entry costs inf whatever its runs gave; strategies map them to the worst value
+(`jaxplan.tune.sanitize`) and the workflow counts them.
 """
 
 from __future__ import annotations
@@ -156,7 +157,10 @@ class Objective:
 
         def fn(pop):
             cost, metrics = run(pop)
-            per_seed = jnp.mean(cost, axis=1)  # [P, R]
+            # A weight vector with a NaN/inf entry is no configuration, yet a planner turns it into failed runs of
+            # finite cost (2.0 for the default ACO weights), which a strategy could rank best: charge it inf.
+            ok = jnp.all(jnp.isfinite(pop), axis=1)
+            per_seed = jnp.where(ok[:, None], jnp.mean(cost, axis=1), jnp.inf)  # [P, R]
             return jnp.mean(per_seed, axis=1), per_seed, {k: jnp.mean(v, axis=(1, 2)) for k, v in metrics.items()}
 
         return fn

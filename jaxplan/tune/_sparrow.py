@@ -44,7 +44,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxplan.tune._bounds import Bounds
-from jaxplan.tune._strategies import Strategy, sanitize, _box, _track_best
+from jaxplan.tune._strategies import Strategy, _box, _track_best, require_positive, sanitize
 
 __all__ = ["SparrowState", "ssa", "issa", "adaptive_weight", "levy"]
 
@@ -156,6 +156,7 @@ def _make(name: str, P: int, T: int, improved: bool, pd=0.2, sd=0.2, st=0.8, lam
             raise ValueError(f"{name}: {k} must lie in (0, 1], got {v!r}")
     if not 0 < lam_min < lam_max:
         raise ValueError(f"{name}: need 0 < lam_min < lam_max, got {lam_min!r}, {lam_max!r}")
+    require_positive(name, levy_scale=levy_scale)
 
     def init(key, bounds, x0=None):
         return _init(key, bounds, x0, P=P)

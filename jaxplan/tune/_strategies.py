@@ -26,8 +26,10 @@ et al. 2011); they are wrapped, not re-implemented.
 
 from __future__ import annotations
 
+import difflib
+import inspect
 import math
-from typing import Any, Callable, NamedTuple
+from typing import Any, Callable, Mapping, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -67,7 +69,8 @@ def sanitize(fitness: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:
 
 def _track_best(best_x, best_f, pop, fitness):
     i = jnp.argmin(fitness)
-    better = fitness[i] < best_f
+    # a point with a NaN coordinate is never the best, even when sanitize gave every member the same worst value
+    better = (fitness[i] < best_f) & jnp.all(jnp.isfinite(pop[i]))
     return jnp.where(better, pop[i], best_x), jnp.where(better, fitness[i], best_f)
 
 
@@ -152,16 +155,26 @@ class ESState(NamedTuple):
     key: jax.Array
 
 
-def _evosax(name: str, cls_name: str, population_size: int, sigma: float, **kwargs) -> Strategy:
-    import evosax.algorithms as ea
+def require_positive(who: str, *, strict: bool = True, **values: float) -> None:
+    """ValueError naming the first of ``values`` that is not a finite number > 0 (>= 0 unless ``strict``)."""
+    for k, v in values.items():
+        bad = isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0 or (
+            strict and v == 0)
+        if bad:
+            raise ValueError(f"{who}: option {k!r} must be a finite number {'>' if strict else '>='} 0, got {v!r}")
 
-    cls = getattr(ea, cls_name)
+
+def _evosax(name: str, cls_name: str, population_size: int, sigma: float, **kwargs) -> Strategy:
+    require_positive(name, sigma=sigma)  # a NaN or negative step would run to the end on NaN points
     cache: dict[int, Any] = {}
 
     def es_of(D: int):
-        # The evosax object is static configuration (population size, a template solution).
+        # The evosax object is static configuration (population size, a template solution); evosax is imported
+        # here, not above, so that building a strategy to check a config's options costs no import.
         if D not in cache:
-            es = cls(population_size=population_size, solution=jnp.zeros(D), **kwargs)
+            import evosax.algorithms as ea
+
+            es = getattr(ea, cls_name)(population_size=population_size, solution=jnp.zeros(D), **kwargs)
             cache[D] = (es, es.default_params.replace(std_init=sigma))
         return cache[D]
 
@@ -206,6 +219,47 @@ def _sparrows():
 
 
 STRATEGIES = ("grid", "random", "cma_es", "snes", "ssa", "issa", "reinforce", "surrogate")
+
+
+def strategy_options(name: str) -> dict[str, Any]:
+    """The options (keyword arguments besides the population and generations) that strategy ``name`` takes,
+    with their defaults."""
+    from jaxplan.tune import _gradients
+
+    fn = {"cma_es": cma_es, "snes": snes, "ssa": _sparrows()._make, "issa": _sparrows()._make,
+          "reinforce": _gradients.reinforce, "surrogate": _gradients.surrogate}.get(name)
+    if fn is None:  # grid and random search have none
+        return {}
+    sizes = {"name", "population_size", "generations", "P", "T", "improved"}
+    return {k: p.default for k, p in inspect.signature(fn).parameters.items()
+            if k not in sizes and p.default is not inspect.Parameter.empty}
+
+
+def option_problems(name: str, options: Mapping[str, Any], population_size: int = 2,
+                    generations: int = 1) -> list[tuple[str | None, str]]:
+    """``(option or None, problem)`` for every option of ``options`` that strategy ``name`` would refuse or
+    misuse: unknown names, values that are not finite real numbers (integers where the default is one), and
+    the strategy's own range checks (e.g. sigma > 0). Empty when ``make_strategy`` accepts them."""
+    accepted = strategy_options(name)
+    problems: list[tuple[str | None, str]] = []
+    for k, v in options.items():
+        if k not in accepted:
+            near = difflib.get_close_matches(k, list(accepted), n=1)
+            takes = f"it takes {', '.join(sorted(accepted))}" if accepted else "it takes none"
+            problems.append((k, f"strategy {name!r} has no option {k!r} ({takes})"
+                                + (f"; did you mean {near[0]!r}?" if near else "")))
+        elif isinstance(v, bool) or not isinstance(v, (int, float)):
+            problems.append((k, f"expected a number, got {v!r}"))
+        elif not math.isfinite(v):
+            problems.append((k, f"must be a finite number, got {v!r}"))
+        elif isinstance(accepted[k], int) and not isinstance(v, int):
+            problems.append((k, f"expected an integer, got {v!r}"))
+    if not problems:  # the ranges live with each strategy: build it once to apply them
+        try:
+            make_strategy(name, population_size, generations, **options)
+        except ValueError as e:
+            problems.append((None, str(e)))
+    return problems
 
 
 def make_strategy(name: str, population_size: int, generations: int, **options) -> Strategy:

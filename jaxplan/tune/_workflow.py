@@ -16,7 +16,8 @@ Run folder ``OUT/NAME`` (``OUT/NAME-quick`` for quick runs)::
     checkpoints/manifest.json the commit log: fingerprint, last checkpointed generation, the rows so far
     checkpoints/gen_NNNNN/    the strategy state after generation NNNNN (orbax), every k generations
     summary.json              defaults vs best weights on the train and held-out test sets, the
-                              seed-to-seed spread (sd over seeds of the per-seed mean cost), NaN count
+                              seed-to-seed spread (sd over seeds of the per-seed mean cost; null with
+                              one seed), NaN count; strict JSON (a NaN or inf number is written null)
     best.toml                 the best weights as a [[planners]] entry for `jaxplan run`
     convergence.png           best-so-far and generation mean against evaluations
 
@@ -307,14 +308,16 @@ def build_objective(cfg) -> Objective:
 
 
 def compare(objective: Objective, x, split: str, population: int = 2) -> dict:
-    """Defaults vs ``x`` on a split, in one compiled call: mean cost, seed-to-seed sd, metric means.
+    """Defaults vs ``x`` on a split, in one compiled call: mean cost, seed-to-seed sd (nan with one seed), metric
+    means.
 
     The two rows are padded to ``population`` rows (copies of ``x``), so that on the training
     split the tuning loop's compiled program is reused instead of compiling a new one."""
     rows = [objective.defaults, np.asarray(x, np.float32)]
     rows += [rows[1]] * max(0, population - 2)
     ev = objective.evaluate(np.stack(rows), split)
-    sd = ev.per_seed.std(axis=1, ddof=1) if ev.per_seed.shape[1] > 1 else np.zeros(len(rows))
+    # one seed has no spread: nan (shown as "–", as in the experiment tables), not a reassuring 0
+    sd = ev.per_seed.std(axis=1, ddof=1) if ev.per_seed.shape[1] > 1 else np.full(len(rows), np.nan)
     out = {}
     for i, k in enumerate(("defaults", "tuned")):
         out[k] = {"objective": float(ev.fitness[i]), "seed_sd": float(sd[i]),
@@ -322,6 +325,22 @@ def compare(objective: Objective, x, split: str, population: int = 2) -> dict:
                   "metrics": {m: float(v[i]) for m, v in ev.metrics.items()}}
     out["improvement"] = out["defaults"]["objective"] - out["tuned"]["objective"]
     return out
+
+
+def _sd_text(sd: float) -> str:
+    """A seed-to-seed sd for a comment: ``–`` when there is none (fewer than two seeds)."""
+    return f"{sd:.3g}" if math.isfinite(sd) else "–"
+
+
+def _json_safe(v: Any) -> Any:
+    """``v`` with every NaN or infinite float as None: JSON has no NaN (``json.dumps`` would write invalid JSON)."""
+    if isinstance(v, float):
+        return v if math.isfinite(v) else None
+    if isinstance(v, dict):
+        return {k: _json_safe(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_json_safe(x) for x in v]
+    return v
 
 
 def run_tuning(config_path, out="runs", quick: bool = False, data_dir=None, progress: bool = True,
@@ -364,11 +383,12 @@ def run_tuning(config_path, out="runs", quick: bool = False, data_dir=None, prog
         "train": compare(objective, best, "train", cfg.population), "test": compare(objective, best, "test"),
         "weights": dict(cfg.weights), "wall_s_this_session": wall,
     }
-    _atomic_write(run_dir / "summary.json", json.dumps(summary, indent=1).encode())
+    _atomic_write(run_dir / "summary.json", json.dumps(_json_safe(summary), indent=1, allow_nan=False).encode())
     te = summary["test"]
     comment = (f"best weights of tuning run {cfg.name} ({cfg.strategy}, {res['evaluations']} evaluations)\n"
-               f"held-out test objective: tuned {te['tuned']['objective']:.6g} ± {te['tuned']['seed_sd']:.3g}, "
-               f"paper defaults {te['defaults']['objective']:.6g} ± {te['defaults']['seed_sd']:.3g} (sd over seeds)")
+               f"held-out test objective: tuned {te['tuned']['objective']:.6g} ± {_sd_text(te['tuned']['seed_sd'])}, "
+               f"paper defaults {te['defaults']['objective']:.6g} ± {_sd_text(te['defaults']['seed_sd'])} "
+               f"(sd over {len(cfg.test_seeds)} seed{'s' if len(cfg.test_seeds) != 1 else ''})")
     frag = fragment_toml(objective, best, label=f"{cfg.planner}-tuned", overrides=dict(cfg.overrides),
                          pipeline=cfg.pipeline, comment=comment)
     _atomic_write(run_dir / "best.toml", frag.encode())
