@@ -219,3 +219,37 @@ def test_seed_keys_equal_jax_random_key():
     np.testing.assert_array_equal(jax.random.key_data(_seed_keys(seeds)), jax.random.key_data(expected))
     with pytest.raises(ValueError, match="below 2\\*\\*32"):
         _seed_keys([2**32])
+
+
+def test_praco_with_one_colony_exchanges_with_no_one():
+    # One colony has no ring neighbour: its exchange deposits must not come back to itself.
+    from jaxplan.grid._neighbours import offsets
+
+    free = np.ones((6, 7), bool)
+    free[2:4, 2:5] = False
+    grid = jp.grid_from_array(free)
+    for backend in ("jax", "numba"):
+        r = jp.plan(grid, (0, 0), (6, 5), planner="praco", seed=0, colonies=1, ants=1, iterations=1,
+                    keep_pheromone=True, update_backend=backend)
+        index = {tuple(o): k for k, o in enumerate(offsets(8))}
+        edges = [(int(y0 * 7 + x0), index[(x1 - x0, y1 - y0)]) for (x0, y0), (x1, y1) in zip(r.path[:-1], r.path[1:])]
+        tau = r.info["tau"][0]
+        # rho_res 0.7 of the initial 1.0, plus the own colony's (w − 1 = 5) and best-so-far (w = 6) deposits, 1/Z each.
+        np.testing.assert_allclose([tau[c, k] for c, k in edges], 0.7 + 11.0 / r.cost, rtol=1e-5)
+
+
+def test_opt_ant_initial_pheromone_stays_bounded_below_the_datum():
+    # Seed 002's −σ·H/H_max term: terrain below zero must not divide by a floored maximum.
+    from jaxplan.aco import _rules as R
+    from jaxplan.aco._context import map_tables
+
+    params = {"c_init": jnp.float32(20.0), "sigma": jnp.float32(0.125)}
+    h = np.linspace(-101.0, -100.0, 36, dtype=np.float32).reshape(6, 6)
+    tau0 = np.asarray(R.init_opt_ant(map_tables(jp.grid_from_array(np.ones((6, 6), bool), height=h), 16), params))
+    assert np.all(tau0 <= 20.0 + 1.0 + 0.125 + 1e-5) and np.all(tau0 >= 20.0 - 0.125 - 1e-5)
+    # Heights >= 0 keep the published form: the highest cell loses exactly σ.
+    h = np.linspace(0.0, 1.0, 36, dtype=np.float32).reshape(6, 6)
+    t = map_tables(jp.grid_from_array(np.ones((6, 6), bool), height=h), 16)
+    inner = 20.0 + 1.0 / (1.0 + np.asarray(t.n_blocked)) - 0.125 * np.asarray(t.height)
+    expect = np.where(np.asarray(t.boundary), 20.0, inner)
+    np.testing.assert_allclose(np.asarray(R.init_opt_ant(t, params)), expect, rtol=1e-6)

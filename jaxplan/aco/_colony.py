@@ -230,7 +230,7 @@ def _choose(colony: Colony, cfg: RunConfig, tables: MapTables, params: dict, sta
     bs_cost = jnp.where(better, it_cost, state.bs_cost)
     bs_length = jnp.where(better, length[jnp.arange(S), it_best], state.bs_length)
     bs_turns = jnp.where(better, stats.turns.reshape(S, m)[jnp.arange(S), it_best], state.bs_turns)
-    dep = R.combine(colony.deposits, cost, bs_cost, params)
+    dep = R.without_exchange(R.combine(colony.deposits, cost, bs_cost, params), S)
     alert = state.alert
     if ants.marks is not None:
         alert = alert | ants.marks

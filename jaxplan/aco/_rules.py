@@ -102,9 +102,11 @@ def init_opt_ant(tables: MapTables, params: dict) -> jnp.ndarray:
     """Seed 002, Eq. 2: C on boundary cells, else C + 1/(1 + n_blocked) − σ·H/H_max.
 
     The paper prints "+ σ·H/H_max" but says a larger σ makes high cells less likely;
-    DESIGN §4 follows the text. Floored at TAU_FLOOR.
+    DESIGN §4 follows the text. H_max is the largest |H|, so that terrain below the datum
+    (negative heights) keeps the term in [−σ, σ] instead of dividing by a floored maximum
+    (the same for heights >= 0). Floored at TAU_FLOOR.
     """
-    h_max = jnp.maximum(jnp.max(tables.height), 1e-6)
+    h_max = jnp.maximum(jnp.max(jnp.abs(tables.height)), 1e-6)
     inner = params["c_init"] + 1.0 / (1.0 + tables.n_blocked) - params["sigma"] * tables.height / h_max
     return jnp.maximum(jnp.where(tables.boundary, params["c_init"], inner), TAU_FLOOR)
 
@@ -191,6 +193,12 @@ def deposit_neighbour(costs, bs_cost, params) -> Deposit:
     q = _ranks(costs) + 1.0
     nbr = jnp.where(q <= n - 1, (n - q) * _inv(costs), 0.0)
     return Deposit(nbr=nbr, bs_nbr=n * _inv(bs_cost))
+
+
+def without_exchange(dep: Deposit, colonies: int) -> Deposit:
+    """``dep`` without the ring exchange when there is one colony (static): it has no neighbour, and
+    the ring ``(s + 1) % S`` would hand its exchange deposits back to itself."""
+    return dep._replace(nbr=None, bs_nbr=None) if colonies == 1 else dep
 
 
 def combine(deposits: tuple, costs, bs_cost, params) -> Deposit:

@@ -254,7 +254,7 @@ def run_tsp(cfg: TSPConfig, dist: jnp.ndarray, params: dict, key: jax.Array) -> 
         bs_tour = jnp.where(better[:, None], tours[jnp.arange(S) * m + best], bs_tour)
         bs_len = jnp.where(better, it_len, bs_len)
         # Eq. 10 (or Q/L): amounts for own ants, ants passed on, and best-so-far tours.
-        dep = R.combine(deposits, lengths, bs_len, params)
+        dep = R.without_exchange(R.combine(deposits, lengths, bs_len, params), S)
         parts = [(tours, colony_of, dep.own), (tours, nxt[colony_of], dep.nbr),
                  (bs_tour, jnp.arange(S), dep.bs_own), (bs_tour, nxt, dep.bs_nbr)]
         parts = [(t, c, a.ravel()) for t, c, a in parts if a is not None]
