@@ -253,3 +253,32 @@ def test_opt_ant_initial_pheromone_stays_bounded_below_the_datum():
     inner = 20.0 + 1.0 / (1.0 + np.asarray(t.n_blocked)) - 0.125 * np.asarray(t.height)
     expect = np.where(np.asarray(t.boundary), 20.0, inner)
     np.testing.assert_allclose(np.asarray(R.init_opt_ant(t, params)), expect, rtol=1e-6)
+
+
+def test_an_empty_batch_is_an_empty_result():
+    # A host past the end of a multi-host sweep's scenarios gets none (jaxplan.scale.host_share).
+    grid = jp.grid_from_array(np.ones((6, 6), bool))
+    b = jp.plan_batch(grid, np.zeros((0, 2), int), np.zeros((0, 2), int), planner="aco", seeds=[0, 1],
+                      iterations=3, mesh=None)
+    assert b.paths.shape[:2] == (0, 2) and b.success.shape == (0, 2) and b.history.shape == (0, 2, 3)
+
+
+@pytest.mark.parametrize("overrides, match", [
+    (dict(planner="iaco", lambdas=(0.0, 0.0, 0.0)), "lambdas must have a weight > 0"),
+    (dict(planner="aco", max_steps=True), "max_steps"),
+    (dict(planner="praco", w_rank=0.5), "w_rank"),
+    (dict(planner="praco", n_exchange=0), "n_exchange"),
+])
+def test_counts_and_weights_that_make_no_sense_are_refused(overrides, match):
+    grid = jp.grid_from_array(np.ones((6, 6), bool))
+    with pytest.raises(ValueError, match=match):
+        jp.plan(grid, (0, 0), (5, 5), **overrides)
+
+
+@pytest.mark.parametrize("dead_end", ["die", "alert", "retreat"])
+def test_praco_takes_every_dead_end_rule(dead_end):
+    # DESIGN §4: every ACO planner takes the three rules; the dead-corner penalty needs retreats only.
+    free = np.ones((6, 7), bool)
+    free[2:4, 2:5] = False
+    r = jp.plan(jp.grid_from_array(free), (0, 0), (6, 5), planner="praco", dead_end=dead_end, ants=4, iterations=3)
+    assert r.success

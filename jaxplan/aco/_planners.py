@@ -118,7 +118,8 @@ def _validate(name: str):
         for k in ("ants", "iterations", "colonies"):
             if k in p and (not isinstance(p[k], (int, np.integer)) or isinstance(p[k], bool) or p[k] < 1):
                 raise ValueError(f"planner {name!r}: {k} must be a positive integer, got {p[k]!r}")
-        if p["max_steps"] is not None and (not isinstance(p["max_steps"], (int, np.integer)) or p["max_steps"] < 1):
+        if p["max_steps"] is not None and (not isinstance(p["max_steps"], (int, np.integer))
+                                           or isinstance(p["max_steps"], bool) or p["max_steps"] < 1):
             raise ValueError(f"planner {name!r}: max_steps must be a positive integer or None, got {p['max_steps']!r}")
         if p["connectivity"] not in (4, 8, 16):
             raise ValueError(f"planner {name!r}: connectivity must be one of (4, 8, 16), got {p['connectivity']!r}")
@@ -144,6 +145,12 @@ def _validate(name: str):
                 raise ValueError(f"planner {name!r}: parameter {k!r} must be >= 0, got {v!r}")
             if k in _UNIT and np.any(arr > 1):
                 raise ValueError(f"planner {name!r}: parameter {k!r} must lie in [0, 1], got {v!r}")
+        if "lambdas" in p and not np.sum(p["lambdas"]) > 0:
+            raise ValueError(f"planner {name!r}: lambdas must have a weight > 0 (all zero, every path costs 0), "
+                             f"got {p['lambdas']!r}")
+        for k in ("w_rank", "n_exchange"):  # counts of ranked ants (seed 004, Eq. 10)
+            if k in p and not (float(p[k]).is_integer() and p[k] >= 1):
+                raise ValueError(f"planner {name!r}: parameter {k!r} must be a whole number >= 1, got {p[k]!r}")
         if "tau_min" in p and not (0 < p["tau_min"] <= p["tau_max"]):
             raise ValueError(f"planner {name!r}: need 0 < tau_min <= tau_max, got {p['tau_min']}, {p['tau_max']}")
         for k in ("q", "tau0", "u", "a", "omega1", "f0", "c_init"):
@@ -166,7 +173,8 @@ def split_params(grid: GridMap, p: Mapping[str, Any]) -> tuple[RunConfig, dict, 
         width=W,
         heuristic=p["heuristic"],
         dead_end=p["dead_end"],
-        penalise="lambda_p" in p,
+        # Seed 004's dead-corner penalty falls on the edges an ant retreats over: none without retreat.
+        penalise="lambda_p" in p and p["dead_end"] == "retreat",
         keep_pheromone=bool(p.get("keep_pheromone", False)),
         walk_backend=p.get("walk_backend", "auto"),
         update_backend=p.get("update_backend", "auto"),
@@ -336,6 +344,15 @@ def _to_batch(name: str, out, time_s: float, compile_s: float, width: int) -> Ba
     )
 
 
+def _empty_batch(name: str, R: int, iterations: int) -> BatchResult:
+    """The `BatchResult` of zero scenarios: every array ``[0, R, …]``, nothing compiled."""
+    z = lambda *shape, dtype=np.float64: np.zeros((0, R) + shape, dtype)  # noqa: E731
+    return BatchResult(paths=z(1, 2, dtype=np.int64), n_cells=z(dtype=np.int64), length=z(), cost=z(),
+                       turns=z(dtype=np.int64), success=z(dtype=bool), converged=z(dtype=np.int64),
+                       history=z(iterations), diversity=z(iterations), successes=z(iterations, dtype=np.int64),
+                       time_s=0.0, compile_s=0.0, planner=name, tau=None)
+
+
 def _plan_one(name: str):
     def fn(grid: GridMap, start, goal, seed, **p) -> PlanResult:
         check_one(grid, start, goal, p["vehicle_height"])
@@ -382,6 +399,10 @@ def plan_batch(
     s, g = np.asarray(starts), np.asarray(goals)
     auto_mesh(mesh, 1)  # a bad mesh argument fails for every planner, before any work
     if planner in COLONIES:
+        if len(s) == 0:  # e.g. a host past the end of a multi-host sweep's scenarios
+            if len(g) != 0:
+                raise ValueError(f"starts and goals differ in shape: {s.shape} vs {g.shape}")
+            return _empty_batch(planner, len(_seed_keys([int(x) for x in seeds])), int(p["iterations"]))
         mesh = auto_mesh(mesh, len(s))
         out, dt, compile_s, width = _run_colony(planner, grid, s, g, seeds, p, mesh=mesh)
         return _to_batch(planner, out, dt, compile_s, width)
