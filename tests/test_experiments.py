@@ -322,12 +322,17 @@ def test_chunk_size_does_not_change_lengths_or_gaps(tmp_path):
         assert [r[col] for r in one] == [r[col] for r in five], col
 
 
-def test_grid_path_lengths_are_exact_float64_sums():
+def test_grid_path_lengths_are_float64_sums_independent_of_the_padding():
     from jaxplan.experiments.runner import grid_path_lengths, optimality_gaps
 
     paths = np.array([[[0, 0], [1, 1], [2, 1], [-1, -1]], [[3, 3], [-1, -1], [-1, -1], [-1, -1]]], np.int32)
     got = grid_path_lengths(paths, np.array([3, 1]), 0.5)
     assert got.dtype == np.float64 and got.tolist() == [(np.sqrt(2.0) + 1.0) * 0.5, 0.0]
+    # A long zig-zag, padded to two different widths (as two chunk sizes pad a batch): the same bits.
+    rng = np.random.default_rng(0)
+    walk = np.cumsum(rng.integers(-1, 2, (1, 301, 2)), axis=1)
+    pad = lambda k: np.concatenate([walk, np.full((1, k, 2), -1)], axis=1)  # noqa: E731
+    assert grid_path_lengths(pad(3), [301], 1.0).tolist() == grid_path_lengths(pad(700), [301], 1.0).tolist()
     assert optimality_gaps(np.array([2.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0])).tolist() == [1.0, 0.0, np.inf]
 
 

@@ -425,11 +425,16 @@ def _los_metrics(grid, paths: np.ndarray, n: np.ndarray, ok: np.ndarray, fill: n
 
 
 def grid_path_lengths(paths: np.ndarray, n: np.ndarray, resolution: float) -> np.ndarray:
-    """``f64[B]`` metres of grid paths ``int[B, P, 2]`` (cells) with ``n [B]`` valid points: exactly rounded float64
-    sums (`math.fsum`), so that a length depends on its own cells only, not on the batch or the padding."""
+    """``f64[B]`` metres of grid paths ``int[B, P, 2]`` (cells) with ``n [B]`` valid points: float64 sums taken
+    left to right (a running sum), so that a length depends on its own cells only, not on the batch or the
+    padding (NumPy's pairwise `sum` groups terms by the padded length)."""
+    n = np.asarray(n)
     seg = np.hypot(*np.moveaxis(np.diff(np.asarray(paths, np.float64), axis=1), -1, 0))  # [B, P - 1]
-    keep = np.arange(seg.shape[1])[None, :] < np.asarray(n)[:, None] - 1
-    return np.array([math.fsum(row[k]) for row, k in zip(seg, keep)], np.float64) * resolution
+    if seg.shape[1] == 0:
+        return np.zeros(len(n))
+    run = np.cumsum(seg, axis=1)
+    last = np.clip(n - 2, 0, seg.shape[1] - 1)
+    return np.where(n >= 2, np.take_along_axis(run, last[:, None], axis=1)[:, 0], 0.0) * resolution
 
 
 def optimality_gaps(length: np.ndarray, optimal: np.ndarray) -> np.ndarray:
