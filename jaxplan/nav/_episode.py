@@ -394,6 +394,11 @@ _SPAN = 3
 """Cells around a blocking disc's cell that re-planning examines (reach up to 3.5 cells)."""
 
 
+def _centres_at(obs: MovingObstacles, times: jnp.ndarray) -> jnp.ndarray:
+    """``[K, B, M, 2]`` centres of every episode's obstacles along their routes at ``times [K]`` (s)."""
+    return jax.vmap(lambda tk: jax.vmap(obstacle_state, in_axes=(0, None))(obs, tk)[0])(times)
+
+
 def _oracle_track(obs: MovingObstacles, t: jnp.ndarray, steps: int, dt: float, pos_all: jnp.ndarray,
                   vel_all: jnp.ndarray) -> jnp.ndarray:
     """``[B, N, D, steps + 1, 2]`` centres at ``t, t + dt, …, t + steps·dt``: the obstacles (the first
@@ -401,7 +406,7 @@ def _oracle_track(obs: MovingObstacles, t: jnp.ndarray, steps: int, dt: float, p
     B, N, D = pos_all.shape[:3]
     M = obs.radii.shape[-1]
     taus = jnp.arange(steps + 1, dtype=jnp.float32) * dt
-    fut = jax.vmap(lambda tau: jax.vmap(obstacle_state, in_axes=(0, None))(obs, t + tau)[0])(taus)  # [K, B, M, 2]
+    fut = _centres_at(obs, t + taus)  # [K, B, M, 2]
     fut = jnp.broadcast_to(jnp.moveaxis(fut, 0, 2)[:, None], (B, N, M, steps + 1, 2))
     linear = pos_all[..., None, :] + vel_all[..., None, :] * taus[:, None]  # [B, N, D, K, 2]
     return jnp.concatenate([fut, linear[:, :, M:]], axis=2) if D > M else fut
@@ -564,8 +569,7 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
     frac = jnp.arange(1, K + 1, dtype=new.dtype) / K  # [K]
     each = lambda a: jnp.broadcast_to(a, (K,) + a.shape)  # noqa: E731
     pose = advance(each(c.state), each(u), frac[:, None, None] * period)  # [K, B, N, 5]; a done robot (u = 0) stays
-    place = jax.vmap(obstacle_state, in_axes=(0, None))
-    ocs = jax.vmap(lambda tk: place(obs, tk)[0])(t + frac * period)  # [K, B, M, 2]
+    ocs = _centres_at(obs, t + frac * period)  # [K, B, M, 2]
     nc, _ = _robot_discs(pose, robot)  # [K, B, N, C, 2]
     clear = static_clearance(table, nc[..., 0], nc[..., 1], "hybrid")  # [K, B, N, C]
     hit_map = jnp.any(clear < rr, axis=(0, 3))
