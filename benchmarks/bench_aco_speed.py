@@ -1,4 +1,4 @@
-"""ACO engine speed: ant-steps per second, step-slot use, compile time, seed-003-sized runs, memory.
+"""ACO engine speed: ant-steps per second, step-slot use, compile time, chen2023-sized runs, memory.
 
 Run:  python benchmarks/bench_aco_speed.py [--iterations 5] [--repeats 5]
 
@@ -13,7 +13,7 @@ native call per iteration, the default on a CPU; both give identical results):
   * compile time of the configuration: XLA's (lower + compile), and the first call's time
     minus the steady-state run time (adds numba's one-off load or compilation);
 then the compile time of every planner's configuration (its defaults, and with 1,024 ants), and
-the time of a seed-003-sized run (20x20 warehouse, risk_aco defaults: 100 ants,
+the time of a chen2023-sized run (20x20 warehouse, risk_aco defaults: 100 ants,
 50 iterations; the paper reports 8.468 s in MATLAB) per backend, and the peak memory of
 iaco with 1,024 ants on brc202d (measured first, in a fresh child process of its own). The
 speed figures are measured three times, each in a child process: with XLA's default threads,
@@ -82,14 +82,14 @@ def measure(iterations: int, repeats: int) -> dict:
         for label, extra in (("defaults", {}), ("1024 ants", dict(ants=1024))):
             _, p = resolve(planner, extra)
             out["compile"][f"{planner}/{label}"] = _run_colony(planner, scene.grid, starts, goals, [0], p)[2]
-    ware = jp.warehouse_seed003(0)
+    ware = jp.warehouse_chen2023(0)
     grid = jp.poisson_risk(ware.grid, 0, lam=1.0)
-    out["seed003_ms"] = {}
+    out["chen2023_ms"] = {}
     for backend in BACKENDS:
         jp.plan(grid, ware.start, ware.goal, planner="risk_aco", seed=0, walk_backend=backend)
         times = [jp.plan(grid, ware.start, ware.goal, planner="risk_aco", seed=s, walk_backend=backend).time_s
                  for s in range(max(repeats, 5))]
-        out["seed003_ms"][backend] = 1e3 * statistics.median(times)
+        out["chen2023_ms"][backend] = 1e3 * statistics.median(times)
     out["devices"] = str(jax.devices())
     return out
 
@@ -175,8 +175,8 @@ def main() -> None:
         print(f"{planner:<10}{setting:<11}" + "".join(f"{results[lab]['compile'][key]:>30.2f}" for lab in labels))
     print()
     for label, r in results.items():
-        ms = r["seed003_ms"]
-        print(f"seed-003-sized run (20x20, risk_aco, 100 ants x 50 iterations), {label}: jax {ms['jax']:.1f} ms, "
+        ms = r["chen2023_ms"]
+        print(f"chen2023-sized run (20x20, risk_aco, 100 ants x 50 iterations), {label}: jax {ms['jax']:.1f} ms, "
               f"numba {ms['numba']:.1f} ms (target <= 30 ms; paper: 8,468 ms in MATLAB)")
     if memory is None:
         print(f"walk memory: skipped ({BRC202D} not found)")

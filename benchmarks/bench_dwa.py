@@ -5,7 +5,7 @@ Run:  python benchmarks/bench_dwa.py [--repeat 9] [--robots 1,64,1024]
 Scene: a 48 m x 32 m warehouse (`jp.WarehouseGenerator`, 0.5 m per cell, 1.5 m aisles).
 Robots stand on random free cells (clearance >= 0.5 m) with random headings, speeds in
 [0, 1.2] m/s and yaw rates in [-2, 2] rad/s, each with a sub-goal a few metres away.
-One control step = the default configuration of seed 000: 20 x 40 velocity samples,
+One control step = the default configuration of cui2025: 20 x 40 velocity samples,
 each rolled out for 20 steps of 0.1 s (16,000 trajectory points per robot), weighted
 evaluator, argmax; every point's clearance is looked up (``hybrid``: exact below 1.5
 cells; a second row uses the plain ``bilinear`` interpolation).

@@ -1,11 +1,11 @@
-"""Two-level navigation: success, collisions and costs of the seeds' pipelines, multi-robot, speed.
+"""Two-level navigation: success, collisions and costs of the papers' pipelines, multi-robot, speed.
 
 Run:  python benchmarks/bench_nav.py [--data-dir ../shared/benchmarks] [--rows 50] [--seeds 5]
                                      [--sections maps,pipelines,multi,speed] [--quick]
 
-Robot: seed 000's (unicycle, 1.2 m/s, 2 rad/s, 0.5 m/s², radius 0.25 m, d_safe 0.3 m, control
+Robot: cui2025's (unicycle, 1.2 m/s, 2 rad/s, 0.5 m/s², radius 0.25 m, d_safe 0.3 m, control
 period 0.2 s, DWA 20 x 40 samples over 2 s) on the MovingAI maps at 1.0 m per cell: at
-seed 000's 0.5 m per cell their one-cell aisles and doors would be 0.5 m wide, which leaves
+cui2025's 0.5 m per cell their one-cell aisles and doors would be 0.5 m wide, which leaves
 0.25 m on each side of the robot's centre — below its own 0.3 m safety distance.
 
 Scenarios: rows of each map's scenario file with optimal length <= 80 cells, ``--rows`` of
@@ -23,7 +23,7 @@ Sections:
              bound for any walker predictor, not something a robot can have).
   pipelines  every pipeline and ablation (`jaxplan.nav.pipelines()`) on the warehouse map
              (``--pipeline-maps`` for others), static and moving.
-  multi      seed 001's Table 3 set-up: teams of 5 robots on the warehouse map with 5
+  multi      li2026's Table 3 set-up: teams of 5 robots on the warehouse map with 5
              random walkers at 1.0 and 1.5 m/s; contacts are counted, not stopped at.
   speed      1,000 static `iaco_dwa` episodes on the warehouse map in one batched call
              (global planning included), and one episode's control steps against real
@@ -157,7 +157,7 @@ def section_multi(d: Path, args) -> None:
     import jaxplan as jp
     from jaxplan.nav import NavConfig
 
-    print(f"\n== multi-robot (seed 001 Table 3): teams of 5 robots on {WAREHOUSE}, 5 random walkers ==")
+    print(f"\n== multi-robot (li2026 Table 3): teams of 5 robots on {WAREHOUSE}, 5 random walkers ==")
     grid, scen = load(d, WAREHOUSE)
     sel = rows(scen, 10_000)
     rng = np.random.default_rng(0)

@@ -1,4 +1,4 @@
-"""Sampling planners beside exact ones: RRT*, MRBS-RRT* (seed 001), KNG-A* (seed 001) and A*.
+"""Sampling planners beside exact ones: RRT*, MRBS-RRT* (li2026), KNG-A* (li2026) and A*.
 
 Run:  python benchmarks/bench_sampling.py [--data-dir ../shared/benchmarks] [--rows 20] [--seeds 1]
 

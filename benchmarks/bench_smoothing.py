@@ -10,7 +10,7 @@ per map and smoother, relative to the raw path (sums over the rows):
     and sharp-turn cut (%, >= 45°);
   * corners/vertices changed and fallbacks (places kept unsmoothed to stay clear);
   * seconds per path (after compilation) and the compile + first call time.
-Seed 004 reports 5.9 % / 7.2 % length and 15–39 % turns for its line-of-sight pruning.
+yu2020 reports 5.9 % / 7.2 % length and 15–39 % turns for its line-of-sight pruning.
 Turn counts of sampled curves (fillet, Bezier, B-spline) count every sample, so for them
 read the sharp-turn column.
 """

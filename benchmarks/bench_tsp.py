@@ -3,7 +3,7 @@
 Run:  python benchmarks/bench_tsp.py [--seeds 10] [--data-dir ../shared/benchmarks]
 
 Quality: for eil51 and berlin52 (optima 426 and 7542 from the MANIFEST), runs ``praco``
-(seed 004's defaults: 5 colonies x 35 ants, 200 iterations) and ``aco`` (Ant System: 50 ants,
+(yu2020's defaults: 5 colonies x 35 ants, 200 iterations) and ``aco`` (Ant System: 50 ants,
 200 iterations), without local search, with ``--seeds`` seeds each, and prints mean / min /
 max tour length, the mean gap to the optimum (target for praco: <= 5 %), median run time and
 compile time.

@@ -2,10 +2,10 @@
 
 Run:  python benchmarks/bench_tune.py [--quick] [--parts aco,dwa,call] [--out runs/bench_tune]
 
-(i)  IACO (seed 000) on a random 24 x 24 map (20 % obstacles, 1 m cells): α, β and the fitness
+(i)  IACO (cui2025) on a random 24 x 24 map (20 % obstacles, 1 m cells): α, β and the fitness
      weights λ1..λ3; cost = optimality gap of the best path + 1 per failed run; 16 ants x 8
      iterations. 32 training scenarios x 4 seeds; held-out test: 16 other scenarios x 4 other seeds.
-(ii) Weighted DWA (seed 000 Eq. 7) on a 12 m x 12 m hall with pillars (0.5 m cells), two moving
+(ii) Weighted DWA (cui2025 Eq. 7) on a 12 m x 12 m hall with pillars (0.5 m cells), two moving
      discs per episode drawn from the seed, the goal as the sub-goal: heading, velocity and
      clearance weights; cost = time to goal / 20 s + 1 per failed episode (collision or not there).
      16 training scenarios x 4 seeds; test 16 others x 4 other seeds.

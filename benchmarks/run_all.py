@@ -4,7 +4,7 @@ Run:  python benchmarks/run_all.py [--quick] [--json PATH] [--data-dir ../shared
 
 Each row is ``quantity | jaxplan | reference (what it is) | speed-up | unit``. Every reference
 is measured in the same run, on the same machine, right beside the jaxplan figure (the one
-exception, the seed-003 row's MATLAB time, is labelled as the paper's figure). "speed-up" is
+exception, the chen2023 row's MATLAB time, is labelled as the paper's figure). "speed-up" is
 how many times faster jaxplan is than the reference (reference time / jaxplan time, or
 jaxplan rate / reference rate): above 1 jaxplan is faster. Every timing excludes compilation
 and warm-up (first calls are made before timing and reported separately as compile rows)
@@ -20,8 +20,8 @@ Sections and rows (sizes: default / ``--quick``):
            second of run time — with the default numba walk against ``walk_backend="jax"``
            (the plain JAX `lax.while_loop` step loop); the compile time of each
            configuration (XLA lower + compile, and the first call minus the steady run, which
-           adds numba's load/compile). Then a seed-003-sized run: `risk_aco` defaults on
-           ``jp.warehouse_seed003(0)`` with ``jp.poisson_risk`` (20x20, 100 ants x 50
+           adds numba's load/compile). Then a chen2023-sized run: `risk_aco` defaults on
+           ``jp.warehouse_chen2023(0)`` with ``jp.poisson_risk`` (20x20, 100 ants x 50
            iterations), ms per run (`PlanResult.time_s`), beside the paper's 8,468 ms in MATLAB
            (a figure from the paper, not a measurement).
   dwa      one control step (20 x 40 samples x 20 steps = 16,000 trajectory points per robot,
@@ -99,7 +99,7 @@ sys.path.insert(0, str(HERE))
 
 from _timing import Steal, cpu_info, machine_line, median_time  # noqa: E402
 
-PAPER_SEED003_MS = 8468.0
+PAPER_CHEN2023_MS = 8468.0
 SECTIONS = ("aco", "dwa", "exact", "metrics", "episodes", "tune", "tsp", "scale")
 
 
@@ -236,13 +236,13 @@ def section_aco(args) -> list[Row]:
         rows.append(compile_row("aco", f"compile, iaco {ants} ants, {b} walk: XLA", res[b]["xla_compile_s"]))
         rows.append(compile_row("aco", f"compile, iaco {ants} ants, {b} walk: first call - run",
                                 res[b]["first_minus_run_s"]))
-    ware = jp.warehouse_seed003(0)
+    ware = jp.warehouse_chen2023(0)
     grid = jp.poisson_risk(ware.grid, 0, lam=1.0)
     jp.plan(grid, ware.start, ware.goal, planner="risk_aco", seed=0)
     m = max(n, 5)
     ms = 1e3 * statistics.median(jp.plan(grid, ware.start, ware.goal, planner="risk_aco", seed=s + 1).time_s
                                  for s in range(m))
-    rows.append(time_row("aco", "seed-003-sized run: risk_aco 100 ants x 50 it, 20x20", "ms", ms, PAPER_SEED003_MS,
+    rows.append(time_row("aco", "chen2023-sized run: risk_aco 100 ants x 50 it, 20x20", "ms", ms, PAPER_CHEN2023_MS,
                          "paper's figure (MATLAB), not measured", m))
     return rows
 

@@ -38,8 +38,8 @@ from jaxplan.grid._generators import (
     WarehouseGenerator,
     demo_warehouse,
     poisson_risk,
-    warehouse_seed003,
-    warehouse_seed004,
+    warehouse_chen2023,
+    warehouse_yu2020,
 )
 from jaxplan.aco import BatchResult, TourResult, TSPProblem, load_tour, load_tsplib, plan_batch, solve_tsp, tour_length
 from jaxplan.registry import PlannerSpec, plan, planners, register_planner
@@ -57,6 +57,21 @@ from jaxplan.nav import (
 )
 from jaxplan.search import SearchGraph, astar, dijkstra, distance_from, search_graph, shortest_lengths
 
+_DEPRECATED = {"warehouse_seed003": "warehouse_chen2023", "warehouse_seed004": "warehouse_yu2020"}
+"""Names of the previous release (papers by internal number) -> their author-year names; kept for one release."""
+
+
+def __getattr__(name: str):
+    if name in _DEPRECATED:
+        import warnings
+
+        new = _DEPRECATED[name]
+        warnings.warn(f"jaxplan.{name} is deprecated; use jaxplan.{new} (papers are named by first author and year)",
+                      DeprecationWarning, stacklevel=2)
+        return globals()[new]
+    raise AttributeError(f"module 'jaxplan' has no attribute {name!r}")
+
+
 try:
     __version__ = version("jaxplan")
 except PackageNotFoundError:  # pragma: no cover - running from a source tree without install
@@ -67,7 +82,7 @@ __all__ = [
     "Scene", "SearchGraph", "UrbanGenerator", "WarehouseGenerator", "astar", "clearance_field", "demo_warehouse",
     "dijkstra", "distance_from", "goal_distance_field", "grid_from_array", "load_map", "load_scenarios",
     "neighbour_table", "passable", "plan", "planners", "poisson_risk", "register_planner", "save_map",
-    "search_graph", "shortest_lengths", "smooth", "Smoothed", "metrics", "path_metrics", "Ackermann", "Disc", "DiscObstacles", "DWAConfig", "DWAInfo", "DWAParams", "Rectangle", "Unicycle", "dwa_control", "dwa_control_batch", "dwa_step", "EnergyModel", "EpisodeTiming", "warehouse_seed003", "warehouse_seed004",
+    "search_graph", "shortest_lengths", "smooth", "Smoothed", "metrics", "path_metrics", "Ackermann", "Disc", "DiscObstacles", "DWAConfig", "DWAInfo", "DWAParams", "Rectangle", "Unicycle", "dwa_control", "dwa_control_batch", "dwa_step", "EnergyModel", "EpisodeTiming", "warehouse_chen2023", "warehouse_yu2020",
     "Episode", "EpisodeBatch", "MovingObstacles", "NavConfig", "crossing_traffic", "head_on", "moving_obstacles",
     "navigate", "navigate_batch", "navigate_multi", "pipelines", "random_obstacles",
 ]

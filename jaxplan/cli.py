@@ -128,7 +128,7 @@ def cmd_figures(args: argparse.Namespace) -> int:
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
-    """``jaxplan reproduce [--quick]``: every ``configs/seed*.toml`` run (or resumed), then its figures."""
+    """``jaxplan reproduce [--quick]``: every ``configs/<paper>_*.toml`` run (or resumed), then its figures."""
     import time
 
     from jaxplan.experiments.reproduce import reproduce, reproduction_configs
@@ -219,10 +219,10 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--out", default="figures", help="figure root (default: figures; files go to OUT/RUN/)")
     f.add_argument("--data-dir", default=None, help="folder that the config's map paths are relative to")
     f.set_defaults(func=cmd_figures)
-    g = sub.add_parser("reproduce", help="run every reproduction config (configs/seed*.toml), then draw its figures")
+    g = sub.add_parser("reproduce", help="run every paper's reproduction config (configs/<paper>_*.toml, e.g. cui2025_table2.toml), then draw its figures")
     g.add_argument("--quick", action="store_true", help="the configs' [experiment.quick] smoke runs (CI)")
     g.add_argument("--configs", default="configs", help="folder of the configs (default: configs)")
-    g.add_argument("--pattern", default="seed*.toml", help="which configs (glob; default: seed*.toml)")
+    g.add_argument("--pattern", default=None, help="which configs (glob; default: every <paper>_*.toml)")
     g.add_argument("--out", default="runs", help="parent folder of the run folders (default: runs)")
     g.add_argument("--figures", default="figures", help="figure root (default: figures)")
     g.add_argument("--data-dir", default=None, help="folder that map paths are relative to")

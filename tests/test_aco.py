@@ -239,7 +239,7 @@ def test_praco_with_one_colony_exchanges_with_no_one():
 
 
 def test_opt_ant_initial_pheromone_stays_bounded_below_the_datum():
-    # Seed 002's −σ·H/H_max term: terrain below zero must not divide by a floored maximum.
+    # chu2024's −σ·H/H_max term: terrain below zero must not divide by a floored maximum.
     from jaxplan.aco import _rules as R
     from jaxplan.aco._context import map_tables
 

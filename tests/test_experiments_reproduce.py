@@ -1,4 +1,4 @@
-"""The reproduction configs (configs/seed*.toml): each validates, stores the paper's numbers and documents its
+"""The reproduction configs (configs/<paper>_*.toml): each validates, stores the paper's numbers and documents its
 deviations; `jaxplan reproduce --quick` runs them all and draws their figures (in CI: about 2 min on 2 cores; the issue's
 budget for all quick runs together is 3 min)."""
 
@@ -14,18 +14,18 @@ from jaxplan.experiments.reproduce import reproduction_configs
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = reproduction_configs(ROOT / "configs")
-SEEDS = ("seed000", "seed001", "seed002", "seed003", "seed004")
+from jaxplan.papers import PAPERS
 
 
-def test_every_seed_has_a_reproduction_config():
+def test_every_paper_has_a_reproduction_config():
     names = [p.name for p in CONFIGS]
-    assert all(any(n.startswith(s) for n in names) for s in SEEDS), names
+    assert all(any(n.startswith(f"{key}_") for n in names) for key in PAPERS), names
 
 
 @pytest.mark.parametrize("path", CONFIGS, ids=lambda p: p.stem)
 def test_reproduction_config_is_complete(path):
     cfg = load_config(path)
-    assert cfg.paper and cfg.paper_source.startswith("Seed 00"), "the paper's numbers, labelled with their table"
+    assert cfg.paper and cfg.paper_source.startswith(PAPERS[path.stem.split("_")[0]].short), "the paper's numbers, labelled with their table"
     assert cfg.quick.seeds and cfg.figures
     assert "Deviations from the paper" in path.read_text()
 
@@ -46,7 +46,7 @@ def test_reproduce_quick_runs_every_config_and_draws_its_figures(tmp_path, capsy
 def test_quick_keeps_only_the_named_planners_and_maps():
     from jaxplan.experiments.config import ConfigError, apply_quick, parse_config
 
-    text = (ROOT / "configs" / "seed004_tables2_3.toml").read_text()
+    text = (ROOT / "configs" / "yu2020_tables2_3.toml").read_text()
     q = apply_quick(parse_config(text))
     assert [m.name for m in q.maps] == ["map30"] and [p.label for p in q.planners] == ["ACO", "P-RACO"]
     bad = text.replace('maps = ["map30"]', 'maps = ["map31"]\nplanners = ["PRACO"]')
@@ -133,7 +133,7 @@ def test_reproduce_goes_on_after_a_config_fails_to_run_or_draw(tmp_path, monkeyp
 
 def test_reproduce_reports_every_failure_and_exits_2_at_the_end(tmp_path, monkeypatch, capsys):
     _fake_reproduction(tmp_path, monkeypatch, run_fails=("seedA",), figures_fail=("seedB",))
-    argv = ["reproduce", "--configs", str(tmp_path), "--out", str(tmp_path / "runs"), "--figures",
+    argv = ["reproduce", "--configs", str(tmp_path), "--pattern", "seed*.toml", "--out", str(tmp_path / "runs"), "--figures",
             str(tmp_path / "figs"), "--no-progress", "--no-cache"]
     assert main(argv) == 2
     out, err = capsys.readouterr()

@@ -1,4 +1,4 @@
-"""The experiment harness's TSP kind and the seed 000 / seed 004 metrics it gained (accuracy, line-of-sight
+"""The experiment harness's TSP kind and the cui2025 / yu2020 metrics it gained (accuracy, line-of-sight
 smoothing before/after).
 
 A tiny 8-city instance (written to a temporary folder, its optimum found by brute force) runs a small P-RACO
@@ -199,23 +199,23 @@ def test_planner_kinds_need_their_sites(tmp_path):
 [experiment]
 name = "sites"
 [[maps]]
-generator = "warehouse_seed004"
+generator = "warehouse_yu2020"
 [[planners]]
 kind = "tsp"
 name = "praco"
 """
     with pytest.raises(ConfigError) as e:
         parse_config(text, data_dir=tmp_path)
-    assert "maps[0]: no plan or navigate planner is configured to run on 'warehouse_seed004'" in e.value.problems
+    assert "maps[0]: no plan or navigate planner is configured to run on 'warehouse_yu2020'" in e.value.problems
     assert any(p.startswith("planners[0].kind: a kind = 'tsp' planner runs on [[instances]]")
                for p in e.value.problems), e.value.problems
 
 
-def test_seed004_tsp_config_validates_and_quick_keeps_eil51(tsplib):
+def test_yu2020_tsp_config_validates_and_quick_keeps_eil51(tsplib):
     from jaxplan.experiments.config import apply_quick, load_config
 
     root = Path(__file__).resolve().parents[1]
-    cfg = load_config(root / "configs" / "seed004_tsp.toml", data_dir=tsplib.parent)
+    cfg = load_config(root / "configs" / "yu2020_tsp.toml", data_dir=tsplib.parent)
     assert [m.name for m in cfg.maps] == ["eil51", "berlin52"] and all(m.is_tsp for m in cfg.maps)
     assert len(cfg.seeds) == 50 and {p.name for p in cfg.planners} == {"aco", "praco"}
     praco = next(p for p in cfg.planners if p.name == "praco")
@@ -226,7 +226,7 @@ def test_seed004_tsp_config_validates_and_quick_keeps_eil51(tsplib):
 
 
 # ---------------------------------------------------------------------------------------------
-# Seed 000's accuracy and seed 004's smoothing reductions
+# cui2025's accuracy and yu2020's smoothing reductions
 
 
 def test_accuracy_on_a_hand_built_case():

@@ -172,7 +172,7 @@ def test_plan_figures(plan_run, tmp_path):
 
 
 def test_paths_figure_with_a_smoother(plan_run, tmp_path):
-    """Seed 004 Fig. 11: each path and, dashed, the same path after line-of-sight smoothing. The run folder is
+    """yu2020 Fig. 11: each path and, dashed, the same path after line-of-sight smoothing. The run folder is
     copied with a config naming only this figure (figures do not enter the run's fingerprint)."""
     import shutil
 

@@ -9,9 +9,9 @@ import pytest
 import jaxplan as jp
 
 GENERATORS = {
-    "seed003": jp.warehouse_seed003,
-    "seed004_30": lambda k: jp.warehouse_seed004(k, 30),
-    "seed004_35": lambda k: jp.warehouse_seed004(k, 35),
+    "chen2023": jp.warehouse_chen2023,
+    "yu2020_30": lambda k: jp.warehouse_yu2020(k, 30),
+    "yu2020_35": lambda k: jp.warehouse_yu2020(k, 35),
     "random20": jp.RandomMapGenerator(32, 32, 0.2),
     "urban": jp.UrbanGenerator(),
     "mountain": jp.MountainGenerator(),
@@ -29,7 +29,7 @@ def test_generators_deterministic_and_connected(name):
     a, b, c = gen(3), gen(3), gen(4)
     assert _same(a, b)
     assert not np.array_equal(a.grid.free, c.grid.free) or not np.array_equal(a.grid.height, c.grid.height) \
-        or not np.array_equal(a.grid.turn_rule, c.grid.turn_rule) or name == "seed003"
+        or not np.array_equal(a.grid.turn_rule, c.grid.turn_rule) or name == "chen2023"
     r = jp.plan(a.grid, a.start, a.goal)
     assert r.success
 
@@ -43,18 +43,18 @@ def test_jax_keys_work_like_seeds():
         jp.RandomMapGenerator(16, 16, 0.3)("five")
 
 
-def test_seed004_blocked_counts_are_exact():
+def test_yu2020_blocked_counts_are_exact():
     for key in range(3):
-        assert (~jp.warehouse_seed004(key, 30).grid.free).sum() == 200
-        assert (~jp.warehouse_seed004(key, 35).grid.free).sum() == 400
-    with pytest.raises(ValueError, match="seed 004 uses sizes 30 and 35"):
-        jp.warehouse_seed004(0, 40)
+        assert (~jp.warehouse_yu2020(key, 30).grid.free).sum() == 200
+        assert (~jp.warehouse_yu2020(key, 35).grid.free).sum() == 400
+    with pytest.raises(ValueError, match="yu2020 uses sizes 30 and 35"):
+        jp.warehouse_yu2020(0, 40)
     with pytest.raises(ValueError, match="exceeds the"):
         jp.WarehouseGenerator(10, 10, n_blocked=90)(0)
 
 
-def test_seed003_combined_shelves():
-    g = jp.warehouse_seed003(0).grid
+def test_chen2023_combined_shelves():
+    g = jp.warehouse_chen2023(0).grid
     assert g.shape == (20, 20)
     blocked = ~g.free
     # Every shelf is a run of six cells, two rows deep.
@@ -128,3 +128,10 @@ def test_urban_counts_at_their_limits_draw():
     scene = jp.UrbanGenerator(n_interventions=0, n_dynamic=254)(0)
     assert len(scene.dynamic_slots) == 254
     assert jp.UrbanGenerator(n_dynamic=0)(0).dynamic_slots.shape == (0, 2)
+
+
+@pytest.mark.parametrize("old,new", [("warehouse_seed003", "warehouse_chen2023"), ("warehouse_seed004", "warehouse_yu2020")])
+def test_old_generator_names_warn_and_still_work(old, new):
+    with pytest.warns(DeprecationWarning, match=new):
+        fn = getattr(jp, old)
+    assert fn is getattr(jp, new)

@@ -134,7 +134,7 @@ def test_walk_equals_jax_walk_field_by_field(dead_end, penalise, ants):
 
 @pytest.mark.parametrize("dead_end", ["die", "retreat", "alert"])
 def test_walk_with_opt_ant_hook_equals_jax_walk(dead_end):
-    """Seed 002's hook (heights, right-turn cells, goal priority, geodesic inf distances)."""
+    """chu2024's hook (heights, right-turn cells, goal priority, geodesic inf distances)."""
     scene = jp.UrbanGenerator(right_turn_prob=0.8)(1)
     grid = scene.grid
     _, p = resolve("opt_ant", dict(vehicle_height=None, connectivity=8))
@@ -395,7 +395,7 @@ def test_update_backends_agree(room, planner):
 
 
 def test_native_dead_corner_penalty_matches_power():
-    """Seed 004's penalty in the deposit kernel: τ·(1 − λ_p)^count where an edge was retreated over."""
+    """yu2020's penalty in the deposit kernel: τ·(1 − λ_p)^count where an edge was retreated over."""
     rng = np.random.default_rng(2)
     T, K = 800, 8
     tau = jnp.asarray(rng.random(T) * 5, jnp.float32)

@@ -37,7 +37,7 @@ class Colony:
       deposits: deposit rules, summed (`jaxplan.aco._rules.combine`).
       bound: ``bound(tau, params) -> tau`` after each update.
       evaporation: ``"rate"`` (τ ← (1−ρ)·τ, param ``rho``) or ``"residual"`` (τ ← ρ_res·τ,
-        param ``rho_res``, seed 002's Eq. 4).
+        param ``rho_res``, chu2024's Eq. 4).
       hook: optional walk hook (state-dependent logits / move restrictions).
       heuristic_in_hook: the hook adds β·log η itself (the static η table is not used).
       hook_logits: the hook's logits as a table for the numba walk,
@@ -69,7 +69,7 @@ class RunConfig:
       heuristic: ``"euclidean"`` (the papers') or ``"geodesic"`` (exact goal distance).
       dead_end: ``"die"`` (stuck ants stop), ``"retreat"`` (step back one cell) or
         ``"alert"`` (step back, and true dead ends become pseudo-obstacles for the rest of the run).
-      penalise: seed 004's dead-corner penalty on retreat edges (param ``lambda_p``).
+      penalise: yu2020's dead-corner penalty on retreat edges (param ``lambda_p``).
       keep_pheromone: return the final pheromone (``[S, C, K]`` per run) for plots.
       walk_backend: ``"jax"`` (the `lax.while_loop` walk, for any device), ``"numba"`` (one
         native call per iteration, `jaxplan.aco._walk_numba`; same results) or ``"auto"``
@@ -270,7 +270,7 @@ def _deposit_jax(cfg: RunConfig, tau: jnp.ndarray, ants: Ants, state: ColonyStat
 def _deposit_numba(cfg: RunConfig, params: dict, tau: jnp.ndarray, ants: Ants, state: ColonyState,
                    dep: R.Deposit) -> jnp.ndarray:
     """Every run's deposits in one native call over the successful ants' valid steps only, then
-    seed 004's dead-corner penalty on the edges retreated over.
+    yu2020's dead-corner penalty on the edges retreated over.
 
     Args:
       tau: ``f32[B, S, C, K]`` evaporated pheromone; ants: all runs' ants (flat ``[B * S * m]``);
@@ -297,7 +297,7 @@ def _deposit_numba(cfg: RunConfig, params: dict, tau: jnp.ndarray, ants: Ants, s
 
 
 def _finish(colony: Colony, params: dict, tau: jnp.ndarray, penalty: jnp.ndarray | None) -> jnp.ndarray:
-    """One run's pheromone after its deposits: seed 004's dead-corner penalty, then the bounds."""
+    """One run's pheromone after its deposits: yu2020's dead-corner penalty, then the bounds."""
     if penalty is not None:
         tau = tau * jnp.power(1.0 - params["lambda_p"], penalty.reshape(tau.shape))
     return colony.bound(tau, params)

@@ -3,13 +3,13 @@
 Defaults are the papers' values (DESIGN §4). Where a paper is silent jaxplan chooses,
 and says so here:
   * ``dead_end``: ``"die"`` for plain ``aco`` (Ant System), ``"retreat"`` for ``iaco``
-    and ``risk_aco`` (seeds 000/003 do not say; with dying ants rooms and mazes fail
-    4–24 % of scenarios, DESIGN §4), ``"alert"`` for ``opt_ant`` (seed 002; the ant steps
+    and ``risk_aco`` (cui2025/chen2023 do not say; with dying ants rooms and mazes fail
+    4–24 % of scenarios, DESIGN §4), ``"alert"`` for ``opt_ant`` (chu2024; the ant steps
     back and the dead end becomes a pseudo-obstacle of the run),
-    ``"retreat"`` with the edge penalty for ``praco`` (seed 004).
+    ``"retreat"`` with the edge penalty for ``praco`` (yu2020).
   * τ0 = 1 where a paper gives no initial pheromone (``aco``, ``iaco``, ``praco``);
-    seed 003's constant f(0) is ``f0 = 1``.
-  * ``praco`` on grids uses α = 1, β = 7 like the other grid presets (seed 004 gives
+    chen2023's constant f(0) is ``f0 = 1``.
+  * ``praco`` on grids uses α = 1, β = 7 like the other grid presets (yu2020 gives
     no values); its TSP mode uses β = 5.
   * ``max_steps`` defaults to ``min(free cells, 4·(H + W))``.
   * ``keep_pheromone=True`` (every ACO planner; not a paper parameter) also returns the
@@ -86,11 +86,11 @@ _STATIC = ("ants", "iterations", "connectivity", "max_steps", "heuristic", "dead
 _UNIT = ("rho", "rho_res", "lambda_p", "delta")
 _DESCRIPTIONS = {
     "aco": "Ant System (Dorigo): uniform τ0, η = 1/distance to goal, deposit Q/L",
-    "iaco": "seed 000 IACO: multi-objective fitness λ·(L/L0, Σ|θ|/π, Σ1/d), elite reinforcement δ",
-    "risk_aco": "seed 003: obstacle-aware τ0, cost B = u·P + v·H(risk) + w·T",
-    "opt_ant": "seed 002 Opt Ant: 16 directions, height-aware τ0 and η, S = a·L + b·R + c·H, MMAS, dead-end alert, "
+    "iaco": "cui2025 IACO: multi-objective fitness λ·(L/L0, Σ|θ|/π, Σ1/d), elite reinforcement δ",
+    "risk_aco": "chen2023: obstacle-aware τ0, cost B = u·P + v·H(risk) + w·T",
+    "opt_ant": "chu2024 Opt Ant: 16 directions, height-aware τ0 and η, S = a·L + b·R + c·H, MMAS, dead-end alert, "
                "right-hand rule",
-    "praco": "seed 004 P-RACO: ranked sub-colonies on a ring, dead-corner step-back with penalty, Z = ω1·L + ω2·N",
+    "praco": "yu2020 P-RACO: ranked sub-colonies on a ring, dead-corner step-back with penalty, Z = ω1·L + ω2·N",
 }
 
 
@@ -148,7 +148,7 @@ def _validate(name: str):
         if "lambdas" in p and not np.sum(p["lambdas"]) > 0:
             raise ValueError(f"planner {name!r}: lambdas must have a weight > 0 (all zero, every path costs 0), "
                              f"got {p['lambdas']!r}")
-        for k in ("w_rank", "n_exchange"):  # counts of ranked ants (seed 004, Eq. 10)
+        for k in ("w_rank", "n_exchange"):  # counts of ranked ants (yu2020, Eq. 10)
             if k in p and not (float(p[k]).is_integer() and p[k] >= 1):
                 raise ValueError(f"planner {name!r}: parameter {k!r} must be a whole number >= 1, got {p[k]!r}")
         if "tau_min" in p and not (0 < p["tau_min"] <= p["tau_max"]):
@@ -173,7 +173,7 @@ def split_params(grid: GridMap, p: Mapping[str, Any]) -> tuple[RunConfig, dict, 
         width=W,
         heuristic=p["heuristic"],
         dead_end=p["dead_end"],
-        # Seed 004's dead-corner penalty falls on the edges an ant retreats over: none without retreat.
+        # yu2020's dead-corner penalty falls on the edges an ant retreats over: none without retreat.
         penalise="lambda_p" in p and p["dead_end"] == "retreat",
         keep_pheromone=bool(p.get("keep_pheromone", False)),
         walk_backend=p.get("walk_backend", "auto"),

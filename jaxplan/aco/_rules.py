@@ -94,12 +94,12 @@ def init_uniform(tables: MapTables, params: dict) -> jnp.ndarray:
 
 
 def init_obstacle_aware(tables: MapTables, params: dict) -> jnp.ndarray:
-    """Seed 003, Eqs. 5–6: τ0(i) = f0 + 1/(1 + n_blocked(i)): less pheromone beside obstacles."""
+    """chen2023, Eqs. 5–6: τ0(i) = f0 + 1/(1 + n_blocked(i)): less pheromone beside obstacles."""
     return params["f0"] + 1.0 / (1.0 + tables.n_blocked)
 
 
 def init_opt_ant(tables: MapTables, params: dict) -> jnp.ndarray:
-    """Seed 002, Eq. 2: C on boundary cells, else C + 1/(1 + n_blocked) − σ·H/H_max.
+    """chu2024, Eq. 2: C on boundary cells, else C + 1/(1 + n_blocked) − σ·H/H_max.
 
     The paper prints "+ σ·H/H_max" but says a larger σ makes high cells less likely;
     DESIGN §4 follows the text. H_max is the largest |H|, so that terrain below the datum
@@ -121,7 +121,7 @@ def cost_length(stats: PathStats, params: dict, tables: MapTables, goal: GoalTab
 
 
 def cost_iaco(stats: PathStats, params: dict, tables: MapTables, goal: GoalTables) -> jnp.ndarray:
-    """Seed 000, Eq. 4 (as DESIGN §4 reads it): F = λ1·L/L0 + λ2·Σ|θ|/π + λ3·Σ 1/d_j,
+    """cui2025, Eq. 4 (as DESIGN §4 reads it): F = λ1·L/L0 + λ2·Σ|θ|/π + λ3·Σ 1/d_j,
     L0 the straight-line start–goal distance."""
     l0 = jnp.linalg.norm(tables.xy[goal.start] - tables.xy[goal.goal])
     lam = params["lambdas"]
@@ -129,17 +129,17 @@ def cost_iaco(stats: PathStats, params: dict, tables: MapTables, goal: GoalTable
 
 
 def cost_risk(stats: PathStats, params: dict, tables: MapTables, goal: GoalTables) -> jnp.ndarray:
-    """Seed 003, Eq. 8: B = u·P + v·H + w·T (length, summed risk, turns)."""
+    """chen2023, Eq. 8: B = u·P + v·H + w·T (length, summed risk, turns)."""
     return params["u"] * stats.length + params["v"] * stats.risk + params["w"] * stats.turns
 
 
 def cost_opt_ant(stats: PathStats, params: dict, tables: MapTables, goal: GoalTables) -> jnp.ndarray:
-    """Seed 002, Eq. 6: S = a·L + b·R + c·H (length, turns, height mean square deviation)."""
+    """chu2024, Eq. 6: S = a·L + b·R + c·H (length, turns, height mean square deviation)."""
     return params["a"] * stats.length + params["b"] * stats.turns + params["c"] * stats.height_msd
 
 
 def cost_praco(stats: PathStats, params: dict, tables: MapTables, goal: GoalTables) -> jnp.ndarray:
-    """Seed 004, Eq. 7: Z = ω1·L + ω2·N (length, turns)."""
+    """yu2020, Eq. 7: Z = ω1·L + ω2·N (length, turns)."""
     return params["omega1"] * stats.length + params["omega2"] * stats.turns
 
 
@@ -166,7 +166,7 @@ def deposit_inverse(costs, bs_cost, params) -> Deposit:
 
 
 def deposit_elite(costs, bs_cost, params) -> Deposit:
-    """Seed 000, Eq. 3: the iteration-best path gets an extra δ·Q/cost_best."""
+    """cui2025, Eq. 3: the iteration-best path gets an extra δ·Q/cost_best."""
     best = jnp.argmin(costs, axis=1)
     onehot = jnp.arange(costs.shape[1])[None, :] == best[:, None]
     return Deposit(own=jnp.where(onehot, params["delta"] * params["q"] * _inv(costs), 0.0))
@@ -179,7 +179,7 @@ def _ranks(costs: jnp.ndarray) -> jnp.ndarray:
 
 
 def deposit_ranked(costs, bs_cost, params) -> Deposit:
-    """Seed 004, Eq. 10 (own colony): the w−1 best ants lay (w−r)/Z_r, the best-so-far w/Z_bs."""
+    """yu2020, Eq. 10 (own colony): the w−1 best ants lay (w−r)/Z_r, the best-so-far w/Z_bs."""
     w = params["w_rank"]
     r = _ranks(costs) + 1.0
     own = jnp.where(r <= w - 1, (w - r) * _inv(costs), 0.0)
@@ -187,7 +187,7 @@ def deposit_ranked(costs, bs_cost, params) -> Deposit:
 
 
 def deposit_neighbour(costs, bs_cost, params) -> Deposit:
-    """Seed 004, Eq. 10 (exchange): each colony passes its n−1 best ants ((n−q)/Z_q) and its
+    """yu2020, Eq. 10 (exchange): each colony passes its n−1 best ants ((n−q)/Z_q) and its
     best-so-far (n/Z_nbs) to the next colony on a ring."""
     n = params["n_exchange"]
     q = _ranks(costs) + 1.0
@@ -221,16 +221,16 @@ def bound_floor(tau: jnp.ndarray, params: dict) -> jnp.ndarray:
 
 
 def bound_min_max(tau: jnp.ndarray, params: dict) -> jnp.ndarray:
-    """Seed 002, Eq. 7 (MAX–MIN): τ clamped to [τ_min, τ_max]."""
+    """chu2024, Eq. 7 (MAX–MIN): τ clamped to [τ_min, τ_max]."""
     return jnp.clip(tau, params["tau_min"], params["tau_max"])
 
 
 # ---------------------------------------------------------------------------------------------
-# Walk hook: seed 002's state-dependent heuristic and right-hand rule.
+# Walk hook: chu2024's state-dependent heuristic and right-hand rule.
 
 
 def hook_opt_ant(tables: MapTables, params, h_flat, pos, prev, nb, ok, logits, goal, cell0):
-    """Seed 002, Eq. 3: η = l + r + h, and the right-hand rule of its Section 2.3.
+    """chu2024, Eq. 3: η = l + r + h, and the right-hand rule of its Section 2.3.
 
     ``l`` distance factor ("modified Euclidean distance"): the normalised progress of the
     move towards the goal, (1 + (d_i − d_j)/|move|)/2 in [0, 1] (1 when heading straight

@@ -8,7 +8,7 @@ engine's deposit rules (`jaxplan.aco._rules`):
 * ``aco`` — Ant System (Dorigo, Maniezzo & Colorni 1996): τ0 = 1, η = 1/d, every ant lays
   Q/L on its tour, τ ← (1 − ρ)·τ + Σ Δτ. Classic AS values: α = 1, β = 5, ρ = 0.5, Q = 100,
   50 ants, 200 iterations.
-* ``praco`` — seed 004 (P-RACO), Eq. 8 (choice), Eq. 9 (evaporation), Eq. 10 (deposit): S
+* ``praco`` — yu2020 (P-RACO), Eq. 8 (choice), Eq. 9 (evaporation), Eq. 10 (deposit): S
   sub-colonies of m ants on a ring. In each colony the w − 1 best ants lay (w − r)/L_r and
   the colony's best-so-far w/L_bs (`deposit_ranked`); colony s also passes its n − 1 best
   ants ((n − q)/L_q) and its best-so-far (n/L_nbs) to colony (s + 1) mod S
@@ -329,7 +329,7 @@ def solve_tsp(problem: TSPProblem, planner: str = "praco", seed: int = 0, **over
 
     Args:
       problem: a `TSPProblem` (``dist f64[n, n]``, n >= 3), e.g. from `load_tsplib`.
-      planner: ``"praco"`` (seed 004, default) or ``"aco"`` (Ant System); see the module docstring.
+      planner: ``"praco"`` (yu2020, default) or ``"aco"`` (Ant System); see the module docstring.
       seed: integer in [0, 2**32); the same seed gives the same result, bit for bit.
       **overrides: ``ants`` (per colony), ``iterations``, ``alpha``, ``beta``, ``rho``, ``tau0``,
         ``local_search`` (None or ``"2opt"``), and ``q`` (aco) or ``colonies``, ``w_rank``,

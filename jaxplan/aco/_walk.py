@@ -31,7 +31,7 @@ class Ants(NamedTuple):
       moves: ``i8[A, L]`` move index taken at each step; entries from ``n`` on are unspecified.
       n: ``i32[A]`` number of moves in the final path.
       status: ``i32[A]``: 1 goal reached, 2 stopped at a dead end, 3 step limit.
-      penalty: ``f32[C * K]`` or ``None``: count of retreats over each edge (seed 004's
+      penalty: ``f32[C * K]`` or ``None``: count of retreats over each edge (yu2020's
         dead-corner penalty), summed over ants of each colony: ``f32[S, C * K]``.
       ant_steps: ``i32[A]`` loop steps during which each ant was walking (throughput counter).
       loop_steps: ``i32`` iterations of the step loop (``A * loop_steps`` step slots).
@@ -220,7 +220,7 @@ def walk(
             prev_new = jnp.where(fwd, k, prev)
             stuck = walking & ~fwd
             if marks is not None:
-                # Seed 002's dead-end alert: a cell whose only allowed move (ignoring the ant's own
+                # chu2024's dead-end alert: a cell whose only allowed move (ignoring the ant's own
                 # tabu) leads back is a dead end for every later ant of the run.
                 open_moves = jnp.sum((nb >= 0) & ~alert[cell0[:, None] + safe], axis=1)
                 dead = stuck & (open_moves <= 1) & (pos != start) & (pos != goal)

@@ -15,7 +15,7 @@ The result equals `walk`'s bit for bit: the same counter-based uniforms (`hash_u
 one per ant and step), the same float32 inverse-CDF sums in the same order, the same
 dead-end rules, paths (up to ``n``; slots past it are left unwritten), penalty counts, dead-end
 marks and throughput counters (``loop_steps`` and ``slots`` are those the JAX loop,
-with its compaction, would report). With a walk hook (seed 002's `opt_ant`) the hook's
+with its compaction, would report). With a walk hook (chu2024's `opt_ant`) the hook's
 state-dependent logits come from a table precomputed in JAX (`hook_logits`: one value
 per cell and move for "keeps the previous heading" and one for "turns"); the step then
 only needs the exponential of the logits relative to their maximum, computed with XLA's
@@ -61,7 +61,7 @@ _NEG_INF = np.float32(-np.inf)
 
 
 class HookTables(NamedTuple):
-    """What the numba walk needs for seed 002's hook (`jaxplan.aco._rules.hook_opt_ant`).
+    """What the numba walk needs for chu2024's hook (`jaxplan.aco._rules.hook_opt_ant`).
 
     Attributes:
       logits: ``f32[2, G * C, K]`` the hook's logits of each colony's cell and move:
@@ -313,7 +313,7 @@ def _deposit_paths(tau, cells, moves, n, amount, colony, CK, K):
 
 @njit(cache=True, nogil=True)
 def _penalise(tau, counts, keep):
-    """Seed 004's dead-corner penalty: ``tau[e] *= keep ** counts[e]`` where an edge was retreated over.
+    """yu2020's dead-corner penalty: ``tau[e] *= keep ** counts[e]`` where an edge was retreated over.
 
     A pass over the counts, with a power only where one is non-zero (XLA's `jnp.power` over every
     edge cost praco ~1.7 ms per iteration on a 100x100 map with 5 colonies; libm's powf may differ
@@ -399,7 +399,7 @@ def _walk_ant_for(moves_per_cell: int):
                     if alerting:
                         o = o & (not alert[c0 + safe])
                     ok[k] = o
-                # Seed 002's hook: an adjacent goal wins (judged on the moves allowed so far), else
+                # chu2024's hook: an adjacent goal wins (judged on the moves allowed so far), else
                 # on a right-turn cell the quarter turn right of the heading is forced when allowed.
                 any_goal = False
                 for k in range(K):
@@ -446,7 +446,7 @@ def _walk_ant_for(moves_per_cell: int):
                 continue
             # Stuck: no allowed move.
             if alerting:
-                # Seed 002's dead-end alert: only one open move (the way back, ignoring this ant's tabu).
+                # chu2024's dead-end alert: only one open move (the way back, ignoring this ant's tabu).
                 open_moves = 0
                 for j in range(K):
                     nb = nbr[pos, j]
@@ -1046,7 +1046,7 @@ def deposit(tau: jnp.ndarray, paths: tuple, best: tuple, C: int, K: int, penalty
         for the ants and for the best-so-far paths: amounts ``[0]`` go to colony ``colonies[0]``
         (row ``colony * C * K`` of ``tau``), then amounts ``[1]`` to ``colonies[1]``.
       C, K: cells and moves per cell.
-      penalty: optional ``f32[T]`` retreat counts per edge (seed 004): after the deposits, an edge
+      penalty: optional ``f32[T]`` retreat counts per edge (yu2020): after the deposits, an edge
         keeps ``keep ** count`` of its pheromone; keep: ``f32`` scalar, 1 − λ_p.
     """
     _register()

@@ -24,7 +24,7 @@ from jaxplan.dwa._robot import Robot, Unicycle
 __all__ = ["DWAConfig", "DWAParams", "EVALUATORS", "CLEARANCE_MODES", "SELECTIONS", "RECOVERIES", "default_params"]
 
 EVALUATORS = ("weighted", "fuzzy", "classic")
-"""Rollout evaluators: seed 000's Eq. (7) weighted sum, seed 000's fuzzy evaluation, PythonRobotics' costs."""
+"""Rollout evaluators: cui2025's Eq. (7) weighted sum, cui2025's fuzzy evaluation, PythonRobotics' costs."""
 
 CLEARANCE_MODES = ("hybrid", "bilinear", "exact")
 """Static-obstacle clearance lookups (see `jaxplan.dwa._clearance`)."""
@@ -42,11 +42,11 @@ class DWAConfig:
     """Everything about a DWA step except the critic weights.
 
     Attributes:
-      robot: `Unicycle` (default, seed 000) or `Ackermann` (seed 001).
-      period: control period Δt of the dynamic window (s; seed 000 replans every 0.2 s).
+      robot: `Unicycle` (default, cui2025) or `Ackermann` (li2026).
+      period: control period Δt of the dynamic window (s; cui2025 replans every 0.2 s).
       d_safe: a rollout whose clearance (m, from a footprint disc centre to the nearest
         blocked square or moving disc edge) drops below this anywhere on the horizon is
-        infeasible (seed 000 Eq. (8), 0.3 m). At least the footprint radius.
+        infeasible (cui2025 Eq. (8), 0.3 m). At least the footprint radius.
       d_clip: clearance at which the clearance critic saturates (m): O = min(c, d_clip)/d_clip;
         also the "far" breakpoint of the fuzzy clearance input.
       path_clip: distance (m) from the global path at which the path critic reaches 0.
@@ -120,7 +120,7 @@ class DWAParams(NamedTuple):
     """Critic weights and the selection temperature: scalars (or arrays with batch axes). A pytree.
 
     Attributes:
-      heading: α, weight of the heading critic G (seed 000 Eq. (7): 0.4).
+      heading: α, weight of the heading critic G (cui2025 Eq. (7): 0.4).
       velocity: β, weight of the velocity critic V (0.3).
       clearance: γ, weight of the clearance critic O (0.3).
       path: weight of the global-path critic (0: off unless a path is given).

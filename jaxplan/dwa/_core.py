@@ -64,7 +64,7 @@ class DWAInfo(NamedTuple):
       scores: ``f32[S]`` evaluator scores of every sample (higher is better; computed
         for infeasible samples too, but they are never chosen).
       rollouts: ``f32[S, T, 3]`` every sample's trajectory points (x, y, theta) at
-        ``dt, 2·dt, …, T·dt`` (seed 000's Figure 4 fan), or None when the config does not
+        ``dt, 2·dt, …, T·dt`` (cui2025's Figure 4 fan), or None when the config does not
         keep them (``keep_rollouts=False``, what episodes use).
       feasible: ``bool[S]`` minimum clearance >= d_safe over the horizon.
       chosen: ``i32`` index of the best feasible sample (−1 in recovery). With softmax
@@ -122,7 +122,7 @@ def evaluate(cr: C.Critics, v: jnp.ndarray, feasible: jnp.ndarray, config: DWACo
 def window_speed(velocity: jnp.ndarray, feasible: jnp.ndarray) -> jnp.ndarray:
     """The fuzzy speed input ``[S]``: V rescaled to [0, 1] over the feasible samples (V itself if they all agree).
 
-    Seed 000 feeds a "normalised speed"; normalised over the window — as the weighted
+    cui2025 feeds a "normalised speed"; normalised over the window — as the weighted
     evaluator normalises its critics over the samples — rather than by v_max. With
     V = v/v_max a robot at rest sees only "slow" samples (its window reaches 0.1 m/s),
     and the clearance it keeps by staying put outweighs the speed it would gain: measured

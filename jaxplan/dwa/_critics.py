@@ -1,11 +1,11 @@
 """Critics: small pure functions scoring rollouts, and the weighted and classic evaluators.
 
 Every critic maps the S rollouts of one step to ``f32[S]`` in [0, 1], higher is better
-(seed 000 Eq. (7) and DESIGN §5):
+(cui2025 Eq. (7) and DESIGN §5):
 
 * `heading` G = 1 − |Δ|/π, Δ the angle between the rollout's end heading and the
   direction from its end point to the sub-goal ("the angular deviation between the
-  current path endpoint and the target point", seed 000);
+  current path endpoint and the target point", cui2025);
 * `velocity` V = (v − v_min)/(v_max − v_min), i.e. v/v_max for a robot that does not
   reverse;
 * `clearance` O = min(c, d_clip)/d_clip, c the rollout's minimum clearance (m): clipped
@@ -17,7 +17,7 @@ Every critic maps the S rollouts of one step to ``f32[S]`` in [0, 1], higher is 
   travel), so D ∈ [0, 1].
 
 `weighted` is Eq. (7) with every critic first normalised across the feasible samples
-(divided by its mean over them, the normalisation of Fox et al.'s DWA that seed 002
+(divided by its mean over them, the normalisation of Fox et al.'s DWA that chu2024
 writes as σ, with the mean floored at `NORM_FLOOR`): each critic then contributes in
 proportion to how much it varies relative to its level in this window, not to its
 units, and the score is of order ``Σ weights``, which is what the softmax temperature is
@@ -158,7 +158,7 @@ def normalised_weights(rows: jnp.ndarray, feasible: jnp.ndarray, weights: jnp.nd
 
 
 def weighted(cr: Critics, params: DWAParams, feasible: jnp.ndarray, with_path: bool = True) -> jnp.ndarray:
-    """Seed 000 Eq. (7) plus the goal (and path) terms, on critics normalised across feasible samples.
+    """cui2025 Eq. (7) plus the goal (and path) terms, on critics normalised across feasible samples.
 
     Without a path (``with_path=False``) the path critic is the constant 1 and is left out:
     a constant adds the same to every score and changes no choice.

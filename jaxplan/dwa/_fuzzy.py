@@ -1,6 +1,6 @@
-"""Seed 000's fuzzy rollout evaluation (IDWA, §3.2): memberships, a rule base, weighted-average defuzzification.
+"""cui2025's fuzzy rollout evaluation (IDWA, §3.2): memberships, a rule base, weighted-average defuzzification.
 
-Seed 000 fixes the structure — three inputs (heading deviation, normalised speed,
+cui2025 fixes the structure — three inputs (heading deviation, normalised speed,
 minimum obstacle distance), three triangular terms each, a rule base that "prioritises
 low deviation, high velocity and safe clearance", with the typical rules "if heading is
 small and velocity is fast and obstacle is far then the evaluation is high" and "if

@@ -4,14 +4,14 @@ Two models share one state layout, ``[5] = (x, y, theta, v, omega)`` in m, rad, 
 rad/s (DESIGN §3), and one motion model (a unicycle: ``ẋ = v cos θ``, ``ẏ = v sin θ``,
 ``θ̇ = ω``):
 
-* `Unicycle` — a differential-drive robot; defaults from seed 000 (§4.1: v ≤ 1.2 m/s,
+* `Unicycle` — a differential-drive robot; defaults from cui2025 (§4.1: v ≤ 1.2 m/s,
   |ω| ≤ 2.0 rad/s, |a| ≤ 0.5 m/s², the 0.25 m disc of DESIGN §5, angular acceleration
   3.0 rad/s²). It can turn on the spot.
-* `Ackermann` — seed 001's warehouse robot (Table 1: "Ackerman steering", 1.5 m/s,
+* `Ackermann` — li2026's warehouse robot (Table 1: "Ackerman steering", 1.5 m/s,
   0.3 m/s²). A bicycle model about the rear axle has exactly the unicycle's kinematics
   with ``ω = v·tan(δ)/L``, so it differs only in which ``(v, ω)`` it can command: the
   steering limit bounds the curvature, ``|ω| <= |v|·tan(δ_max)/L``, and it cannot turn
-  in place. Seed 001 gives no geometry; wheelbase 0.5 m, steering limit 0.6 rad
+  in place. li2026 gives no geometry; wheelbase 0.5 m, steering limit 0.6 rad
   (a 0.73 m minimum turning radius, well inside its 2 m aisles) and a 0.8 × 0.5 m body
   are our choices.
 
@@ -93,14 +93,14 @@ def footprint_offsets(fp: Footprint) -> tuple[float, ...] | jnp.ndarray:
 @_pytree(("v_min", "v_max", "omega_max", "accel", "decel", "alpha", "footprint"))
 @dataclasses.dataclass(frozen=True)
 class Unicycle:
-    """Differential drive (seed 000 defaults).
+    """Differential drive (cui2025 defaults).
 
     Attributes:
       v_min, v_max: linear velocity limits (m/s); ``v_min < 0`` allows reversing.
       omega_max: angular velocity limit (rad/s), symmetric: ``|ω| <= omega_max``.
       accel, decel: largest increase / decrease of ``v`` per second (m/s², both >= 0;
-        seed 000's ``a_acc`` and ``a_dec`` of Eq. (6), equal by default).
-      alpha: largest change of ``ω`` per second (rad/s², seed 000's ``α_acc = α_dec``).
+        cui2025's ``a_acc`` and ``a_dec`` of Eq. (6), equal by default).
+      alpha: largest change of ``ω`` per second (rad/s², cui2025's ``α_acc = α_dec``).
       footprint: `Disc` or `Rectangle`.
     """
 
@@ -116,7 +116,7 @@ class Unicycle:
 @_pytree(("v_min", "v_max", "omega_max", "accel", "decel", "alpha", "wheelbase", "steer_max", "footprint"))
 @dataclasses.dataclass(frozen=True)
 class Ackermann:
-    """Car-like robot (seed 001's "Ackerman steering": 1.5 m/s, 0.3 m/s²).
+    """Car-like robot (li2026's "Ackerman steering": 1.5 m/s, 0.3 m/s²).
 
     Attributes as `Unicycle`, plus ``wheelbase`` L (m) and ``steer_max`` δ_max (rad, in
     (0, π/2)): commands satisfy ``|ω| <= |v|·tan(δ_max)/L`` as well as the yaw-rate and

@@ -20,7 +20,7 @@ CPU sine and cosine are scalar calls). The loop over the T steps is a `lax.fori_
 carries only the rotor and the running minimum clearance — two kernels per iteration on
 a CPU, ``unroll`` steps per iteration — and the S·T trajectory points are never stored
 unless asked for (``keep=True`` stores ``[S, T, 3]`` poses for plotting the fan of
-trajectories, seed 000's Figure 4).
+trajectories, cui2025's Figure 4).
 """
 
 from __future__ import annotations

@@ -254,7 +254,7 @@ def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any
       params: `DWAParams`, a dict of overrides of the evaluator's defaults
         (e.g. ``{"heading": 0.5}``), or None for the defaults.
       config: `DWAConfig` (robot, window, horizon, evaluator, clearance mode, selection);
-        default `DWAConfig()` — seed 000's robot and weighted evaluator.
+        default `DWAConfig()` — cui2025's robot and weighted evaluator.
       path: the global path ``[L, 2]`` (m) for the path critic, or ``[B, L, 2]``.
 
     Returns:

@@ -1,4 +1,4 @@
-"""The dynamic window and its grid of velocity samples (seed 000 Eqs. (5)–(6), seed 002 Eq. (10)).
+"""The dynamic window and its grid of velocity samples (cui2025 Eqs. (5)–(6), chu2024 Eq. (10)).
 
 The window is the set of velocities reachable within one control period Δt,
 intersected with the robot's limits::

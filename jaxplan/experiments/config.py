@@ -35,8 +35,8 @@ Schema (every key shown; ``#`` marks defaults and alternatives)::
 
     [[maps]]                    # or a generator of jaxplan.grid._generators (see `GENERATORS`)
     name = "wh20"
-    generator = "warehouse"     # warehouse | random | urban | mountain | warehouse_seed003 | warehouse_seed004 | demo_warehouse
-                                # | warehouse_seed003_risk (params = { lam = 1.0 }: seed 003's Poisson risk layer)
+    generator = "warehouse"     # warehouse | random | urban | mountain | warehouse_chen2023 | warehouse_yu2020 | demo_warehouse
+                                # | warehouse_chen2023_risk (params = { lam = 1.0 }: chen2023's Poisson risk layer)
     seed = 0                    # the generator's key (>= 0)
     params = { width = 20, height = 20, missing_prob = 0.1 }   # the generator's own settings
     resolution = 1.0
@@ -91,7 +91,7 @@ Schema (every key shown; ``#`` marks defaults and alternatives)::
     metrics = ["length"]        # default: every configured metric except wall-clock times
     alpha = 0.05                # marks p < alpha in the report
     correction = "holm"         # pairwise p-values adjusted by Holm's method ("holm" | "none")
-    extremes = false            # also show the smallest and largest single-trial value (seed 004's Max/Min)
+    extremes = false            # also show the smallest and largest single-trial value (yu2020's Max/Min)
 
     [[figures]]                 # stored for `jaxplan figures`; not drawn here
     kind = "convergence"        # see `FIGURE_KINDS`
@@ -101,14 +101,14 @@ Schema (every key shown; ``#`` marks defaults and alternatives)::
     band = "iqr"
     # Other kinds: box/bar (metric = ...; default the first stats metric), paths and pheromone
     # (scenario, seed; plan planners; paths also takes smoothing = "los" to draw each path after that
-    # smoother beside it, seed 004 Fig. 11), trajectories and controls (scenario, seed; navigate planners:
+    # smoother beside it, yu2020 Fig. 11), trajectories and controls (scenario, seed; navigate planners:
     # executed paths among the moving discs, v and omega over time), fan (the DWA rollouts at the
-    # given control steps = [..]), diversity (seed 004: sd of the ants' costs per iteration),
+    # given control steps = [..]), diversity (yu2020: sd of the ants' costs per iteration),
     # sweep (metric against x: a generator parameter name, e.g. "obstacle_ratio", or one number per map), and
     # tours (seed; tsp planners: the best tour over the instance's cities, the optimal one dashed).
 
     [paper]                     # the paper's numbers, shown beside ours, labelled "paper"
-    source = "Seed 000, Table 2"
+    source = "Cui & Liu (2025), Table 2"
     [[paper.values]]
     planner = "IACO"            # a planner label
     map = "wh20"                # optional: default every map
@@ -192,14 +192,14 @@ KINDS = ("plan", "navigate", "tsp")
 a TSP ant colony on a TSPLIB instance (`jaxplan.solve_tsp`'s program, batched over seeds)."""
 
 ACCURACY_GAP = 0.10
-"""Seed 000's "accuracy" (DESIGN §6): the share of trials that succeed with an optimality gap <= this."""
+"""cui2025's "accuracy" (DESIGN §6): the share of trials that succeed with an optimality gap <= this."""
 
 _P, _N, _B = frozenset({"plan"}), frozenset({"navigate"}), frozenset({"plan", "navigate"})
 _T, _PT = frozenset({"tsp"}), frozenset({"plan", "tsp"})
 METRICS: Mapping[str, Metric] = MappingProxyType({m.name: m for m in (
     Metric("success", _B | _T, "", "plan: goal reached; navigate: goal reached without collision in time; "
                                    "tsp: 1 (every run returns a tour)", rate=True),
-    Metric("accuracy", _B, "", "seed 000: success with optimality gap <= 10 % (plan: the raw grid path against the "
+    Metric("accuracy", _B, "", "cui2025: success with optimality gap <= 10 % (plan: the raw grid path against the "
                                "octile optimum; navigate: the executed path against the line-of-sight smoothed "
                                "exact path on the planning map)", rate=True, default=False),
     Metric("length", _P, "m", "path length"),
@@ -208,16 +208,16 @@ METRICS: Mapping[str, Metric] = MappingProxyType({m.name: m for m in (
                                       "optimal tour length - 1"),
     Metric("turns", _P, "", "path vertices with a heading change"),
     Metric("sharp_turns", _P, "", "heading changes >= 45 deg"),
-    Metric("los_length", _P, "m", "path length after line-of-sight smoothing (seed 004 sec. 3.3, smoother 'los')",
+    Metric("los_length", _P, "m", "path length after line-of-sight smoothing (yu2020 sec. 3.3, smoother 'los')",
            default=False),
     Metric("los_turns", _P, "", "turns after line-of-sight smoothing", default=False),
-    Metric("los_length_reduction", _P, "", "1 - los_length / length (seed 004 Table 4)", default=False),
+    Metric("los_length_reduction", _P, "", "1 - los_length / length (yu2020 Table 4)", default=False),
     Metric("los_turns_reduction", _P, "", "1 - los_turns / turns (nan for a straight path)", default=False),
     Metric("smoothness", _P, "", "1 - mean |heading change| / pi"),
     Metric("min_clearance", _P, "m", "smallest vertex clearance"),
     Metric("mean_clearance", _P, "m", "mean vertex clearance"),
     Metric("max_curvature", _B, "1/m", "plan: Menger curvature at path vertices; navigate: executed |omega|/v"),
-    Metric("hausdorff", _B, "m", "Hausdorff distance of the global path to the exact A* path (seed 000 Fig. 9)"),
+    Metric("hausdorff", _B, "m", "Hausdorff distance of the global path to the exact A* path (cui2025 Fig. 9)"),
     Metric("cost", _P, "", "the planner's own objective"),
     Metric("converged_iteration", _PT, "", "plan: first iteration within 0.1 % of the final best cost; tsp: first "
                                            "iteration whose best tour is the final best (0-based)"),
@@ -265,28 +265,28 @@ def _generators() -> dict[str, tuple[Callable[..., Any], bool]]:
         "random": (G.RandomMapGenerator, True),
         "urban": (G.UrbanGenerator, True),
         "mountain": (G.MountainGenerator, True),
-        "warehouse_seed003": (G.warehouse_seed003, False),
-        "warehouse_seed004": (G.warehouse_seed004, False),
+        "warehouse_chen2023": (G.warehouse_chen2023, False),
+        "warehouse_yu2020": (G.warehouse_yu2020, False),
         "demo_warehouse": (G.demo_warehouse, False),
-        "warehouse_seed003_risk": (_seed003_risk, False),
+        "warehouse_chen2023_risk": (_chen2023_risk, False),
     }
 
 
-def _seed003_risk(key: int = 0, lam: float = 1.0):
-    """Seed 003's Case 1 map with its unknown-factor layer: Poisson(λ = ``lam``) risk per free cell (§II, Fig. 8).
+def _chen2023_risk(key: int = 0, lam: float = 1.0):
+    """chen2023's Case 1 map with its unknown-factor layer: Poisson(λ = ``lam``) risk per free cell (§II, Fig. 8).
 
-    The layer's key is the map key + 1, so the shelves stay those of `warehouse_seed003(key)` for every λ."""
+    The layer's key is the map key + 1, so the shelves stay those of `warehouse_chen2023(key)` for every λ."""
     from jaxplan.grid import _generators as G
 
-    scene = G.warehouse_seed003(key)
+    scene = G.warehouse_chen2023(key)
     return scene._replace(grid=G.poisson_risk(scene.grid, int(key) + 1, lam=float(lam)))
 
 
-GENERATORS = ("warehouse", "random", "urban", "mountain", "warehouse_seed003", "warehouse_seed004", "demo_warehouse",
-              "warehouse_seed003_risk")
+GENERATORS = ("warehouse", "random", "urban", "mountain", "warehouse_chen2023", "warehouse_yu2020", "demo_warehouse",
+              "warehouse_chen2023_risk")
 """Generator names a map may use (`jaxplan.grid._generators`)."""
-_FUNCTION_PARAMS = {"warehouse_seed003": (), "warehouse_seed004": ("size",), "demo_warehouse": (),
-                    "warehouse_seed003_risk": ("lam",)}
+_FUNCTION_PARAMS = {"warehouse_chen2023": (), "warehouse_yu2020": ("size",), "demo_warehouse": (),
+                    "warehouse_chen2023_risk": ("lam",)}
 
 SCENARIO_SOURCES = ("scen", "random", "scene")
 SPREADS = ("first", "even", "random")
@@ -432,7 +432,7 @@ class PlannerConfig:
 @dataclass(frozen=True)
 class StatsSpec:
     """Significance tests across planners, per map and metric (on per-seed means); ``extremes``: the tables
-    also show the smallest and largest single-trial value (seed 004 reports Max/Min beside Avg/Sd)."""
+    also show the smallest and largest single-trial value (yu2020 reports Max/Min beside Avg/Sd)."""
 
     anova: bool = True
     pairwise: bool = False
@@ -844,7 +844,7 @@ def _check_generator(r: _Reader, path: str, name: str, entry: tuple, params: dic
     if "resolution" in params:
         r.bad(_join(path, "resolution"), "give the resolution as the map's own 'resolution' key")
     if not ok or not is_dc:
-        if name == "warehouse_seed004" and params.get("size", 30) not in (30, 35):
+        if name == "warehouse_yu2020" and params.get("size", 30) not in (30, 35):
             r.bad(_join(path, "size"), f"must be 30 or 35, got {params.get('size')!r}")
         return
     try:
@@ -1181,7 +1181,7 @@ def _read_paper(r: _Reader, raw: dict, metrics: tuple, maps: set, labels: set) -
         r.bad("paper.values", f"expected [[paper.values]] tables, got {_describe(vals)}")
         return source, ()
     if vals and not source:
-        r.bad("paper.source", "say where the paper's numbers come from (e.g. 'Seed 000, Table 2')")
+        r.bad("paper.source", "say where the paper's numbers come from (e.g. 'cui2025, Table 2')")
     out, seen = [], set()
     for i, v in enumerate(vals):
         p = f"paper.values[{i}]"
@@ -1215,7 +1215,7 @@ def _read_paper(r: _Reader, raw: dict, metrics: tuple, maps: set, labels: set) -
                 mean, sd = float(x[0]), float(x[1])
             elif isinstance(x, dict) and "mean" in x and set(x) <= {"mean", "sd", "min", "max"} and all(
                     num(y) for y in x.values()):
-                # A paper's Max/Min are stored as printed, unchecked against the mean: seed 004's Table 1
+                # A paper's Max/Min are stored as printed, unchecked against the mean: yu2020's Table 1
                 # prints an ACO average below its minimum.
                 mean, sd = float(x["mean"]), (float(x["sd"]) if "sd" in x else None)
                 lo, hi = (float(x["min"]) if "min" in x else None), (float(x["max"]) if "max" in x else None)

@@ -1,4 +1,4 @@
-"""`jaxplan demo`: seed 000's IACO-DWA beside its ACO-DWA baseline among moving obstacles, with no data.
+"""`jaxplan demo`: cui2025's IACO-DWA beside its ACO-DWA baseline among moving obstacles, with no data.
 
 Both pipelines drive the same robot from the same start to the same goal on the built-in
 48x32 warehouse (`jaxplan.demo_warehouse`) among the same moving discs (random routes
@@ -40,7 +40,7 @@ __all__ = ["DemoResult", "run_demo", "demo_table", "ROWS", "PIPELINES"]
 plt = plots.plt
 
 PIPELINES = ("iaco_dwa", "aco_dwa")
-"""The compared pipelines: seed 000's IACO-DWA and its Ant System + weighted-DWA baseline."""
+"""The compared pipelines: cui2025's IACO-DWA and its Ant System + weighted-DWA baseline."""
 
 ROWS = ("success", "time to goal (s)", "path length (m)", "collisions", "min clearance (m)", "max curvature (1/m)",
         "energy (J)", "planning time (ms)", "wall time (s)")

@@ -15,7 +15,7 @@ Kinds (keys besides ``kind name title maps planners format``):
 
     convergence  best cost per iteration, median and band over seeds, at ``scenario`` (plan planners; tsp
                  planners: best tour length per iteration on each instance)
-    diversity    seed 004's diversity (sd of the ants' path costs) per iteration, same layout
+    diversity    yu2020's diversity (sd of the ants' path costs) per iteration, same layout
     box          per-seed means of ``metric`` per planner (box plot), one panel per map
     bar          mean ± sd over seeds of ``metric`` per planner, the paper's value beside ours, hatched
     sweep        ``metric`` against ``x`` (a generator parameter, e.g. ``obstacle_ratio``, or one number
@@ -24,7 +24,7 @@ Kinds (keys besides ``kind name title maps planners format``):
                  ``smoothing`` (a `jaxplan.smooth` smoother, e.g. "los") adds each path after it, dashed
     pheromone    final pheromone per cell of each colony planner at (``scenario``, ``seed``)
     trajectories executed robot paths with the moving discs' tracks (navigate planners)
-    controls     v (m/s) and omega (rad/s) against time (navigate planners), seed 002 Figs 8/11
+    controls     v (m/s) and omega (rad/s) against time (navigate planners), chu2024 Figs 8/11
     fan          DWA rollouts (feasible blue, infeasible red, chosen black) at control ``steps``
     tours        best tour of each tsp planner at ``seed`` over the instance's cities, the optimal tour dashed
 
@@ -149,7 +149,7 @@ def _panels(n: int, w: float = 5.0, h: float = 4.2, rows: int = 1):
 
 
 def _layer(grid) -> str | None:
-    """The map layer worth showing: risk (seed 003) or terrain height (seeds 002), else none."""
+    """The map layer worth showing: risk (chen2023) or terrain height (chu2024), else none."""
     if np.any(np.asarray(grid.risk) > 0):
         return "risk"
     if np.ptp(np.asarray(grid.height)) > 0:

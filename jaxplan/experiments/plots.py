@@ -9,7 +9,7 @@ returns it, so a figure is composed from small calls::
     import jaxplan as jp
     from jaxplan.experiments.plots import plot_map, plot_paths, plot_pheromone, save_figure
 
-    scene = jp.warehouse_seed003()
+    scene = jp.warehouse_chen2023()
     res = jp.plan(scene.grid, scene.start, scene.goal, planner="iaco", keep_pheromone=True)
     fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
     plot_map(a, scene.grid, layer="risk")
@@ -127,11 +127,11 @@ def plot_map(
     Args:
       ax: matplotlib axes.
       grid: the map (``free bool[H, W]`` and its layers).
-      layer: ``None``, ``"height"`` (terrain, m), ``"risk"`` (seed 003's unknown-factor
+      layer: ``None``, ``"height"`` (terrain, m), ``"risk"`` (chen2023's unknown-factor
         intensity, scale from 0) or ``"clearance_height"`` (tunnel/bridge headroom, m; cells
         without a roof, ``+inf``, are left blank), drawn as a colour field over free cells.
       title: axes title.
-      show_turn_rule: mark the free cells with ``turn_rule == 1`` (seed 002's right-hand rule)
+      show_turn_rule: mark the free cells with ``turn_rule == 1`` (chu2024's right-hand rule)
         with small hollow circles at their centres (legend label ``"right-turn rule"``).
       colorbar: add a colour bar for ``layer`` (not when it has no cell to show).
 

@@ -1,4 +1,4 @@
-"""`reproduce`: every reproduction config (``configs/seed*.toml``) run, then its figures drawn.
+"""`reproduce`: every reproduction config (``configs/<paper>_<table>.toml``) run, then its figures drawn.
 
 One process runs them all in file-name order, so compiled programs that two configs share
 (the same planner on maps of the same shape) are built once. Each config's run folder is
@@ -30,8 +30,9 @@ class Reproduced:
     error: str | None = None
 
 
-def reproduction_configs(config_dir: str | os.PathLike = "configs", pattern: str = "seed*.toml") -> list[Path]:
-    """The reproduction configs in ``config_dir`` (sorted by name).
+def reproduction_configs(config_dir: str | os.PathLike = "configs", pattern: str | None = None) -> list[Path]:
+    """The reproduction configs in ``config_dir`` (sorted by name): files ``<paper>_*.toml`` for every paper key of
+    `jaxplan.papers.PAPERS`, or those matching the glob ``pattern`` if one is given.
 
     Raises:
       FileNotFoundError: no such folder, or no config matches.
@@ -39,9 +40,14 @@ def reproduction_configs(config_dir: str | os.PathLike = "configs", pattern: str
     d = Path(config_dir)
     if not d.is_dir():
         raise FileNotFoundError(f"config folder {d} not found (pass --configs)")
-    found = sorted(d.glob(pattern))
+    from jaxplan.papers import PAPERS
+
+    if pattern is None:
+        found = sorted(p for key in PAPERS for p in d.glob(f"{key}_*.toml"))
+    else:
+        found = sorted(d.glob(pattern))
     if not found:
-        raise FileNotFoundError(f"no config matches {d / pattern}")
+        raise FileNotFoundError(f"no config matches {d / (pattern or '<paper>_*.toml')}")
     return found
 
 

@@ -376,7 +376,7 @@ _GAP_TOL = 1e-9  # a gap of exactly 10 % computes as 0.10000000000000009: count 
 
 
 def accuracy(success: np.ndarray, gap: np.ndarray, threshold: float = ACCURACY_GAP) -> np.ndarray:
-    """Seed 000's accuracy per trial (DESIGN §6): 1 for a success with ``gap <= threshold``, else 0.
+    """cui2025's accuracy per trial (DESIGN §6): 1 for a success with ``gap <= threshold``, else 0.
 
     Args:
       success: ``[...]`` 1/0 outcomes (nan: undefined).
@@ -394,14 +394,14 @@ def accuracy(success: np.ndarray, gap: np.ndarray, threshold: float = ACCURACY_G
 
 
 def reductions(before: np.ndarray, after: np.ndarray) -> np.ndarray:
-    """``f64[...]`` reduction rates ``1 − after / before`` (seed 004 Table 4); nan where ``before`` is 0 or nan."""
+    """``f64[...]`` reduction rates ``1 − after / before`` (yu2020 Table 4); nan where ``before`` is 0 or nan."""
     b, a = np.asarray(before, np.float64), np.asarray(after, np.float64)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(b > 0, 1.0 - a / np.where(b > 0, b, 1.0), np.nan)
 
 
 def _los_metrics(grid, paths: np.ndarray, n: np.ndarray, ok: np.ndarray, fill: np.ndarray) -> dict[str, np.ndarray]:
-    """Length (m) and turns of each path after line-of-sight smoothing (seed 004 §3.3: an intermediate cell centre
+    """Length (m) and turns of each path after line-of-sight smoothing (yu2020 §3.3: an intermediate cell centre
     is dropped while the last kept one sees the next), nan where the plan failed.
 
     Args:
@@ -650,7 +650,7 @@ def _run_tsp(mw: MapWork, pc: PlannerConfig, seeds: tuple[int, ...], metrics: Se
     R = len(seeds)
     values = {"success": np.ones((1, R), np.int64), "tour_length": lengths[None],
               "optimality_gap": (lengths / mw.optimal[0] - 1.0)[None],
-              # The iteration the final best tour was found: Table 1's "number of iterations" (seed 004).
+              # The iteration the final best tour was found: Table 1's "number of iterations" (yu2020).
               "converged_iteration": np.argmax(history <= history[:, -1:], axis=1).astype(np.float64)[None]}
     keep = {"history": history[None].astype(np.float32), "tours": tours[None].astype(np.int32),
             "success": np.ones((1, R), bool)}

@@ -9,7 +9,7 @@ sample standard deviation (``ddof=1``) of those per-seed means over the seeds: t
 spread a reader should expect from re-running the experiment with new seeds on the same
 scenarios — not the spread over scenarios, which mixes easy and hard rows. ``n`` counts
 the seeds with a defined per-seed mean. ``min`` and ``max`` are the smallest and largest
-single-trial value (not per-seed means): seed 004 reports Max/Min of its runs beside Avg/Sd, and
+single-trial value (not per-seed means): yu2020 reports Max/Min of its runs beside Avg/Sd, and
 with one scenario per map (its configs) a trial is a seed's run.
 
 Significance (if ``[stats]`` asks): per map and metric, a one-way ANOVA across planners

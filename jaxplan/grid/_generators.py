@@ -27,8 +27,8 @@ __all__ = [
     "UrbanGenerator",
     "MountainGenerator",
     "poisson_risk",
-    "warehouse_seed003",
-    "warehouse_seed004",
+    "warehouse_chen2023",
+    "warehouse_yu2020",
     "demo_warehouse",
 ]
 
@@ -77,15 +77,15 @@ def _cells(*pairs) -> np.ndarray:
 
 @dataclass(frozen=True)
 class WarehouseGenerator:
-    """Warehouse of rectangular shelf blocks separated by aisles (seeds 003, 004).
+    """Warehouse of rectangular shelf blocks separated by aisles (chen2023, yu2020).
 
     Shelves are ``shelf_depth`` x ``shelf_length`` blocks (rows x columns) placed
     on a regular lattice inside a free ``margin`` ring, with ``aisle`` free rows
     between block rows and ``cross_aisle`` free columns between block columns.
-    Seed 003 draws each shelf as six consecutive cells and combines two back to
+    chen2023 draws each shelf as six consecutive cells and combines two back to
     back (depth 2). The key decides which blocks are left out
     (``missing_prob``) and, when ``n_blocked`` is given, which shelf ends are
-    trimmed to hit that exact count of blocked cells (seed 004's ≈200 / ≈400).
+    trimmed to hit that exact count of blocked cells (yu2020's ≈200 / ≈400).
     Removing shelf cells never disconnects the aisles, so every free cell is
     reachable. Start and goal: opposite corners of the margin ring.
     """
@@ -157,18 +157,18 @@ class WarehouseGenerator:
         return Scene(grid, _cells(0, 0)[0], _cells(self.width - 1, self.height - 1)[0], _cells(), name)
 
 
-def warehouse_seed003(key: Any = 0) -> Scene:
-    """Seed 003, Case 1: a 20x20 warehouse of combined shelves (two 1x6 shelves back to back)."""
+def warehouse_chen2023(key: Any = 0) -> Scene:
+    """chen2023, Case 1: a 20x20 warehouse of combined shelves (two 1x6 shelves back to back)."""
     return WarehouseGenerator(20, 20, shelf_length=6, shelf_depth=2, aisle=1, cross_aisle=2)(key)
 
 
-def warehouse_seed004(key: Any = 0, size: int = 30) -> Scene:
-    """Seed 004: the 30x30 map with 200 blocked cells or the 35x35 map with 400."""
+def warehouse_yu2020(key: Any = 0, size: int = 30) -> Scene:
+    """yu2020: the 30x30 map with 200 blocked cells or the 35x35 map with 400."""
     if size == 30:
         return WarehouseGenerator(30, 30, shelf_length=6, shelf_depth=2, aisle=2, cross_aisle=2, n_blocked=200)(key)
     if size == 35:
         return WarehouseGenerator(35, 35, shelf_length=6, shelf_depth=2, aisle=1, cross_aisle=2, n_blocked=400)(key)
-    raise ValueError(f"seed 004 uses sizes 30 and 35, got {size}")
+    raise ValueError(f"yu2020 uses sizes 30 and 35, got {size}")
 
 
 def demo_warehouse() -> Scene:
@@ -178,7 +178,7 @@ def demo_warehouse() -> Scene:
 
 @dataclass(frozen=True)
 class RandomMapGenerator:
-    """Uniformly random blocked cells at a given obstacle ratio (seed 001 sweeps 10–40 %).
+    """Uniformly random blocked cells at a given obstacle ratio (li2026 sweeps 10–40 %).
 
     Exactly ``round(obstacle_ratio * (W * H - 2))`` cells other than start and goal
     are blocked. The start–goal connection is guaranteed: up to ``tries`` draws are
@@ -254,13 +254,13 @@ def _is_int(v: Any) -> bool:
 
 @dataclass(frozen=True)
 class UrbanGenerator:
-    """Seed 002's 20x20 urban map: a street grid with right-turn cells and moving-car slots.
+    """chu2024's 20x20 urban map: a street grid with right-turn cells and moving-car slots.
 
     Reconstruction (the paper gives only Figure 1): two-cell-wide streets on every
     sixth row and column (0–1, 6–7, 12–13, 18–19) around 4x4 building blocks
     (static obstacles). The key makes some blocks parks (free, with a hill in the
-    ``height`` layer: seed 002's green cells, "the deeper the higher"); marks
-    intersection cells as right-turn cells (``turn_rule = 1``, seed 002's brown
+    ``height`` layer: chu2024's green cells, "the deeper the higher"); marks
+    intersection cells as right-turn cells (``turn_rule = 1``, chu2024's brown
     cells) with probability ``right_turn_prob``; blocks ``n_interventions``
     street cells (the grey "random interventions"); and picks ``n_dynamic``
     street cells as starting slots of moving cars (the yellow squares). Start
@@ -331,7 +331,7 @@ class UrbanGenerator:
 
 @dataclass(frozen=True)
 class MountainGenerator:
-    """Seed 002's 30x30 mountain map: a height grid with a ridge crossed by tunnels and a bridge.
+    """chu2024's 30x30 mountain map: a height grid with a ridge crossed by tunnels and a bridge.
 
     Reconstruction (the paper gives only Figure 2 and two vehicle heights, 1.45 and
     0.5 m, of which only the lower passes five "three-dimensional" cells): terrain
@@ -383,10 +383,10 @@ class MountainGenerator:
 
 
 def poisson_risk(grid: GridMap, key: Any, lam: float = 1.0) -> GridMap:
-    """Seed 003's "unknown factor" layer: one Poisson(λ) draw per free cell (Eq. 4).
+    """chen2023's "unknown factor" layer: one Poisson(λ) draw per free cell (Eq. 4).
 
     λ is the mean number of disturbances (manual picking, a stalled stacker, ...)
-    per cell; seed 003 tries 0.01, 0.1, 1 and 10 and settles on 1. Blocked cells get 0.
+    per cell; chen2023 tries 0.01, 0.1, 1 and 10 and settles on 1. Blocked cells get 0.
 
     Args:
       grid: the map.

@@ -20,11 +20,11 @@ class GridMap(NamedTuple):
 
     Attributes:
       free: ``bool[H, W]``, True where a robot may stand.
-      height: ``f32[H, W]`` terrain height in metres (seed 002's mountain map), 0 by default.
+      height: ``f32[H, W]`` terrain height in metres (chu2024's mountain map), 0 by default.
       clearance_height: ``f32[H, W]`` the headroom of a tunnel or bridge cell in metres;
         a vehicle passes only if it is lower than this. ``+inf`` (no roof) by default.
-      risk: ``f32[H, W]`` intensity of seed 003's "unknown factors" (>= 0), 0 by default.
-      turn_rule: ``i8[H, W]`` 0 = no rule, 1 = right turn required (seed 002's urban map).
+      risk: ``f32[H, W]`` intensity of chen2023's "unknown factors" (>= 0), 0 by default.
+      turn_rule: ``i8[H, W]`` 0 = no rule, 1 = right turn required (chu2024's urban map).
       resolution: metres per cell (a scalar leaf, so maps of several resolutions can be batched).
 
     Example:

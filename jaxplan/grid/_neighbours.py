@@ -4,8 +4,8 @@ Move rule (DESIGN §2): a move from cell c to c + (dx, dy) is allowed when every
 cell whose closed square meets the closed segment between the two centres is
 passable. For straight moves that is just the target; for diagonal moves the
 segment passes through the shared corner, so both orthogonal neighbours must be
-free (MovingAI's "no corner cutting", seed 003's "de-pointing"); for the
-knight moves of seed 002 (±1, ±2)/(±2, ±1) the two cells the segment crosses
+free (MovingAI's "no corner cutting", chen2023's "de-pointing"); for the
+knight moves of chu2024 (±1, ±2)/(±2, ±1) the two cells the segment crosses
 must be free. Step lengths are 1, √2 and √5 times the resolution.
 """
 

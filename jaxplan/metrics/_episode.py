@@ -146,7 +146,7 @@ def rmse(
 class EnergyModel:
     """Constants of the energy proxy ``∫ (m·|a|·|v| + c_r·m·g·|v| + c_w·|ω|) dt`` (DESIGN §6).
 
-    Attributes (defaults for the seed-000 robot: 0.25 m radius, v <= 1.2 m/s):
+    Attributes (defaults for the cui2025 robot: 0.25 m radius, v <= 1.2 m/s):
       mass: m, kg. 30 kg: a differential-drive robot of 0.5 m diameter with a light load
         (platforms of that size weigh 20–50 kg).
       rolling: c_r, rolling-resistance coefficient. 0.02: polyurethane or rubber wheels on

@@ -53,7 +53,7 @@ def diversity(costs: jnp.ndarray, valid: jnp.ndarray, axis: int | tuple[int, ...
         sub-colonies' ants form one population), or None for all axes.
 
     Returns:
-      ``[...]`` the standard deviation over the counted ants (seed 004's population
+      ``[...]`` the standard deviation over the counted ants (yu2020's population
       diversity); 0 when fewer than two ants count — one path or none shows no spread,
       and 0 keeps per-iteration curves free of NaN.
     """

@@ -5,7 +5,7 @@
   metrics; results as `Episode` / `EpisodeBatch`.
 * `run_episodes` (`_episode`): the pure episode program (``[B episodes, N robots]``).
 * `NavConfig` (`_config`), `Pipeline`/`pipelines` (`_pipelines`: the seeds' systems and
-  seed 000's ablations), in-episode re-planning (`_replan`).
+  cui2025's ablations), in-episode re-planning (`_replan`).
 * Moving obstacles (`_obstacles`): `MovingObstacles`, `moving_obstacles`, the generators
   `random_obstacles`, `crossing_traffic`, `head_on`, and the pure `obstacle_state`.
 """

@@ -12,13 +12,13 @@ from jaxplan.dwa._config import DWAConfig
 __all__ = ["NavConfig", "LOCAL_PLANNERS", "SUBGOAL_MODES", "PREDICTIONS"]
 
 LOCAL_PLANNERS = ("dwa", "follow")
-"""``"dwa"``: the DWA step; ``"follow"``: pure path following without obstacle avoidance (seed 000's
+"""``"dwa"``: the DWA step; ``"follow"``: pure path following without obstacle avoidance (cui2025's
 "without DWA" ablation): turn towards the sub-goal, slow down with the heading error, within
 the robot's dynamic window."""
 
 SUBGOAL_MODES = ("key_nodes", "lookahead")
 """``"key_nodes"``: aim at the current waypoint and switch to the next within ``switch_radius``
-(seeds 000/001); ``"lookahead"``: aim at the point ``lookahead`` metres further along the
+(cui2025/li2026); ``"lookahead"``: aim at the point ``lookahead`` metres further along the
 waypoint polyline than the robot's projection on it."""
 
 PREDICTIONS = ("constant_velocity", "oracle")
@@ -55,7 +55,7 @@ class NavConfig:
       evaluator: the DWA evaluator (``"weighted"``, ``"fuzzy"``, ``"classic"``; static), or
         None: the pipeline's (fuzzy for ``iaco_dwa``, weighted for the others).
       subgoal: ``"key_nodes"`` or ``"lookahead"`` (static; see `SUBGOAL_MODES`).
-      switch_radius: a waypoint counts as passed within this distance (seed 001: 1 m). While
+      switch_radius: a waypoint counts as passed within this distance (li2026: 1 m). While
         the robot creeps (see ``stall_time``), only if the straight way to the next keeps
         ``dwa.d_safe`` from the map for its first 3.2 m, and otherwise within ``switch_min``.
       switch_min: see ``switch_radius``.
@@ -66,7 +66,7 @@ class NavConfig:
       chunk: control steps per iteration of the outer loop (static): the loop stops at the
         first chunk boundary after every robot is done.
       stop_on_collision: a colliding robot stops there (``reason = collision``); when False
-        it drives on and contacts are counted (seed 001's Table 3 counts collisions) (static).
+        it drives on and contacts are counted (li2026's Table 3 counts collisions) (static).
       contact_checks: contacts (robot disc within a blocked square, a moving disc or another
         robot) are checked at this many evenly spaced times of each control period, the last
         at its end (static). A robot and a walker close by up to 0.44 m per period (1.2 + 1.0
@@ -80,7 +80,7 @@ class NavConfig:
         the cross aisles it would need (it cannot turn into a 1 m aisle at speed); measured
         on the warehouse, one of 50 short rows then drove to the map's far end. Not while a
         disc is within half of ``block_distance``: then the drift is an evasion.
-      replan_period: at most one re-plan per robot per this many seconds (seed 000: 0.2 s).
+      replan_period: at most one re-plan per robot per this many seconds (cui2025: 0.2 s).
       block_distance: how far along the remaining path a disc is looked for (6 m: a walker
         closing head-on in a 1 m aisle must be seen while the robot can still turn round).
       block_horizon: a disc blocks the path if it comes near it within this many seconds,

@@ -7,8 +7,8 @@ The steps of every episode (DESIGN §5):
    footprint. A scenario whose start or goal is closed, or whose goal the inflated map
    does not connect to the start, is *infeasible* for this robot: it is not run, and is
    reported with that reason (benchmarks count it apart). At 1.0 m per cell every free
-   cell centre keeps 0.5 m, so nothing is closed for the seed-000 robot (0.3 m); at
-   seed 000's 0.5 m per cell a one-cell aisle keeps only 0.25 m, narrower than the
+   cell centre keeps 0.5 m, so nothing is closed for the cui2025 robot (0.3 m); at
+   cui2025's 0.5 m per cell a one-cell aisle keeps only 0.25 m, narrower than the
    robot's own radius plus nothing — which is why the MovingAI maps run at 1.0 m.
 2. **Global plan** with the pipeline's planner on the planning map (`plan_batch`: every
    scenario × seed in one compiled call for the ACO planners).
@@ -113,7 +113,7 @@ class Episode(NamedTuple):
     Attributes:
       trajectory: ``f32[T + 1, 3]`` poses (x, y, theta) in m, rad, from the start; ``T``
         control steps were taken.
-      controls: ``f32[T, 2]`` (v, omega) applied at each step (seed 002's velocity traces).
+      controls: ``f32[T, 2]`` (v, omega) applied at each step (chu2024's velocity traces).
       times: ``f32[T + 1]`` seconds of the trajectory samples.
       success: goal reached within tolerance, without collision, within the time limit.
       reason: ``"goal"``, ``"collision"``, ``"time limit"`` or why it was not run (infeasible).

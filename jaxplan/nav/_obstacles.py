@@ -1,6 +1,6 @@
 """Moving obstacles: discs that travel piecewise-linear routes at constant speed.
 
-The model (DESIGN §5; seed 001's moving obstacles at 1.0 and 1.5 m/s, seed 002's
+The model (DESIGN §5; li2026's moving obstacles at 1.0 and 1.5 m/s, chu2024's
 head-on encounter of Figure 11):
 
 * An obstacle is a disc of radius ``r`` (m) whose centre moves along a route, a polyline
@@ -44,7 +44,7 @@ cell (clearance >= radius, as `jaxplan.grid._collision.segment_free` decides it)
 verified with an exact segment-to-square test on the host (`_Blocked`, a numpy twin
 of that test that needs no compilation per map and path length):
 `random_obstacles` (random walkers along A* routes), `crossing_traffic` (traffic
-crossing a robot's planned path) and `head_on` (seed 002, Figure 11).
+crossing a robot's planned path) and `head_on` (chu2024, Figure 11).
 
 Example:
   >>> import jaxplan as jp
@@ -528,7 +528,7 @@ def random_obstacles(grid: Any, n: int = 5, speed: Any = 1.0, radius: Any = 0.25
     Args:
       grid: a `GridMap`, or a `Scene` such as ``jp.demo_warehouse()``.
       n: number of obstacles (>= 0).
-      speed: m/s, >= 0: a scalar or ``[n]`` (seed 001 runs 1.0 and 1.5).
+      speed: m/s, >= 0: a scalar or ``[n]`` (li2026 runs 1.0 and 1.5).
       radius: disc radius (m), >= 0: a scalar or ``[n]``.
       seed: integer seed of the numpy RNG (same seed, same obstacles).
       waypoints: random cells per route (>= 1; 1 stands still).
@@ -761,7 +761,7 @@ def crossing_traffic(grid: Any, path: ArrayLike, n: int = 3, speed: Any = 1.0, r
 
 
 def head_on(path: ArrayLike, speed: float = 1.0, radius: float = 0.25, *, delay: float = 0.0) -> MovingObstacles:
-    """One disc travelling the robot's planned ``path`` in reverse, from its goal end (seed 002, Figure 11).
+    """One disc travelling the robot's planned ``path`` in reverse, from its goal end (chu2024, Figure 11).
 
     The route is ``path[::-1]``, bouncing (not looping): the disc leaves the goal end,
     meets the robot head-on, reaches the start end and turns back. No map is checked: the

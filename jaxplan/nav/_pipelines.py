@@ -1,4 +1,4 @@
-"""The seeds' two-level systems as named pipelines, and the ablations of seed 000's Table 1.
+"""The papers' two-level systems as named pipelines, and the ablations of cui2025's Table 1.
 
 A pipeline is a global planner (a registry name and overrides), the reduction of its path
 to waypoints (smoothers of `jaxplan.smooth`, run with the robot's d_safe as clearance),
@@ -47,25 +47,25 @@ def _p(name, planner, waypoints, evaluator, description, local="dwa", **override
 
 PIPELINES: Mapping[str, Pipeline] = MappingProxyType({p.name: p for p in (
     _p("iaco_dwa", "iaco", _KEY, "fuzzy",
-       "seed 000 IACO-DWA: elite multi-objective ACO, key nodes, fuzzy-evaluated DWA (IDWA)"),
-    _p("aco_dwa", "aco", _KEY, "weighted", "seed 000's ACO-DWA baseline: Ant System, key nodes, weighted DWA"),
+       "cui2025 IACO-DWA: elite multi-objective ACO, key nodes, fuzzy-evaluated DWA (IDWA)"),
+    _p("aco_dwa", "aco", _KEY, "weighted", "cui2025's ACO-DWA baseline: Ant System, key nodes, weighted DWA"),
     _p("astar_kng_dwa", "astar", ["key_nodes"], "weighted",
-       "seed 001 A*-KNG-DWA: exact A*, key-node guidance (turns >= 20 deg), weighted DWA"),
+       "li2026 A*-KNG-DWA: exact A*, key-node guidance (turns >= 20 deg), weighted DWA"),
     _p("opt_ant_dwa", "opt_ant", ["los", "bezier"], "weighted",
-       "seed 002 Opt Ant-DWA: 16-direction Opt Ant, line-of-sight pruning and Bezier corners, weighted DWA"),
-    _p("rrt_star_dwa", "rrt_star", ["key_nodes"], "weighted", "seed 001's RRT* baseline tracked by weighted DWA"),
+       "chu2024 Opt Ant-DWA: 16-direction Opt Ant, line-of-sight pruning and Bezier corners, weighted DWA"),
+    _p("rrt_star_dwa", "rrt_star", ["key_nodes"], "weighted", "li2026's RRT* baseline tracked by weighted DWA"),
     _p("mrbs_rrt_dwa", "mrbs_rrt", ["key_nodes"], "weighted",
-       "seed 001 MRBS: multi-region biased RRT*, key nodes, weighted DWA"),
-    # Seed 000 Table 1 ablations of IACO-DWA.
+       "li2026 MRBS: multi-region biased RRT*, key nodes, weighted DWA"),
+    # cui2025 Table 1 ablations of IACO-DWA.
     _p("iaco_dwa_no_elite", "iaco", _KEY, "fuzzy",
-       "seed 000 Table 1 B: IACO-DWA without elite reinforcement (delta = 0)", delta=0.0),
+       "cui2025 Table 1 B: IACO-DWA without elite reinforcement (delta = 0)", delta=0.0),
     _p("iaco_dwa_no_fitness", "iaco", _KEY, "fuzzy",
-       "seed 000 Table 1 C: IACO-DWA without the multi-objective fitness (length only: lambdas = (1, 0, 0))",
+       "cui2025 Table 1 C: IACO-DWA without the multi-objective fitness (length only: lambdas = (1, 0, 0))",
        lambdas=(1.0, 0.0, 0.0)),
     _p("iaco_follow", "iaco", _KEY, "fuzzy",
-       "seed 000 Table 1 D: IACO without DWA: pure path following of the key nodes", local="follow"),
+       "cui2025 Table 1 D: IACO without DWA: pure path following of the key nodes", local="follow"),
     _p("iaco_dwa_weighted", "iaco", _KEY, "weighted",
-       "seed 000 Table 1 E: IACO-DWA without fuzzy evaluation (weighted sum)"),
+       "cui2025 Table 1 E: IACO-DWA without fuzzy evaluation (weighted sum)"),
 )})
 """The named pipelines (`pipelines()` lists them)."""
 

@@ -1,7 +1,7 @@
 """In-episode global re-planning: an exact grid distance field, its descent, and the trigger.
 
 A navigation episode is one compiled program, so re-planning around an obstacle that
-blocks the global path has to run inside it. The global planners of the seeds (an ACO
+blocks the global path has to run inside it. The global planners of the papers (an ACO
 colony per re-plan) would cost far more than the control step; the in-episode planner
 is the exact one instead: a goal distance field over the planning map (8-connected,
 no corner cutting, octile step costs — the same graph as `jaxplan.astar`) with the

@@ -60,9 +60,9 @@ def aco_memory(cells: int, moves: int, runs: int, colonies: int, ants: int, max_
       cells, moves: C = H·W and K (8 or 16) of the map.
       runs: B = scenarios × seeds; colonies, ants: S and m per run; max_steps: L; iterations: I.
       keep_pheromone: the final ``[B, S, C, K]`` pheromone is returned.
-      hook: seed 002's walk hook (two ``[B·S·C, K]`` logit tables per iteration).
-      penalty: seed 004's per-edge retreat counts.
-      alert: seed 002's dead-end alert (``bool[B, C]`` marks).
+      hook: chu2024's walk hook (two ``[B·S·C, K]`` logit tables per iteration).
+      penalty: yu2020's per-edge retreat counts.
+      alert: chu2024's dead-end alert (``bool[B, C]`` marks).
       jax_walk: the JAX step loop (bit-packed tabu per ant) instead of the numba walk
         (one ``int32[C]`` stamp array per thread).
       threads: the numba walk's threads.

@@ -1,6 +1,6 @@
-"""Key-node-guided A* (seed 001, Eq. 13–15): the exact A* path reduced to its key nodes.
+"""Key-node-guided A* (li2026, Eq. 13–15): the exact A* path reduced to its key nodes.
 
-Seed 001 computes the direction of each path segment (Eq. 13–14), the angle difference
+li2026 computes the direction of each path segment (Eq. 13–14), the angle difference
 between adjacent segments (Eq. 15), deletes the nodes whose angle difference is under
 20° and hands the remaining key nodes to DWA as sub-goals. jaxplan applies the rule of
 `jaxplan.smooth.key_nodes` to the A* path: the heading change of a
@@ -99,13 +99,13 @@ def astar_kng(
     grid: GridMap, start: ArrayLike, goal: ArrayLike, seed: int = 0, *, threshold_deg: float = 20.0,
     connectivity: int = 8, vehicle_height: float | None = None,
 ) -> PlanResult:
-    """A* followed by key-node guidance (seed 001).
+    """A* followed by key-node guidance (li2026).
 
     Args:
       grid: the map.
       start, goal: ``(x, y)`` cells; a blocked or outside cell raises ``ValueError``.
       seed: ignored (the planner is deterministic); kept for the common signature.
-      threshold_deg: nodes whose heading change is under this angle are dropped (20° in seed 001).
+      threshold_deg: nodes whose heading change is under this angle are dropped (20° in li2026).
       connectivity: 4, 8 or 16 (A*'s moves).
       vehicle_height: cells with ``clearance_height <= vehicle_height`` are blocked, for A*
         and for the line-of-sight test between key nodes.
@@ -149,7 +149,7 @@ def _register() -> None:
         "astar_kng",
         lambda grid, start, goal, seed, **p: astar_kng(grid, start, goal, seed, **p),
         {"threshold_deg": 20.0, "connectivity": 8, "vehicle_height": None},
-        "KNG-A* (seed 001): A* path reduced to key nodes (heading change >= 20 deg, line of sight kept)",
+        "KNG-A* (li2026): A* path reduced to key nodes (heading change >= 20 deg, line of sight kept)",
         _check_kng,
     )
 

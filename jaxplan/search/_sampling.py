@@ -1,4 +1,4 @@
-"""Sampling-based global planners: RRT* and seed 001's multi-region biased sampling (MRBS).
+"""Sampling-based global planners: RRT* and li2026's multi-region biased sampling (MRBS).
 
 Both are continuous RRT* (Karaman & Frazzoli 2011) in *cell coordinates* (the centre of
 cell ``(x, y)`` is the point ``(x, y)``; metres = ``(point + 0.5) · res``) over the free
@@ -21,7 +21,7 @@ jitted JAX test costs about 55 µs of dispatch, and RRT* tests tens of edges per
 iteration). A margin of `clear_margin` cells on top (growing with the map, as float32
 spacing does) keeps every accepted segment free under the float32 JAX test too.
 
-Sampling (seed 001, Eq. 9–12). Each iteration draws four uniforms ``u [4]``; `mrbs_sample`
+Sampling (li2026, Eq. 9–12). Each iteration draws four uniforms ``u [4]``; `mrbs_sample`
 maps them to a point and a region:
 
 * with probability ``goal_bias``: the goal itself (the classic RRT goal bias);
@@ -192,7 +192,7 @@ def segment_clear(grid: GridMap, p: ArrayLike, q: ArrayLike, robot_radius: float
 
 
 # ---------------------------------------------------------------------------------------------
-# Sampling regions (seed 001, Eq. 9–12)
+# Sampling regions (li2026, Eq. 9–12)
 
 
 class SamplingRegions(NamedTuple):
@@ -631,7 +631,7 @@ def _check_mrbs(params: Mapping[str, Any]) -> None:
     total = sum(ps.values())
     if abs(total - 1.0) > 1e-6:
         raise ValueError(
-            "region probabilities must sum to 1 (seed 001, Eq. 9): "
+            "region probabilities must sum to 1 (li2026, Eq. 9): "
             + " + ".join(f"{k}={v:g}" for k, v in ps.items()) + f" = {total:g}"
         )
     _positive_or_none("obs_band", params["obs_band"], "metres")
@@ -736,7 +736,7 @@ def mrbs_rrt(
     step: float | None = None, radius: float | None = None, goal_bias: float = 0.05, robot_radius: float = 0.0,
     p_start: float = 0.1, p_end: float = 0.2, p_obs: float = 0.2, p_norm: float = 0.5, obs_band: float | None = None,
 ) -> PlanResult:
-    """RRT* with seed 001's multi-region biased sampling (MRBS, Eq. 9–12).
+    """RRT* with li2026's multi-region biased sampling (MRBS, Eq. 9–12).
 
     Same as `rrt_star`, except that the samples that are not the goal (``1 − goal_bias``)
     come from four regions (module docstring):
@@ -773,7 +773,7 @@ def _register() -> None:
         "mrbs_rrt",
         lambda grid, start, goal, seed, **p: mrbs_rrt(grid, start, goal, seed, **p),
         _MRBS_DEFAULTS,
-        "MRBS-RRT* (seed 001): RRT* sampling start, end, obstacle-border and uniform regions (Eq. 9-12)",
+        "MRBS-RRT* (li2026): RRT* sampling start, end, obstacle-border and uniform regions (Eq. 9-12)",
         _check_mrbs,
     )
 

@@ -1,4 +1,4 @@
-"""Corner curves: inscribed-arc fillets (seed 003) and cubic Bezier corners.
+"""Corner curves: inscribed-arc fillets (chen2023) and cubic Bezier corners.
 
 Each interior vertex ``V`` of a polyline, with incoming direction ``u1``, outgoing
 direction ``u2`` and heading change ``θ``, is replaced by a curve from the tangent
@@ -6,7 +6,7 @@ point ``T1 = V − t·u1`` to ``T2 = V + t·u2``; the straight parts between cor
 are pieces of the input's segments. Adjacent corners share a segment, so each may
 use at most half of it: ``t <= min(l1, l2) / 2``.
 
-* fillet: the circle of radius ``R`` tangent to both segments (seed 003's
+* fillet: the circle of radius ``R`` tangent to both segments (chen2023's
   construction, eq. 9–12), ``t = R·tan(θ/2)``; ``R`` is the largest value up to
   ``radius_max`` that fits.
 * bezier: a cubic Bezier ``T1, T1 + κ(V − T1), T2 + κ(V − T2), T2``; tangent to both
@@ -143,7 +143,7 @@ def _corners(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, radius: fl
 
 def fillet(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, radius_max: float = 1.0, radius: float = 0.0,
            samples: int = 9) -> Smoothed:
-    """Replaces each corner by the largest inscribed arc (seed 003) of radius <= ``radius_max`` cells.
+    """Replaces each corner by the largest inscribed arc (chen2023) of radius <= ``radius_max`` cells.
 
     Args:
       cmap: the map's `CollisionMap`.

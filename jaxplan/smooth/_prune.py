@@ -1,4 +1,4 @@
-"""Vertex pruning: line-of-sight node reduction (seed 004) and key-node guidance (seed 001).
+"""Vertex pruning: line-of-sight node reduction (yu2020) and key-node guidance (li2026).
 
 Both walk the path once, keeping an anchor (the last kept vertex) and deciding for
 each interior vertex whether the path may go straight from the anchor to the next
@@ -72,7 +72,7 @@ def los_prune(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, radius: f
 
 def key_nodes(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, threshold: float = math.radians(20.0),
               radius: float = 0.0) -> Smoothed:
-    """Key-node guidance (seed 001): keeps the vertices where the path turns by ``threshold`` or more.
+    """Key-node guidance (li2026): keeps the vertices where the path turns by ``threshold`` or more.
 
     The heading change of vertex ``j`` is measured between the direction from the last
     kept key node to ``j`` and the direction from ``j`` to ``j + 1``, so slow drifts add up
@@ -81,6 +81,6 @@ def key_nodes(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, threshold
     `los_prune`. The kept vertices are the sub-goals a local planner tracks.
 
     Args:
-      threshold: radians (static; 20° as in seed 001).
+      threshold: radians (static; 20° as in li2026).
     """
     return _prune(cmap, points, n, radius, float(threshold))

@@ -5,7 +5,7 @@
   training split of scenarios × seeds in ONE compiled call (`aco_objective`, `dwa_objective`,
   `function_objective`); a held-out test split kept apart.
 * `_strategies`, `_sparrow`, `_gradients`: one `Strategy` interface (``init/ask/tell``) for grid
-  and random search, CMA-ES and SNES (evosax), seed 001's ISSA and the plain SSA, the
+  and random search, CMA-ES and SNES (evosax), li2026's ISSA and the plain SSA, the
   score-function (REINFORCE) and surrogate routes; `relaxed_dwa` differentiates softmax-DWA
   episodes through `lax.scan` with optax.
 * `_config`, `_workflow`: TOML tuning configs and `run_tuning` (progress, CSV log, orbax

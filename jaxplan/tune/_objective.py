@@ -448,7 +448,7 @@ def dwa_objective(grid, train: Split, test: Split, evaluator: str = "weighted", 
     Args:
       grid: the map (DWA clearance from its blocked squares).
       train, test: `Split`s (cells; ``optimal`` unused).
-      evaluator: ``"weighted"`` (seed 000 Eq. 7) or ``"fuzzy"``.
+      evaluator: ``"weighted"`` (cui2025 Eq. 7) or ``"fuzzy"``.
       space: default heading, velocity, clearance in [0.01, 1].
       weights: metric weights (`DWA_METRICS`); default ``{"time": 1, "failure": 1}``.
       dwa: `DWAConfig` fields (static counts, distances); default a small, fast window.

@@ -1,4 +1,4 @@
-"""Sparrow search: the plain SSA (Xue & Shen 2020) and seed 001's improved ISSA, as `Strategy` objects.
+"""Sparrow search: the plain SSA (Xue & Shen 2020) and li2026's improved ISSA, as `Strategy` objects.
 
 A population of ``P`` sparrows keeps personal-best positions ``X`` and fitness ``F``. Per
 generation, ranked by fitness, the best ``pd·P`` are *producers* (leaders), the rest
@@ -14,7 +14,7 @@ SSA (Xue & Shen 2020, Eqs. 3–5):
   * sentinels: ``x ← x_best + β·|x − x_best|`` (not the best) or
     ``x ← x + K·|x − x_worst|/(f − f_worst + ε)`` (the best).
 
-ISSA (seed 001, "Cauchy opposition-based learning, sine–cosine leaders, Lévy followers"):
+ISSA (li2026, "Cauchy opposition-based learning, sine–cosine leaders, Lévy followers"):
   * initialisation (Eq. 5): generation 0 evaluates uniform points x; generation 1 their
     Cauchy-perturbed quasi-opposition points ``OP = c + r·(a + b − x − c)`` (c the box centre,
     r ~ U(0, 1) — Eq. 5's "rand((a + b)/2, x̃)") plus a Cauchy step ``0.1·(b − a)·tan(π(u − ½))``;
@@ -63,12 +63,12 @@ class SparrowState(NamedTuple):
 
 
 def adaptive_weight(t, T: int, lam_max: float = 0.9, lam_min: float = 0.4) -> jnp.ndarray:
-    """Seed 001 Eq. 6: ``λ = λmin + (λmax − λmin)/(λmax + λmin)·cos(t·π/T)``."""
+    """li2026 Eq. 6: ``λ = λmin + (λmax − λmin)/(λmax + λmin)·cos(t·π/T)``."""
     return lam_min + (lam_max - lam_min) / (lam_max + lam_min) * jnp.cos(t * math.pi / T)
 
 
 def levy(key, shape, zeta: float = 1.5, scale: float = 1.0) -> jnp.ndarray:
-    """Seed 001 Eq. 7 (Mantegna's algorithm): ``scale·r1·σ/|r2|^(1/ζ)``, r1, r2 ~ N(0, 1)."""
+    """li2026 Eq. 7 (Mantegna's algorithm): ``scale·r1·σ/|r2|^(1/ζ)``, r1, r2 ~ N(0, 1)."""
     sigma = (math.gamma(1 + zeta) * math.sin(math.pi * zeta / 2)
              / (math.gamma((1 + zeta) / 2) * zeta * 2 ** ((zeta - 1) / 2))) ** (1 / zeta)
     k1, k2 = jax.random.split(key)
@@ -185,5 +185,5 @@ def ssa(population_size: int, generations: int, **options) -> Strategy:
 
 
 def issa(population_size: int, generations: int, **options) -> Strategy:
-    """Seed 001's improved sparrow search (see the module docstring)."""
+    """li2026's improved sparrow search (see the module docstring)."""
     return _make("issa", population_size, generations, True, **options)
