@@ -16,7 +16,7 @@ from numpy.typing import ArrayLike
 from jaxplan.grid._fields import clearance_field
 from jaxplan.grid._gridmap import GridMap, check_cell, check_cells, passable
 from jaxplan.grid._neighbours import neighbour_table
-from jaxplan.search._exact import distance_from
+from jaxplan.grid import distance_from
 
 __all__ = ["MapTables", "GoalTables", "map_tables", "goal_tables"]
 

@@ -50,7 +50,7 @@ from jaxplan.nav._obstacles import MovingObstacles, no_obstacles, obstacle_state
 from jaxplan.nav._pipelines import Pipeline, get_pipeline
 from jaxplan.scale._host_devices import auto_mesh
 from jaxplan.scale._mesh import BATCH_AXIS, pad_leading
-from jaxplan.search._exact import shortest_lengths
+from jaxplan.grid import shortest_lengths
 
 __all__ = ["Episode", "EpisodeBatch", "navigate", "navigate_batch", "navigate_multi", "planning_grid",
            "CURVATURE_MIN_SPEED", "INFEASIBLE_START", "INFEASIBLE_GOAL", "UNREACHABLE", "PLAN_FAILED"]

@@ -69,7 +69,7 @@ from jaxplan.dwa._clearance import DiscObstacles
 from jaxplan.grid._collision import TOUCH
 from jaxplan.grid._fields import clearance_field
 from jaxplan.grid._gridmap import GridMap, grid_from_array
-from jaxplan.search._exact import astar
+from jaxplan.search import astar
 
 __all__ = [
     "MovingObstacles", "obstacle_state", "discs_at", "trajectories", "route_lengths", "no_obstacles",
