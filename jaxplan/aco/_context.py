@@ -13,9 +13,9 @@ import jax.numpy as jnp
 import numpy as np
 from numpy.typing import ArrayLike
 
-from jaxplan.grid._fields import clearance_field
-from jaxplan.grid._gridmap import GridMap, check_cell, check_cells, passable
-from jaxplan.grid._neighbours import neighbour_table
+from jaxplan.grid import clearance_field
+from jaxplan.grid import GridMap, check_cell, check_cells, passable
+from jaxplan.grid import neighbour_table
 from jaxplan.grid import distance_from
 
 __all__ = ["MapTables", "GoalTables", "map_tables", "goal_tables"]

@@ -23,8 +23,8 @@ from jaxplan.dwa._config import CLEARANCE_MODES, EVALUATORS, RECOVERIES, SELECTI
 from jaxplan.dwa._core import DWAInfo, dwa_control, dwa_control_batch
 from jaxplan.dwa._fastmath import MAX_ROTOR_ANGLE
 from jaxplan.dwa._robot import Ackermann, Disc, Rectangle, Unicycle, footprint_radius
-from jaxplan.grid._collision import collision_map
-from jaxplan.grid._gridmap import GridMap
+from jaxplan.grid import collision_map
+from jaxplan.grid import GridMap
 
 __all__ = ["dwa_step", "table_of", "validate_config", "validate_params", "as_obstacles"]
 

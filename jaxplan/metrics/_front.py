@@ -18,7 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 from numpy.typing import ArrayLike
 
-from jaxplan.grid._collision import CollisionMap, cached_collision_map
+from jaxplan.grid import CollisionMap, cached_collision_map
 from jaxplan.grid import GridMap, shortest_lengths
 from jaxplan.metrics._clearance import clearance_metrics
 from jaxplan.metrics._exact_clearance import polyline_clearance

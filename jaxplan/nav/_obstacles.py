@@ -65,10 +65,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import ndimage
 
-from jaxplan.dwa._clearance import DiscObstacles
-from jaxplan.grid._collision import TOUCH
-from jaxplan.grid._fields import clearance_field
-from jaxplan.grid._gridmap import GridMap, grid_from_array
+from jaxplan.dwa import DiscObstacles
+from jaxplan.grid import TOUCH
+from jaxplan.grid import clearance_field
+from jaxplan.grid import GridMap, grid_from_array
 from jaxplan.search import astar
 
 __all__ = [

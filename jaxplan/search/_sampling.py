@@ -75,9 +75,9 @@ from numba import njit
 from numpy.typing import ArrayLike
 from scipy import ndimage
 
-from jaxplan.grid._collision import TOUCH, cached_collision_map
-from jaxplan.grid._gridmap import GridMap, check_cell
-from jaxplan.metrics._host import count_turns, path_length
+from jaxplan.grid import TOUCH, cached_collision_map
+from jaxplan.grid import GridMap, check_cell
+from jaxplan.metrics import count_turns, path_length
 from jaxplan.result import PlanResult
 
 __all__ = [

@@ -10,8 +10,8 @@ import jax.numpy as jnp
 import numpy as np
 from numpy.typing import ArrayLike
 
-from jaxplan.grid._collision import cached_collision_map
-from jaxplan.grid._gridmap import GridMap
+from jaxplan.grid import cached_collision_map
+from jaxplan.grid import GridMap
 from jaxplan.smooth._bspline import bspline
 from jaxplan.smooth._corners import bezier_corners, fillet
 from jaxplan.smooth._prune import key_nodes, los_prune
