@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import math
 import time
-from collections import OrderedDict
 from typing import Any, Mapping, NamedTuple
 
 import jax
@@ -43,12 +42,11 @@ from jaxplan.aco import _rules as R
 from jaxplan.aco._colony import Colony, RunConfig, run_batch, walk_backend
 from jaxplan.aco._context import GoalTables, MapTables, check_one, goal_tables, map_tables
 from jaxplan.aco._walk_numba import WALK_BACKENDS, sharing_cores
+from jaxplan.core.cache import Built, digest, memoize
 from jaxplan.grid import GridMap, passable
 from jaxplan.registry import register_planner, resolve
 from jaxplan.result import PlanResult
-from jaxplan.scale import aco_memory, check_memory
-from jaxplan.scale import auto_mesh
-from jaxplan.scale import BATCH_AXIS, check_mesh, pad_leading, padded_size
+from jaxplan.scale import BATCH_AXIS, aco_memory, auto_mesh, check_memory, check_mesh, pad_leading, padded_size
 
 __all__ = ["COLONIES", "BatchResult", "plan_batch", "aco_defaults", "STATIC_PARAMS", "UNIT_PARAMS", "seed_keys",
            "split_params", "cached_map_tables"]
@@ -184,32 +182,21 @@ def split_params(grid: GridMap, p: Mapping[str, Any]) -> tuple[RunConfig, dict, 
     return cfg, params, int(p["connectivity"]), p["vehicle_height"]
 
 
-# Prepared map tables keyed by map content and move rules (pure memoisation, bounded).
-_TABLES: OrderedDict[tuple, MapTables] = OrderedDict()
-# Compiled programs keyed by (colony, config, argument shapes): the time of a call can then be
-# reported without its one-off compilation.
-_PROGRAMS: OrderedDict[tuple, Any] = OrderedDict()
+def _tables_key(grid: GridMap, connectivity: int, vehicle_height: float | None) -> tuple:
+    layers = (grid.free, grid.height, grid.clearance_height, grid.risk, grid.turn_rule)
+    return digest(*layers), float(grid.resolution), connectivity, vehicle_height
 
 
-def _memo(store: OrderedDict, key, make, limit: int = 16):
-    if key in store:
-        store.move_to_end(key)
-        return store[key]
-    value = store[key] = make()
-    if len(store) > limit:
-        store.popitem(last=False)
-    return value
-
-
+@memoize(maxsize=8, key=_tables_key)
 def cached_map_tables(grid: GridMap, connectivity: int, vehicle_height: float | None) -> MapTables:
     """`map_tables`, memoised on the map's layers and the move rules."""
-    import hashlib
+    return map_tables(grid, connectivity, vehicle_height)
 
-    h = hashlib.blake2b(digest_size=16)
-    for layer in (grid.free, grid.height, grid.clearance_height, grid.risk, grid.turn_rule):
-        h.update(np.ascontiguousarray(layer).tobytes())
-    key = (grid.shape, h.hexdigest(), float(grid.resolution), connectivity, vehicle_height)
-    return _memo(_TABLES, key, lambda: map_tables(grid, connectivity, vehicle_height), limit=8)
+
+def _program_key(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys,
+                 mesh: Mesh | None) -> tuple:
+    sig = jax.tree_util.tree_map(lambda a: (a.shape, a.dtype), (tables, goals, params, keys))
+    return colony, cfg, str(jax.tree_util.tree_structure(sig)), str(jax.tree_util.tree_leaves(sig)), mesh
 
 
 def compiled(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys,
@@ -219,13 +206,15 @@ def compiled(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTable
     With a ``mesh`` (`jaxplan.scale.batch_mesh`), the scenario axis of ``goals`` (a multiple of
     the mesh's devices) is split over its devices with `jax.shard_map`; the map tables, params
     and keys are replicated. Every run depends only on its own scenario and key, so the result
-    equals the single-device one.
+    equals the single-device one. Programs are kept by (colony, config, argument shapes, mesh), so
+    a call's time can be reported without its one-off compilation.
     """
-    sig = jax.tree_util.tree_map(lambda a: (a.shape, a.dtype), (tables, goals, params, keys))
-    key = (colony, cfg, str(jax.tree_util.tree_structure(sig)), str(jax.tree_util.tree_leaves(sig)), mesh)
-    if key in _PROGRAMS:
-        _PROGRAMS.move_to_end(key)
-        return _PROGRAMS[key], 0.0
+    return _program(colony, cfg, tables, goals, params, keys, mesh).take()
+
+
+@memoize(maxsize=32, key=_program_key)
+def _program(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys,
+             mesh: Mesh | None) -> Built:
     t0 = time.perf_counter()
     body = lambda t, g, p, k: run_batch(colony, cfg, t, g, p, k)  # noqa: E731
     if mesh is not None:
@@ -235,9 +224,7 @@ def compiled(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTable
                              check_vma=False)
     with sharing_cores(1 if mesh is None else len(mesh.local_devices)):
         fn = jax.jit(body).lower(tables, goals, params, keys).compile()
-    dt = time.perf_counter() - t0
-    _memo(_PROGRAMS, key, lambda: fn, limit=32)
-    return fn, dt
+    return Built(fn, time.perf_counter() - t0)
 
 
 def seed_keys(seeds) -> jax.Array:

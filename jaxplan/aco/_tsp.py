@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import math
 import time
-from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
@@ -46,9 +45,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxplan.aco import _rules as R
-from jaxplan.aco._planners import _memo
 from jaxplan.aco._tsplib import TSPProblem, tour_length
 from jaxplan.aco._walk import hash_uniform
+from jaxplan.core.cache import Built, memoize
 
 __all__ = ["TSP_PLANNERS", "TSP_STATIC_PARAMS", "TSPConfig", "TSPOutput", "TourResult", "resolve_tsp", "run_tsp", "solve_tsp",
            "tsp_defaults"]
@@ -281,18 +280,15 @@ def run_tsp(cfg: TSPConfig, dist: jnp.ndarray, params: dict, key: jax.Array) -> 
     return TSPOutput(bs_tour[b], bs_len[b], history)
 
 
-# Compiled programs keyed by (config, n): a call's time_s then excludes its one-off compilation.
-_PROGRAMS: OrderedDict[tuple, Any] = OrderedDict()
-
-
 def _compiled(cfg: TSPConfig, dist: jnp.ndarray, params: dict, key: jax.Array) -> tuple[Any, float]:
-    """The compiled run for these static sizes, and the seconds spent compiling it now (0 if cached)."""
-    sig = (cfg, dist.shape, tuple(sorted(params)))
-    if sig in _PROGRAMS:
-        return _memo(_PROGRAMS, sig, None), 0.0  # (refreshes the entry's place in the LRU order)
-    t0 = time.perf_counter()
-    fn = jax.jit(lambda d, p, k: run_tsp(cfg, d, p, k)).lower(dist, params, key).compile()
-    return _memo(_PROGRAMS, sig, lambda: fn), time.perf_counter() - t0
+    """The compiled run for these static sizes, and the seconds spent compiling it now (0 if cached): programs
+    are kept by (config, n, parameter names), so a call's time_s excludes its one-off compilation."""
+    return _program(cfg, dist, params, key).take()
+
+
+@memoize(maxsize=16, key=lambda cfg, dist, params, key: (cfg, dist.shape, tuple(sorted(params))))
+def _program(cfg: TSPConfig, dist: jnp.ndarray, params: dict, key: jax.Array) -> Built:
+    return Built.timed(lambda: jax.jit(lambda d, p, k: run_tsp(cfg, d, p, k)).lower(dist, params, key).compile())
 
 
 def resolve_tsp(planner: str, overrides: dict[str, Any]) -> dict[str, Any]:

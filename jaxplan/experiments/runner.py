@@ -60,13 +60,13 @@ import shutil
 import subprocess
 import sys
 import time
-from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping, Sequence
 
 import numpy as np
 
+from jaxplan.core.cache import Built, memoize
 from jaxplan.experiments.config import (
     ACCURACY_GAP, METRICS, ConfigError, ExperimentConfig, MapSpec, PlannerConfig, applies, apply_quick, load_config,
     nav_config,
@@ -598,28 +598,21 @@ def _run_navigate(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, seeds
     return out, keep, timing
 
 
-# Compiled TSP programs keyed by (config, n, seeds, parameter names): one compile per (instance size, planner).
-_TSP_PROGRAMS: OrderedDict[tuple, Any] = OrderedDict()
-
-
 def _tsp_program(cfg, dist, params: dict, keys) -> tuple[Callable, float]:
     """`run_tsp` vmapped over ``keys [R]``, compiled for these shapes, and the seconds spent compiling now (0 if
-    cached)."""
+    cached): one compile per (config, instance size, seeds, parameter names); a sweep over many sizes keeps only
+    the last 8 executables alive."""
+    return _compiled_tsp(cfg, dist, params, keys).take()
+
+
+@memoize(maxsize=8, key=lambda cfg, dist, params, keys: (cfg, dist.shape, keys.shape, tuple(sorted(params))))
+def _compiled_tsp(cfg, dist, params: dict, keys) -> Built:
     import jax
 
     from jaxplan.aco import run_tsp
 
-    sig = (cfg, dist.shape, keys.shape, tuple(sorted(params)))
-    if sig in _TSP_PROGRAMS:
-        _TSP_PROGRAMS.move_to_end(sig)
-        return _TSP_PROGRAMS[sig], 0.0
-    t0 = time.perf_counter()
-    fn = jax.jit(jax.vmap(lambda d, p, k: run_tsp(cfg, d, p, k), in_axes=(None, None, 0))).lower(
-        dist, params, keys).compile()
-    _TSP_PROGRAMS[sig] = fn
-    while len(_TSP_PROGRAMS) > 8:  # a sweep over many sizes must not keep every executable alive
-        _TSP_PROGRAMS.popitem(last=False)
-    return fn, time.perf_counter() - t0
+    program = jax.jit(jax.vmap(lambda d, p, k: run_tsp(cfg, d, p, k), in_axes=(None, None, 0)))
+    return Built.timed(lambda: program.lower(dist, params, keys).compile())
 
 
 def _run_tsp(mw: MapWork, pc: PlannerConfig, seeds: tuple[int, ...], metrics: Sequence[str]

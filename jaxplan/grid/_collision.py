@@ -18,15 +18,14 @@ that any square within the radius of the segment is seen from some step.
 
 from __future__ import annotations
 
-import hashlib
 import math
-from collections import OrderedDict
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxplan.core.cache import digest, memoize
 from jaxplan.grid._fields import clearance_field
 from jaxplan.grid._gridmap import GridMap
 
@@ -76,26 +75,11 @@ def collision_map(grid: GridMap) -> CollisionMap:
     return CollisionMap(jnp.asarray(blocked), jnp.asarray(field, jnp.float32), jnp.asarray(res, jnp.float32))
 
 
-# Collision maps memoised by content (pure memoisation, bounded): building one runs a distance
-# transform, which would otherwise dominate repeated calls on the same map.
-_CMAPS: OrderedDict[tuple, CollisionMap] = OrderedDict()
-_CMAPS_MAX = 8
-
-
+@memoize(maxsize=8, key=lambda grid: (digest(np.asarray(grid.free, dtype=bool)), float(grid.resolution)))
 def cached_collision_map(grid: GridMap) -> CollisionMap:
-    """`collision_map(grid)`, memoised on the map's free cells and resolution."""
-    free = np.asarray(grid.free, dtype=bool)
-    key = (free.shape, hashlib.blake2b(np.packbits(free).tobytes(), digest_size=16).hexdigest(),
-           float(grid.resolution))
-    hit = _CMAPS.get(key)
-    if hit is not None:
-        _CMAPS.move_to_end(key)
-        return hit
-    cmap = collision_map(grid)
-    _CMAPS[key] = cmap
-    if len(_CMAPS) > _CMAPS_MAX:
-        _CMAPS.popitem(last=False)
-    return cmap
+    """`collision_map(grid)`, memoised on the map's free cells and resolution (building one runs a
+    distance transform, which would otherwise dominate repeated calls on the same map)."""
+    return collision_map(grid)
 
 
 def point_square_distance(p: jnp.ndarray, c: jnp.ndarray) -> jnp.ndarray:

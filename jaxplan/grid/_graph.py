@@ -11,13 +11,12 @@ metrics. The planners `astar`/`dijkstra` (`jaxplan.search`) wrap `shortest_path`
 
 from __future__ import annotations
 
-import hashlib
-from collections import OrderedDict
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from jaxplan.core.cache import digest, memoize
 from jaxplan.grid import _kernels as K
 from jaxplan.grid._gridmap import GridMap, check_cell, check_cells, passable
 from jaxplan.grid._neighbours import Neighbours, neighbour_table
@@ -41,27 +40,19 @@ class SearchGraph(NamedTuple):
     vehicle_height: float | None
 
 
-# Memo of prepared graphs keyed by the map's content: pure memoisation (same key, same
-# value), bounded, so repeated `jp.plan` calls on one map do not rebuild the move table.
-_GRAPHS: OrderedDict[tuple, SearchGraph] = OrderedDict()
-_GRAPHS_MAX = 8
-
-
 def _graph_key(grid: GridMap, connectivity: int, vehicle_height: float | None) -> tuple:
-    ok = passable(grid, vehicle_height)
-    digest = hashlib.blake2b(np.packbits(ok).tobytes(), digest_size=16).hexdigest()
-    return (ok.shape, digest, float(grid.resolution), int(connectivity))
+    return (digest(passable(grid, vehicle_height)), float(grid.resolution), int(connectivity))
 
 
 def search_graph(grid: GridMap, connectivity: int = 8, vehicle_height: float | None = None) -> SearchGraph:
-    """Prepares (or fetches from a small content-keyed memo) the search graph of ``grid``."""
-    key = _graph_key(grid, connectivity, vehicle_height)
-    hit = _GRAPHS.get(key)
-    if hit is not None:
-        _GRAPHS.move_to_end(key)
-        return hit._replace(grid=grid)
+    """Prepares (or fetches from a small memo keyed by the passable cells) the search graph of ``grid``."""
+    return _search_graph(grid, connectivity, vehicle_height)._replace(grid=grid)
+
+
+@memoize(maxsize=8, key=_graph_key)  # repeated `jp.plan` calls on one map do not rebuild the move table
+def _search_graph(grid: GridMap, connectivity: int, vehicle_height: float | None) -> SearchGraph:
     moves = neighbour_table(grid, connectivity, vehicle_height)
-    g = SearchGraph(
+    return SearchGraph(
         grid=grid,
         moves=moves,
         step_cells=np.hypot(moves.offsets[:, 0], moves.offsets[:, 1]).astype(np.float64),
@@ -69,10 +60,6 @@ def search_graph(grid: GridMap, connectivity: int = 8, vehicle_height: float | N
         capacity=int(moves.valid.sum()) + 1,
         vehicle_height=vehicle_height,
     )
-    _GRAPHS[key] = g
-    if len(_GRAPHS) > _GRAPHS_MAX:
-        _GRAPHS.popitem(last=False)
-    return g
 
 
 def _walk_back(parent: np.ndarray, goal: int, width: int) -> np.ndarray:

@@ -14,12 +14,12 @@ point ``x`` is within ``[|x − b| − √½, |x − b| − ½]``.
 
 from __future__ import annotations
 
-import hashlib
 import math
-from collections import OrderedDict
 
 import numpy as np
 from scipy.spatial import cKDTree
+
+from jaxplan.core.cache import digest, memoize
 
 __all__ = ["exact_point_clearance", "polyline_clearance", "SAMPLE_CELLS"]
 
@@ -33,25 +33,13 @@ _HALF_DIAG = math.sqrt(0.5)
 _SLACK = 1e-9  # float64 rounding in the ball radii: a candidate too many costs nothing
 _K_NEAR = 8  # nearest centres fetched per point; rows needing more fall back to a ball query
 
-_TREES: OrderedDict[tuple, tuple[np.ndarray, cKDTree]] = OrderedDict()
-_TREES_MAX = 8
-
-
+@memoize(maxsize=8, key=lambda free: digest(free))
 def _blocked_tree(free: np.ndarray) -> tuple[np.ndarray, cKDTree]:
     """``(centres f64[K, 2] (x, y), tree)`` of the blocked cells plus one outside ring, memoised by content."""
-    key = (free.shape, hashlib.blake2b(np.packbits(free).tobytes(), digest_size=16).hexdigest())
-    hit = _TREES.get(key)
-    if hit is not None:
-        _TREES.move_to_end(key)
-        return hit
     blocked = np.pad(~free, 1, constant_values=True)
     y, x = np.nonzero(blocked)
     centres = np.stack([x - 1.0, y - 1.0], axis=1)
-    out = (centres, cKDTree(centres))
-    _TREES[key] = out
-    if len(_TREES) > _TREES_MAX:
-        _TREES.popitem(last=False)
-    return out
+    return centres, cKDTree(centres)
 
 
 def _candidates(tree: cKDTree, pts: np.ndarray, radius: np.ndarray,

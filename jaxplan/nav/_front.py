@@ -27,9 +27,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import threading
 import time
-from collections import OrderedDict
 from typing import Any, Mapping, NamedTuple, Sequence
 
 import jax
@@ -39,18 +37,15 @@ from jax.sharding import Mesh
 from jax.sharding import PartitionSpec as P
 from numpy.typing import ArrayLike
 
-from jaxplan.dwa import DWAParams
-from jaxplan.dwa import table_of, validate_config, validate_params
-from jaxplan.grid import clearance_field
-from jaxplan.grid import GridMap
+from jaxplan.core.cache import Built, memoize
+from jaxplan.dwa import DWAParams, table_of, validate_config, validate_params
+from jaxplan.grid import GridMap, clearance_field, shortest_lengths
 from jaxplan.metrics import EnergyModel, energy
 from jaxplan.nav._config import LOCAL_PLANNERS, PREDICTIONS, SUBGOAL_MODES, NavConfig
 from jaxplan.nav._episode import GOAL, REASONS, EpisodeInputs, run_episodes
 from jaxplan.nav._obstacles import MovingObstacles, no_obstacles, obstacle_state, stack_obstacles, trajectories
 from jaxplan.nav._pipelines import Pipeline, get_pipeline
-from jaxplan.scale import auto_mesh
-from jaxplan.scale import BATCH_AXIS, pad_leading
-from jaxplan.grid import shortest_lengths
+from jaxplan.scale import BATCH_AXIS, auto_mesh, pad_leading
 
 __all__ = ["Episode", "EpisodeBatch", "navigate", "navigate_batch", "navigate_multi", "planning_grid", "resolve_config",
            "CURVATURE_MIN_SPEED", "INFEASIBLE_START", "INFEASIBLE_GOAL", "UNREACHABLE", "PLAN_FAILED"]
@@ -64,26 +59,25 @@ UNREACHABLE = "infeasible: goal not reachable for the inflated footprint"
 PLAN_FAILED = "global planner found no path"
 _NOT_RUN = (INFEASIBLE_START, INFEASIBLE_GOAL, UNREACHABLE, PLAN_FAILED)
 
-_PROGRAMS: "OrderedDict[tuple, Any]" = OrderedDict()  # compiled episode programs, least recently used first
-_PROGRAM_CACHE = 16
-_PROGRAMS_LOCK = threading.Lock()  # navigate_batch may be called from several threads
-
-
 def _compiled_episodes(cfg: NavConfig, steps: int, mesh: Mesh | None, args: tuple) -> tuple[Any, float]:
     """The compiled episode program for ``args = (table, free, params, inputs)``'s shapes, and the
-    seconds spent compiling it now (0 if cached): one compilation per configuration and shape.
+    seconds spent compiling it now (0 if cached): one compilation per configuration and shape
+    (the last 16 programs are kept).
 
     With a ``mesh`` the episode axis of ``inputs`` (a multiple of the devices and of
     `NavConfig.replan_group`) is split over its devices with `jax.shard_map`; the map and
     the DWA params are replicated.
     """
+    return _episode_program(cfg, steps, mesh, args).take()
+
+
+def _program_key(cfg: NavConfig, steps: int, mesh: Mesh | None, args: tuple) -> tuple:
     sig = jax.tree_util.tree_map(lambda a: (np.shape(a), str(jnp.result_type(a))), args)
-    key = (cfg, steps, mesh, str(jax.tree_util.tree_structure(sig)), str(jax.tree_util.tree_leaves(sig)))
-    with _PROGRAMS_LOCK:
-        fn = _PROGRAMS.get(key)
-        if fn is not None:
-            _PROGRAMS.move_to_end(key)
-            return fn, 0.0
+    return cfg, steps, mesh, str(jax.tree_util.tree_structure(sig)), str(jax.tree_util.tree_leaves(sig))
+
+
+@memoize(maxsize=16, key=_program_key)  # thread-safe: navigate_batch may be called from several threads
+def _episode_program(cfg: NavConfig, steps: int, mesh: Mesh | None, args: tuple) -> Built:
     t0 = time.perf_counter()
     body = functools.partial(run_episodes, cfg, steps)
     if mesh is not None:
@@ -92,12 +86,7 @@ def _compiled_episodes(cfg: NavConfig, steps: int, mesh: Mesh | None, args: tupl
         body = jax.shard_map(body, mesh=mesh, in_specs=(P(), P(), P(), P(BATCH_AXIS)), out_specs=P(BATCH_AXIS),
                              check_vma=False)
     fn = jax.jit(body).lower(*args).compile()
-    compile_s = time.perf_counter() - t0
-    with _PROGRAMS_LOCK:
-        _PROGRAMS[key] = fn
-        while len(_PROGRAMS) > _PROGRAM_CACHE:
-            _PROGRAMS.popitem(last=False)
-    return fn, compile_s
+    return Built(fn, time.perf_counter() - t0)
 
 
 def planning_grid(grid: GridMap, d_safe: float) -> GridMap:
