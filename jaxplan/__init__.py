@@ -10,7 +10,7 @@ The public names of DESIGN §3 are re-exported here::
 """
 
 # First, before anything can start JAX's backend: one CPU host device per core (see
-# jaxplan.scale._host_devices for the measurement and $JAXPLAN_HOST_DEVICES to change it).
+# jaxplan.scale.configure_host_devices for the measurement and $JAXPLAN_HOST_DEVICES to change it).
 from jaxplan.scale import configure_host_devices as _configure_host_devices
 
 _configure_host_devices()
@@ -27,8 +27,6 @@ from jaxplan.grid import (
     neighbour_table,
     passable,
     save_map,
-)
-from jaxplan.grid import (
     MountainGenerator,
     RandomMapGenerator,
     Scene,

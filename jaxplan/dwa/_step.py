@@ -23,8 +23,7 @@ from jaxplan.dwa._core import DWAInfo, dwa_control, dwa_control_batch
 from jaxplan.dwa._fastmath import MAX_ROTOR_ANGLE
 from jaxplan.dwa._robot import Ackermann, Disc, Rectangle, Unicycle, footprint_radius
 from jaxplan.core.cache import lru_cache, memoize
-from jaxplan.grid import collision_map
-from jaxplan.grid import GridMap
+from jaxplan.grid import GridMap, collision_map
 
 __all__ = ["dwa_step", "table_of", "validate_config", "validate_params", "as_obstacles"]
 

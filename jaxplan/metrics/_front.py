@@ -18,8 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 from numpy.typing import ArrayLike
 
-from jaxplan.grid import CollisionMap, cached_collision_map
-from jaxplan.grid import GridMap, shortest_lengths
+from jaxplan.grid import CollisionMap, GridMap, cached_collision_map, shortest_lengths
 from jaxplan.metrics._clearance import clearance_metrics
 from jaxplan.metrics._exact_clearance import polyline_clearance
 from jaxplan.metrics._path import geometry_metrics

@@ -33,11 +33,8 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
-from jaxplan.dwa import ClearanceTable, DiscObstacles, static_clearance
-from jaxplan.dwa import DWAParams
-from jaxplan.dwa import dwa_control
-from jaxplan.dwa import Disc, advance, footprint_offsets, footprint_radius
-from jaxplan.dwa import dynamic_window
+from jaxplan.dwa import ClearanceTable, DWAParams, DiscObstacles, dwa_control, static_clearance
+from jaxplan.dwa import Disc, advance, dynamic_window, footprint_offsets, footprint_radius
 from jaxplan.metrics import point_polyline_distance
 from jaxplan.nav._config import NavConfig
 from jaxplan.nav._obstacles import MovingObstacles, obstacle_state

@@ -42,8 +42,7 @@ import numpy as np
 
 from jax.sharding import PartitionSpec as P
 
-from jaxplan.scale import auto_mesh
-from jaxplan.scale import BATCH_AXIS, pad_leading, padded_size
+from jaxplan.scale import BATCH_AXIS, auto_mesh, pad_leading, padded_size
 from jaxplan.tune._bounds import Bounds, make_bounds
 
 __all__ = ["Split", "Evaluation", "Objective", "aco_objective", "dwa_objective", "function_objective", "DWAEpisodes", "dwa_episodes",
@@ -264,12 +263,10 @@ def aco_objective(grid, train: Split, test: Split, planner: str = "iaco", space:
       ValueError: naming the parameter, for an unknown or static name, bad bounds, or bounds
         outside the parameter's valid range (negative; above 1 for ρ, δ, ρ_res, λ_p).
     """
-    from jaxplan.aco import run_batch
-    from jaxplan.aco import goal_tables
+    from jaxplan.aco import goal_tables, run_batch
     from jaxplan.aco import COLONIES, STATIC_PARAMS, UNIT_PARAMS, cached_map_tables, seed_keys, split_params
     from jaxplan.grid import collision_map
-    from jaxplan.metrics import clearance_metrics
-    from jaxplan.metrics import geometry_metrics
+    from jaxplan.metrics import clearance_metrics, geometry_metrics
     from jaxplan.registry import resolve
 
     if planner not in COLONIES:
@@ -358,9 +355,7 @@ def dwa_episodes(table, config, params, episodes: DWAEpisodes, steps: int, toler
     through `jnp.where`); with ``config.selection == "softmax"`` the trace is a smooth
     function of the critic weights. The sub-goal is the goal itself (no global path).
     """
-    from jaxplan.dwa import DiscObstacles, disc_clearance, static_clearance
-    from jaxplan.dwa import dwa_control
-    from jaxplan.dwa import advance
+    from jaxplan.dwa import DiscObstacles, advance, disc_clearance, dwa_control, static_clearance
 
     period = config.period
 
@@ -454,8 +449,7 @@ def dwa_objective(grid, train: Split, test: Split, evaluator: str = "weighted", 
       dwa: `DWAConfig` fields (static counts, distances); default a small, fast window.
       max_time: episode length (s).
     """
-    from jaxplan.dwa import clearance_table
-    from jaxplan.dwa import DWAConfig, DWAParams, default_params
+    from jaxplan.dwa import DWAConfig, DWAParams, clearance_table, default_params
     from jaxplan.grid import collision_map
 
     space = space or {"heading": (0.01, 1.0), "velocity": (0.01, 1.0), "clearance": (0.01, 1.0)}
