@@ -78,8 +78,8 @@ _DEFAULTS: dict[str, dict[str, Any]] = {
               "rho": 0.3, "lambda_p": 0.3, "omega1": 1.0, "omega2": 1.0, "tau0": 1.0},
 }
 
-STATIC_PARAMS = ("ants", "iterations", "connectivity", "max_steps", "heuristic", "dead_end", "vehicle_height", "colonies",
-           "keep_pheromone", "walk_backend", "update_backend")
+STATIC_PARAMS = ("ants", "iterations", "connectivity", "max_steps", "heuristic", "dead_end", "vehicle_height",
+                 "colonies", "keep_pheromone", "walk_backend", "update_backend")
 """ACO parameters that shape the compiled program (every other parameter is a traced leaf of ``params``)."""
 UNIT_PARAMS = ("rho", "rho_res", "lambda_p", "delta")
 """ACO parameters that must lie in [0, 1]."""

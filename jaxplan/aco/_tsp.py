@@ -49,8 +49,8 @@ from jaxplan.aco._tsplib import TSPProblem, tour_length
 from jaxplan.aco._walk import hash_uniform
 from jaxplan.core.cache import Built, memoize
 
-__all__ = ["TSP_PLANNERS", "TSP_STATIC_PARAMS", "TSPConfig", "TSPOutput", "TourResult", "resolve_tsp", "run_tsp", "solve_tsp",
-           "tsp_defaults"]
+__all__ = ["TSP_PLANNERS", "TSP_STATIC_PARAMS", "TSPConfig", "TSPOutput", "TourResult", "resolve_tsp", "run_tsp",
+           "solve_tsp", "tsp_defaults"]
 
 # The deposit rules of each TSP planner (summed with `R.combine`).
 TSP_PLANNERS: dict[str, tuple] = {

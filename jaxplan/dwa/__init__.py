@@ -34,7 +34,8 @@ from jaxplan.dwa._window import Window, dynamic_window, sample_controls
 __all__ = [
     "Ackermann", "CLEARANCE_MODES", "ClearanceTable", "Critics", "DWAConfig", "DWAInfo", "DWAParams", "Disc",
     "DiscObstacles", "EVALUATORS", "HYBRID_EXACT_CELLS", "Rectangle", "Rollouts", "SELECTIONS", "Unicycle", "Window",
-    "advance", "clearance_table", "footprint_offsets", "critics", "default_params", "disc_clearance", "dwa_control", "dwa_control_batch",
-    "dwa_step", "dynamic_window", "evaluate", "footprint_radius", "fuzzy_evaluate", "input_memberships",
-    "no_obstacles", "rollout", "rule_table", "sample_controls", "static_clearance", "table_of", "trajectory", "validate_config", "validate_params",
+    "advance", "clearance_table", "critics", "default_params", "disc_clearance", "dwa_control", "dwa_control_batch",
+    "dwa_step", "dynamic_window", "evaluate", "footprint_offsets", "footprint_radius", "fuzzy_evaluate",
+    "input_memberships", "no_obstacles", "rollout", "rule_table", "sample_controls", "static_clearance", "table_of",
+    "trajectory", "validate_config", "validate_params",
 ]
