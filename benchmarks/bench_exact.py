@@ -28,7 +28,7 @@ from scipy.sparse.csgraph import dijkstra as scipy_dijkstra
 
 import jaxplan as jp
 from _timing import median_time
-from jaxplan.search import _kernels
+from jaxplan.grid import _kernels
 
 
 def csgraph_of(grid: jp.GridMap) -> sp.csr_array:

@@ -9,11 +9,9 @@ The public names of DESIGN §3 are re-exported here::
     res = jp.plan(grid, scen.starts[0], scen.goals[0], planner="astar")
 """
 
-from importlib.metadata import PackageNotFoundError, version
-
 # First, before anything can start JAX's backend: one CPU host device per core (see
-# jaxplan.scale._host_devices for the measurement and $JAXPLAN_HOST_DEVICES to change it).
-from jaxplan.scale._host_devices import configure_host_devices as _configure_host_devices
+# jaxplan.scale.configure_host_devices for the measurement and $JAXPLAN_HOST_DEVICES to change it).
+from jaxplan.scale import configure_host_devices as _configure_host_devices
 
 _configure_host_devices()
 
@@ -29,8 +27,6 @@ from jaxplan.grid import (
     neighbour_table,
     passable,
     save_map,
-)
-from jaxplan.grid._generators import (
     MountainGenerator,
     RandomMapGenerator,
     Scene,
@@ -56,6 +52,7 @@ from jaxplan.nav import (
     navigate_batch, navigate_multi, pipelines, random_obstacles,
 )
 from jaxplan.search import SearchGraph, astar, dijkstra, distance_from, search_graph, shortest_lengths
+from jaxplan.core.version import VERSION as __version__
 
 _DEPRECATED = {"warehouse_seed003": "warehouse_chen2023", "warehouse_seed004": "warehouse_yu2020"}
 """Names of the previous release (papers by internal number) -> their author-year names; kept for one release."""
@@ -72,10 +69,6 @@ def __getattr__(name: str):
     raise AttributeError(f"module 'jaxplan' has no attribute {name!r}")
 
 
-try:
-    __version__ = version("jaxplan")
-except PackageNotFoundError:  # pragma: no cover - running from a source tree without install
-    __version__ = "0+unknown"
 
 __all__ = [
     "BatchResult", "plan_batch", "TourResult", "TSPProblem", "load_tour", "load_tsplib", "solve_tsp", "tour_length", "GridMap", "MountainGenerator", "Neighbours", "PlanResult", "PlannerSpec", "RandomMapGenerator", "Scenarios",

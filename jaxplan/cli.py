@@ -61,13 +61,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
     """``jaxplan demo``: IACO-DWA beside ACO-DWA among moving discs on the built-in warehouse (no data)."""
     import time
 
-    import jaxplan as jp
+    from jaxplan.core.version import VERSION
     from jaxplan.experiments.demo import demo_table, run_demo
 
     t0 = time.perf_counter()
     if not args.no_cache:
         _compilation_cache()
-    print(f"jaxplan {jp.__version__} demo: iaco_dwa and aco_dwa among moving obstacles"
+    print(f"jaxplan {VERSION} demo: iaco_dwa and aco_dwa among moving obstacles"
           + (" (quick variant)" if args.quick else ""), flush=True)
     result = run_demo(args.out_dir, seed=args.seed, quick=args.quick, gif=not args.no_gif)
     print(demo_table(result))
@@ -78,12 +78,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
-    import jaxplan as jp
+    from jaxplan.grid import load_map
+    from jaxplan.registry import plan
 
-    grid = jp.load_map(args.map, resolution=args.resolution)
+    grid = load_map(args.map, resolution=args.resolution)
     # Only grid planners take a connectivity (the sampling planners have none), so pass it only when asked.
     extra = {} if args.connectivity is None else {"connectivity": args.connectivity}
-    res = jp.plan(grid, tuple(args.start), tuple(args.goal), planner=args.planner, **extra)
+    res = plan(grid, tuple(args.start), tuple(args.goal), planner=args.planner, **extra)
     print(_table([(args.planner, _path_column(res, grid))], ROW_LABELS, f"{args.planner} on {args.map}"))
     return 0 if res.success else 1
 

@@ -14,7 +14,7 @@ from typing import Any, Callable, Mapping
 
 from numpy.typing import ArrayLike
 
-from jaxplan.grid._gridmap import GridMap
+from jaxplan.grid import GridMap
 from jaxplan.result import PlanResult
 
 __all__ = ["PlannerSpec", "register_planner", "planners", "plan"]

@@ -10,7 +10,7 @@ from scipy import stats
 
 import jaxplan as jp
 from jaxplan.aco import COLONIES, draw, hash_uniform
-from jaxplan.aco._planners import split_params, cached_map_tables, compiled, _seed_keys
+from jaxplan.aco._planners import split_params, cached_map_tables, compiled, seed_keys
 from jaxplan.aco._context import goal_tables
 from jaxplan.registry import resolve
 
@@ -125,7 +125,7 @@ def test_pheromone_stays_finite_and_inside_bounds():
     cfg = type(cfg)(**{**cfg.__dict__, "keep_pheromone": True})
     tables = cached_map_tables(scene.grid, conn, vh)
     gt = goal_tables(scene.grid, [scene.start], [scene.goal], conn, vh)
-    keys = _seed_keys([0])
+    keys = seed_keys([0])
     fn, _ = compiled(COLONIES["opt_ant"], cfg, tables, gt, params, keys)
     out = fn(tables, gt, params, keys)
     tau = np.asarray(out.tau)
@@ -212,13 +212,13 @@ def test_compacting_the_walking_ants_changes_no_result(monkeypatch):
 
 
 def test_seed_keys_equal_jax_random_key():
-    from jaxplan.aco._planners import _seed_keys
+    from jaxplan.aco._planners import seed_keys
 
     seeds = [0, 1, 7, 2**32 - 1]
     expected = jax.vmap(jax.random.key)(jnp.asarray(seeds, jnp.uint32))
-    np.testing.assert_array_equal(jax.random.key_data(_seed_keys(seeds)), jax.random.key_data(expected))
+    np.testing.assert_array_equal(jax.random.key_data(seed_keys(seeds)), jax.random.key_data(expected))
     with pytest.raises(ValueError, match="below 2\\*\\*32"):
-        _seed_keys([2**32])
+        seed_keys([2**32])
 
 
 def test_praco_with_one_colony_exchanges_with_no_one():

@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 
 import jaxplan as jp
-from jaxplan.grid._collision import (
-    TOUCH, collision_map, point_clearance, point_square_distance, segment_clearance, segment_free,
-)
+from jaxplan.core.geometry import point_square_distance
+from jaxplan.grid import TOUCH, collision_map, point_clearance, segment_clearance, segment_free
 
 
 @pytest.fixture(scope="module")

@@ -16,7 +16,7 @@ from jaxplan.aco import _rules as R
 from jaxplan.aco import _walk_numba as WN
 from jaxplan.aco._colony import RunConfig, run_batch
 from jaxplan.aco._context import goal_tables, map_tables
-from jaxplan.aco._planners import _seed_keys, split_params
+from jaxplan.aco._planners import seed_keys, split_params
 from jaxplan.aco._walk import GOAL, move_lut, walk
 from jaxplan.registry import resolve
 
@@ -259,7 +259,7 @@ def test_vmap_over_params_matches_per_element_runs(room):
     cfg, params, conn, vh = split_params(grid, p)
     tables = map_tables(grid, conn, vh)
     gt = goal_tables(grid, starts[:2], goals[:2], conn, vh)
-    keys = _seed_keys([0, 1])
+    keys = seed_keys([0, 1])
     betas = jnp.asarray([2.0, 5.0, 7.0], jnp.float32)
     outs = {}
     for backend in ("jax", "numba"):
@@ -287,7 +287,7 @@ def test_jax_backends_compile_no_native_call_and_reach_the_same_paths(room):
     # The demo's setting: no numba at all. Statistics may differ in the last bits from the native
     # update (another summation order); on this map the runs take the same paths.
     from jaxplan.aco._context import goal_tables
-    from jaxplan.aco._planners import COLONIES, _seed_keys, cached_map_tables, compiled, split_params
+    from jaxplan.aco._planners import COLONIES, seed_keys, cached_map_tables, compiled, split_params
     from jaxplan.registry import resolve
 
     grid, starts, goals = room
@@ -295,7 +295,7 @@ def test_jax_backends_compile_no_native_call_and_reach_the_same_paths(room):
     for update, native in (("jax", False), ("numba", True)):
         cfg, params, conn, vh = split_params(grid, resolve("iaco", {**over, "update_backend": update})[1])
         fn, _ = compiled(COLONIES["iaco"], cfg, cached_map_tables(grid, conn, vh),
-                         goal_tables(grid, starts[:2], goals[:2], conn, vh), params, _seed_keys([3]))
+                         goal_tables(grid, starts[:2], goals[:2], conn, vh), params, seed_keys([3]))
         assert ("jaxplan_aco_deposit" in fn.as_text()) == native, update
         assert "jaxplan_aco_walk" not in fn.as_text()
     runs = [jp.plan_batch(grid, starts[:2], goals[:2], planner="iaco", seeds=[3], **over, update_backend=u)
@@ -380,7 +380,7 @@ def test_update_backends_agree(room, planner):
     cfg, params, conn, vh = split_params(grid, p)
     tables = map_tables(grid, conn, vh)
     gt = goal_tables(grid, starts, goals, conn, vh)
-    keys = _seed_keys([0, 1])
+    keys = seed_keys([0, 1])
     outs = {}
     for backend in ("jax", "numba"):
         c = RunConfig(**{**cfg.__dict__, "update_backend": backend, "keep_pheromone": True})

@@ -18,7 +18,7 @@ from jaxplan.aco import _rules as R
 from jaxplan.aco._context import GoalTables, MapTables
 from jaxplan.aco import _walk_numba
 from jaxplan.aco._walk import DEAD_END_RULES, GOAL, Ants, move_lut, walk
-from jaxplan.metrics import _run as run_metrics
+from jaxplan.metrics import converged_iteration, diversity as run_diversity
 from jaxplan.aco._walk_numba import WALK_BACKENDS, HookTables
 
 __all__ = ["Colony", "RunConfig", "ColonyState", "RunOutput", "run", "run_batch", "HEURISTICS"]
@@ -236,7 +236,7 @@ def _choose(colony: Colony, cfg: RunConfig, tables: MapTables, params: dict, sta
         alert = alert | ants.marks
     n_ok = jnp.sum(ok)
     # Failed ants carry cost inf, so the finite costs are the successful ants (all colonies').
-    diversity = run_metrics.diversity(cost, jnp.isfinite(cost), axis=None)
+    diversity = run_diversity(cost, jnp.isfinite(cost), axis=None)
     new = ColonyState(state.tau, alert, bs_cells, bs_moves, bs_n, bs_cost, bs_length, bs_turns)
     return new, dep, (jnp.min(bs_cost), diversity, n_ok.astype(jnp.int32), jnp.sum(ants.ant_steps))
 
@@ -408,7 +408,7 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
     pick = lambda a: a[jnp.arange(B), best]  # noqa: E731
     final = pick(state.bs_cost)
     success = jnp.isfinite(final)
-    converged = run_metrics.converged_iteration(history)  # history[:, -1] is the final best
+    converged = converged_iteration(history)  # history[:, -1] is the final best
     out = RunOutput(
         cells=pick(state.bs_cells), n=pick(state.bs_n), cost=final, length=pick(state.bs_length),
         turns=pick(state.bs_turns), success=success, history=history, diversity=diversity, successes=successes,

@@ -13,10 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 from numpy.typing import ArrayLike
 
-from jaxplan.grid._fields import clearance_field
-from jaxplan.grid._gridmap import GridMap, check_cell, check_cells, passable
-from jaxplan.grid._neighbours import neighbour_table
-from jaxplan.search._exact import distance_from
+from jaxplan.grid import GridMap, check_cell, check_cells, clearance_field, distance_from, neighbour_table, passable
 
 __all__ = ["MapTables", "GoalTables", "map_tables", "goal_tables"]
 

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import math
 import time
-from collections import OrderedDict
 from typing import Any, Mapping, NamedTuple
 
 import jax
@@ -43,14 +42,14 @@ from jaxplan.aco import _rules as R
 from jaxplan.aco._colony import Colony, RunConfig, run_batch, walk_backend
 from jaxplan.aco._context import GoalTables, MapTables, check_one, goal_tables, map_tables
 from jaxplan.aco._walk_numba import WALK_BACKENDS, sharing_cores
-from jaxplan.grid._gridmap import GridMap, passable
+from jaxplan.core.cache import Built, digest, memoize
+from jaxplan.grid import GridMap, passable
 from jaxplan.registry import register_planner, resolve
 from jaxplan.result import PlanResult
-from jaxplan.scale._memory import aco_memory, check_memory
-from jaxplan.scale._host_devices import auto_mesh
-from jaxplan.scale._mesh import BATCH_AXIS, check_mesh, pad_leading, padded_size
+from jaxplan.scale import BATCH_AXIS, aco_memory, auto_mesh, check_memory, check_mesh, pad_leading, padded_size
 
-__all__ = ["COLONIES", "BatchResult", "plan_batch", "aco_defaults"]
+__all__ = ["COLONIES", "BatchResult", "plan_batch", "aco_defaults", "STATIC_PARAMS", "UNIT_PARAMS", "seed_keys",
+           "split_params", "cached_map_tables"]
 
 COLONIES: dict[str, Colony] = {
     "aco": Colony("aco", R.init_uniform, R.cost_length, (R.deposit_inverse,)),
@@ -79,11 +78,11 @@ _DEFAULTS: dict[str, dict[str, Any]] = {
               "rho": 0.3, "lambda_p": 0.3, "omega1": 1.0, "omega2": 1.0, "tau0": 1.0},
 }
 
-# Parameters that shape the compiled program (everything else is a traced leaf of `params`).
-_STATIC = ("ants", "iterations", "connectivity", "max_steps", "heuristic", "dead_end", "vehicle_height", "colonies",
-           "keep_pheromone", "walk_backend", "update_backend")
-# Parameters that must lie in [0, 1].
-_UNIT = ("rho", "rho_res", "lambda_p", "delta")
+STATIC_PARAMS = ("ants", "iterations", "connectivity", "max_steps", "heuristic", "dead_end", "vehicle_height",
+                 "colonies", "keep_pheromone", "walk_backend", "update_backend")
+"""ACO parameters that shape the compiled program (every other parameter is a traced leaf of ``params``)."""
+UNIT_PARAMS = ("rho", "rho_res", "lambda_p", "delta")
+"""ACO parameters that must lie in [0, 1]."""
 _DESCRIPTIONS = {
     "aco": "Ant System (Dorigo): uniform τ0, η = 1/distance to goal, deposit Q/L",
     "iaco": "cui2025 IACO: multi-objective fitness λ·(L/L0, Σ|θ|/π, Σ1/d), elite reinforcement δ",
@@ -136,14 +135,14 @@ def _validate(name: str):
         if "lambdas" in p and np.shape(p["lambdas"]) != (3,):
             raise ValueError(f"planner {name!r}: lambdas must be three weights (λ1, λ2, λ3), got {p['lambdas']!r}")
         for k, v in p.items():
-            if k in _STATIC:
+            if k in STATIC_PARAMS:
                 continue
             arr = _real(name, k, v, _DEFAULTS[name][k])
             if not np.all(np.isfinite(arr)):
                 raise ValueError(f"planner {name!r}: parameter {k!r} must be finite, got {v!r}")
             if np.any(arr < 0):
                 raise ValueError(f"planner {name!r}: parameter {k!r} must be >= 0, got {v!r}")
-            if k in _UNIT and np.any(arr > 1):
+            if k in UNIT_PARAMS and np.any(arr > 1):
                 raise ValueError(f"planner {name!r}: parameter {k!r} must lie in [0, 1], got {v!r}")
         if "lambdas" in p and not np.sum(p["lambdas"]) > 0:
             raise ValueError(f"planner {name!r}: lambdas must have a weight > 0 (all zero, every path costs 0), "
@@ -179,35 +178,25 @@ def split_params(grid: GridMap, p: Mapping[str, Any]) -> tuple[RunConfig, dict, 
         walk_backend=p.get("walk_backend", "auto"),
         update_backend=p.get("update_backend", "auto"),
     )
-    params = {k: jnp.asarray(v, jnp.float32) for k, v in p.items() if k not in _STATIC}
+    params = {k: jnp.asarray(v, jnp.float32) for k, v in p.items() if k not in STATIC_PARAMS}
     return cfg, params, int(p["connectivity"]), p["vehicle_height"]
 
 
-# Prepared map tables keyed by map content and move rules (pure memoisation, bounded).
-_TABLES: OrderedDict[tuple, MapTables] = OrderedDict()
-# Compiled programs keyed by (colony, config, argument shapes): the time of a call can then be
-# reported without its one-off compilation.
-_PROGRAMS: OrderedDict[tuple, Any] = OrderedDict()
+def _tables_key(grid: GridMap, connectivity: int, vehicle_height: float | None) -> tuple:
+    layers = (grid.free, grid.height, grid.clearance_height, grid.risk, grid.turn_rule)
+    return digest(*layers), float(grid.resolution), connectivity, vehicle_height
 
 
-def _memo(store: OrderedDict, key, make, limit: int = 16):
-    if key in store:
-        store.move_to_end(key)
-        return store[key]
-    value = store[key] = make()
-    if len(store) > limit:
-        store.popitem(last=False)
-    return value
-
-
+@memoize(maxsize=8, key=_tables_key)
 def cached_map_tables(grid: GridMap, connectivity: int, vehicle_height: float | None) -> MapTables:
-    import hashlib
+    """`map_tables`, memoised on the map's layers and the move rules."""
+    return map_tables(grid, connectivity, vehicle_height)
 
-    h = hashlib.blake2b(digest_size=16)
-    for layer in (grid.free, grid.height, grid.clearance_height, grid.risk, grid.turn_rule):
-        h.update(np.ascontiguousarray(layer).tobytes())
-    key = (grid.shape, h.hexdigest(), float(grid.resolution), connectivity, vehicle_height)
-    return _memo(_TABLES, key, lambda: map_tables(grid, connectivity, vehicle_height), limit=8)
+
+def _program_key(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys,
+                 mesh: Mesh | None) -> tuple:
+    sig = jax.tree_util.tree_map(lambda a: (a.shape, a.dtype), (tables, goals, params, keys))
+    return colony, cfg, str(jax.tree_util.tree_structure(sig)), str(jax.tree_util.tree_leaves(sig)), mesh
 
 
 def compiled(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys,
@@ -217,13 +206,15 @@ def compiled(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTable
     With a ``mesh`` (`jaxplan.scale.batch_mesh`), the scenario axis of ``goals`` (a multiple of
     the mesh's devices) is split over its devices with `jax.shard_map`; the map tables, params
     and keys are replicated. Every run depends only on its own scenario and key, so the result
-    equals the single-device one.
+    equals the single-device one. Programs are kept by (colony, config, argument shapes, mesh), so
+    a call's time can be reported without its one-off compilation.
     """
-    sig = jax.tree_util.tree_map(lambda a: (a.shape, a.dtype), (tables, goals, params, keys))
-    key = (colony, cfg, str(jax.tree_util.tree_structure(sig)), str(jax.tree_util.tree_leaves(sig)), mesh)
-    if key in _PROGRAMS:
-        _PROGRAMS.move_to_end(key)
-        return _PROGRAMS[key], 0.0
+    return _program(colony, cfg, tables, goals, params, keys, mesh).take()
+
+
+@memoize(maxsize=32, key=_program_key)
+def _program(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys,
+             mesh: Mesh | None) -> Built:
     t0 = time.perf_counter()
     body = lambda t, g, p, k: run_batch(colony, cfg, t, g, p, k)  # noqa: E731
     if mesh is not None:
@@ -233,12 +224,11 @@ def compiled(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTable
                              check_vma=False)
     with sharing_cores(1 if mesh is None else len(mesh.local_devices)):
         fn = jax.jit(body).lower(tables, goals, params, keys).compile()
-    dt = time.perf_counter() - t0
-    _memo(_PROGRAMS, key, lambda: fn, limit=32)
-    return fn, dt
+    return Built(fn, time.perf_counter() - t0)
 
 
-def _seed_keys(seeds) -> jax.Array:
+def seed_keys(seeds) -> jax.Array:
+    """``key[R]`` PRNG keys of integer seeds (``jax.random.key(seed)`` each); bad seeds raise ``ValueError``."""
     s = np.atleast_1d(np.asarray(list(seeds) if not isinstance(seeds, (int, np.integer)) else [seeds]))
     if s.size == 0:
         raise ValueError("seeds must hold at least one seed")
@@ -305,7 +295,7 @@ def _run_colony(name: str, grid: GridMap, starts: np.ndarray, goals: np.ndarray,
         cfg = RunConfig(**{**cfg.__dict__, "keep_pheromone": True})
     tables = cached_map_tables(grid, connectivity, vh)
     N = len(starts)
-    keys = _seed_keys(seeds)
+    keys = seed_keys(seeds)
     colony = COLONIES[name]
     runs = (N if mesh is None else padded_size(N, check_mesh(mesh))) * keys.shape[0]
     # Refuse a batch that cannot fit before anything of it is allocated (on a mesh, per device).
@@ -402,12 +392,12 @@ def plan_batch(
         if len(s) == 0:  # e.g. a host past the end of a multi-host sweep's scenarios
             if len(g) != 0:
                 raise ValueError(f"starts and goals differ in shape: {s.shape} vs {g.shape}")
-            return _empty_batch(planner, len(_seed_keys([int(x) for x in seeds])), int(p["iterations"]))
+            return _empty_batch(planner, len(seed_keys([int(x) for x in seeds])), int(p["iterations"]))
         mesh = auto_mesh(mesh, len(s))
         out, dt, compile_s, width = _run_colony(planner, grid, s, g, seeds, p, mesh=mesh)
         return _to_batch(planner, out, dt, compile_s, width)
     seed_list = [int(x) for x in seeds]
-    R_ = len(_seed_keys(seed_list))
+    R_ = len(seed_keys(seed_list))
     t0 = time.perf_counter()
     if planner in _SEEDLESS:  # deterministic: one plan per scenario serves every seed
         once = [spec.fn(grid, a, b, 0, **p) for a, b in zip(s, g)]

@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import math
 import time
-from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
@@ -46,11 +45,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxplan.aco import _rules as R
-from jaxplan.aco._planners import _memo
 from jaxplan.aco._tsplib import TSPProblem, tour_length
 from jaxplan.aco._walk import hash_uniform
+from jaxplan.core.cache import Built, memoize
 
-__all__ = ["TSP_PLANNERS", "TSPConfig", "TSPOutput", "TourResult", "run_tsp", "solve_tsp", "tsp_defaults"]
+__all__ = ["TSP_PLANNERS", "TSP_STATIC_PARAMS", "TSPConfig", "TSPOutput", "TourResult", "resolve_tsp", "run_tsp",
+           "solve_tsp", "tsp_defaults"]
 
 # The deposit rules of each TSP planner (summed with `R.combine`).
 TSP_PLANNERS: dict[str, tuple] = {
@@ -63,7 +63,8 @@ _DEFAULTS: dict[str, dict[str, Any]] = {
     "praco": {"colonies": 5, "ants": 35, "iterations": 200, "alpha": 1.0, "beta": 5.0, "rho": 0.3, "w_rank": 6.0,
               "n_exchange": 3.0, "tau0": 1.0, "local_search": None},
 }
-_STATIC = ("colonies", "ants", "iterations", "local_search")  # shape the program; the rest are traced
+TSP_STATIC_PARAMS = ("colonies", "ants", "iterations", "local_search")
+"""TSP parameters that shape the compiled program; the rest are traced."""
 _LOCAL_SEARCH = (None, "2opt")
 
 
@@ -279,21 +280,19 @@ def run_tsp(cfg: TSPConfig, dist: jnp.ndarray, params: dict, key: jax.Array) -> 
     return TSPOutput(bs_tour[b], bs_len[b], history)
 
 
-# Compiled programs keyed by (config, n): a call's time_s then excludes its one-off compilation.
-_PROGRAMS: OrderedDict[tuple, Any] = OrderedDict()
-
-
 def _compiled(cfg: TSPConfig, dist: jnp.ndarray, params: dict, key: jax.Array) -> tuple[Any, float]:
-    """The compiled run for these static sizes, and the seconds spent compiling it now (0 if cached)."""
-    sig = (cfg, dist.shape, tuple(sorted(params)))
-    if sig in _PROGRAMS:
-        return _memo(_PROGRAMS, sig, None), 0.0  # (refreshes the entry's place in the LRU order)
-    t0 = time.perf_counter()
-    fn = jax.jit(lambda d, p, k: run_tsp(cfg, d, p, k)).lower(dist, params, key).compile()
-    return _memo(_PROGRAMS, sig, lambda: fn), time.perf_counter() - t0
+    """The compiled run for these static sizes, and the seconds spent compiling it now (0 if cached): programs
+    are kept by (config, n, parameter names), so a call's time_s excludes its one-off compilation."""
+    return _program(cfg, dist, params, key).take()
 
 
-def _resolve(planner: str, overrides: dict[str, Any]) -> dict[str, Any]:
+@memoize(maxsize=16, key=lambda cfg, dist, params, key: (cfg, dist.shape, tuple(sorted(params))))
+def _program(cfg: TSPConfig, dist: jnp.ndarray, params: dict, key: jax.Array) -> Built:
+    return Built.timed(lambda: jax.jit(lambda d, p, k: run_tsp(cfg, d, p, k)).lower(dist, params, key).compile())
+
+
+def resolve_tsp(planner: str, overrides: dict[str, Any]) -> dict[str, Any]:
+    """The parameters of TSP planner ``planner``: its defaults with ``overrides`` applied, checked (``ValueError``)."""
     p = tsp_defaults(planner)
     unknown = sorted(set(overrides) - set(p))
     if unknown:
@@ -306,7 +305,7 @@ def _resolve(planner: str, overrides: dict[str, Any]) -> dict[str, Any]:
         raise ValueError(f"TSP planner {planner!r}: local_search must be one of {_LOCAL_SEARCH}, "
                          f"got {p['local_search']!r}")
     for k, v in p.items():
-        if k in _STATIC:
+        if k in TSP_STATIC_PARAMS:
             continue
         try:  # a Python or numpy number, or a 0-d array (e.g. a jax scalar from a tuning loop)
             x = None if isinstance(v, (bool, str)) or np.ndim(v) != 0 else float(v)
@@ -322,6 +321,9 @@ def _resolve(planner: str, overrides: dict[str, Any]) -> dict[str, Any]:
         if k in p and not p[k] > 0:
             raise ValueError(f"TSP planner {planner!r}: parameter {k!r} must be > 0, got {p[k]!r}")
     return p
+
+
+_resolve = resolve_tsp  # the previous private name, still imported by jaxplan.experiments.config
 
 
 def solve_tsp(problem: TSPProblem, planner: str = "praco", seed: int = 0, **overrides: Any) -> TourResult:
@@ -345,7 +347,7 @@ def solve_tsp(problem: TSPProblem, planner: str = "praco", seed: int = 0, **over
     """
     if planner not in TSP_PLANNERS:
         raise ValueError(f"unknown TSP planner {planner!r}; accepted: {tuple(TSP_PLANNERS)}")
-    p = _resolve(planner, overrides)
+    p = resolve_tsp(planner, overrides)
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or not 0 <= seed < 2**32:
         raise ValueError(f"seed must be an integer in [0, 2**32), got {seed!r}")
     d = np.asarray(problem.dist, np.float64)
@@ -354,7 +356,7 @@ def solve_tsp(problem: TSPProblem, planner: str = "praco", seed: int = 0, **over
     if not np.all(np.isfinite(d)) or np.any(d < 0):
         raise ValueError("problem.dist must hold finite, non-negative distances")
     cfg = TSPConfig(planner, int(p.get("colonies", 1)), int(p["ants"]), int(p["iterations"]), p["local_search"])
-    params = {k: jnp.asarray(v, jnp.float32) for k, v in p.items() if k not in _STATIC}
+    params = {k: jnp.asarray(v, jnp.float32) for k, v in p.items() if k not in TSP_STATIC_PARAMS}
     dist = jnp.asarray(d, jnp.float32)
     key = jax.random.key(int(seed))
     fn, compile_s = _compiled(cfg, dist, params, key)

@@ -8,7 +8,7 @@ Host front::
 Pure core, for episodes (`lax.scan` over control steps, `vmap` over episodes)::
 
     from jaxplan.dwa import DWAConfig, clearance_table, default_params, dwa_control
-    from jaxplan.grid._collision import collision_map
+    from jaxplan.grid import collision_map
     table = clearance_table(collision_map(grid))
     u, info = dwa_control(table, DWAConfig(keep_rollouts=False), default_params(), state, subgoal)
 """
@@ -26,15 +26,16 @@ from jaxplan.dwa._config import CLEARANCE_MODES, EVALUATORS, SELECTIONS, DWAConf
 from jaxplan.dwa._core import DWAInfo, dwa_control, dwa_control_batch, evaluate, trajectory
 from jaxplan.dwa._critics import Critics, critics
 from jaxplan.dwa._fuzzy import fuzzy_evaluate, input_memberships, rule_table
-from jaxplan.dwa._robot import Ackermann, Disc, Rectangle, Unicycle, advance, footprint_radius
+from jaxplan.dwa._robot import Ackermann, Disc, Rectangle, Unicycle, advance, footprint_offsets, footprint_radius
 from jaxplan.dwa._rollout import Rollouts, rollout
-from jaxplan.dwa._step import dwa_step, table_of
+from jaxplan.dwa._step import dwa_step, table_of, validate_config, validate_params
 from jaxplan.dwa._window import Window, dynamic_window, sample_controls
 
 __all__ = [
     "Ackermann", "CLEARANCE_MODES", "ClearanceTable", "Critics", "DWAConfig", "DWAInfo", "DWAParams", "Disc",
     "DiscObstacles", "EVALUATORS", "HYBRID_EXACT_CELLS", "Rectangle", "Rollouts", "SELECTIONS", "Unicycle", "Window",
     "advance", "clearance_table", "critics", "default_params", "disc_clearance", "dwa_control", "dwa_control_batch",
-    "dwa_step", "dynamic_window", "evaluate", "footprint_radius", "fuzzy_evaluate", "input_memberships",
-    "no_obstacles", "rollout", "rule_table", "sample_controls", "static_clearance", "table_of", "trajectory",
+    "dwa_step", "dynamic_window", "evaluate", "footprint_offsets", "footprint_radius", "fuzzy_evaluate",
+    "input_memberships", "no_obstacles", "rollout", "rule_table", "sample_controls", "static_clearance", "table_of",
+    "trajectory", "validate_config", "validate_params",
 ]

@@ -11,7 +11,6 @@ changing them does not recompile.
 from __future__ import annotations
 
 import math
-from collections import OrderedDict
 from typing import Any, Mapping
 
 import jax
@@ -23,14 +22,11 @@ from jaxplan.dwa._config import CLEARANCE_MODES, EVALUATORS, RECOVERIES, SELECTI
 from jaxplan.dwa._core import DWAInfo, dwa_control, dwa_control_batch
 from jaxplan.dwa._fastmath import MAX_ROTOR_ANGLE
 from jaxplan.dwa._robot import Ackermann, Disc, Rectangle, Unicycle, footprint_radius
-from jaxplan.grid._collision import collision_map
-from jaxplan.grid._gridmap import GridMap
+from jaxplan.core.cache import lru_cache, memoize
+from jaxplan.grid import GridMap, collision_map
 
 __all__ = ["dwa_step", "table_of", "validate_config", "validate_params", "as_obstacles"]
 
-_TABLES: OrderedDict = OrderedDict()
-_DEFAULTS: dict = {}
-_VALID_CONFIGS: OrderedDict = OrderedDict()
 CHUNK = 128
 """Robots per vectorised chunk of a batched step (see `dwa_control_batch`)."""
 
@@ -40,15 +36,14 @@ _batch = jax.jit(dwa_control_batch, static_argnames=("chunk",))
 
 def table_of(grid: GridMap) -> ClearanceTable:
     """The `ClearanceTable` of ``grid``, built once per map object (a few maps are kept)."""
-    key = id(grid.free), float(grid.resolution)
-    hit = _TABLES.get(key)
-    if hit is None or hit[0] is not grid.free:
-        hit = (grid.free, clearance_table(collision_map(grid)))
-        _TABLES[key] = hit
-        while len(_TABLES) > 8:
-            _TABLES.popitem(last=False)
-    _TABLES.move_to_end(key)
-    return hit[1]
+    return _table(grid)[1]
+
+
+# Keyed by the identity of the free-cell array, as `dwa_step` calls this on every step (a content digest of a
+# 512x512 map costs 0.25 ms); the value holds that array, so its id cannot be reused while the entry lives.
+@memoize(maxsize=8, key=lambda grid: (id(grid.free), float(grid.resolution)))
+def _table(grid: GridMap) -> tuple[Any, ClearanceTable]:
+    return grid.free, clearance_table(collision_map(grid))
 
 
 def _number(name: str, x: Any, *, positive: bool = False, nonneg: bool = False) -> float:
@@ -66,15 +61,19 @@ def _number(name: str, x: Any, *, positive: bool = False, nonneg: bool = False) 
 
 
 def validate_config(config: DWAConfig) -> DWAConfig:
-    """Checks a `DWAConfig` and its robot; raises ValueError naming the first problem."""
+    """Checks a `DWAConfig` and its robot; raises ValueError naming the first problem. Returns ``config``."""
     if not isinstance(config, DWAConfig):
         raise ValueError(f"config must be a DWAConfig, got {type(config).__name__}")
     try:
-        if config in _VALID_CONFIGS:
-            return config
-        hashable = True
+        hash(config)
     except TypeError:  # traced or array-valued fields: validate every time
-        hashable = False
+        _check_config(config)
+    else:
+        _checked_config(config)  # each valid configuration is checked once (the last 64 are kept)
+    return config
+
+
+def _check_config(config: DWAConfig) -> None:
     r = config.robot
     if not isinstance(r, (Unicycle, Ackermann)):
         raise ValueError(f"config.robot must be a Unicycle or an Ackermann, got {type(r).__name__}")
@@ -133,17 +132,16 @@ def validate_config(config: DWAConfig) -> DWAConfig:
                             ("recovery", RECOVERIES)):
         if getattr(config, field) not in choices:
             raise ValueError(f"config.{field} must be one of {choices}, got {getattr(config, field)!r}")
-    if hashable:
-        _VALID_CONFIGS[config] = True
-        while len(_VALID_CONFIGS) > 64:
-            _VALID_CONFIGS.popitem(last=False)
-    return config
+
+
+_checked_config = lru_cache(maxsize=64)(_check_config)
+_defaults = lru_cache(maxsize=None)(default_params)  # one `DWAParams` object per evaluator
 
 
 def validate_params(params: DWAParams | Mapping[str, float] | None, evaluator: str) -> DWAParams:
     """`DWAParams` from None (the evaluator's defaults), a mapping of overrides or `DWAParams`; checked."""
     if params is None:
-        return _DEFAULTS.setdefault(evaluator, default_params(evaluator))
+        return _defaults(evaluator)
     if isinstance(params, Mapping):
         return validate_params(default_params(evaluator, **params), evaluator)
     if not isinstance(params, DWAParams):

@@ -59,18 +59,18 @@ class DemoResult:
 
 def _settings(quick: bool):
     """(scene, NavConfig, planner overrides, obstacle settings)."""
-    import jaxplan as jp
+    from jaxplan.grid import WarehouseGenerator, demo_warehouse
     from jaxplan.nav import NavConfig
 
     base = NavConfig()
     engine = {"walk_backend": "jax", "update_backend": "jax"}  # no numba compilation (module docstring)
     if quick:
-        scene = jp.WarehouseGenerator(width=14, height=10, shelf_length=4, shelf_depth=2, aisle=1, cross_aisle=2)(0)
+        scene = WarehouseGenerator(width=14, height=10, shelf_length=4, shelf_depth=2, aisle=1, cross_aisle=2)(0)
         dwa = dataclasses.replace(base.dwa, n_v=5, n_omega=9)
         return scene, dataclasses.replace(base, replan=False, max_time=30.0, dwa=dwa), \
             {"ants": 8, "iterations": 5, **engine}, {"n": 2, "speed": 0.4, "radius": 0.2}
     dwa = dataclasses.replace(base.dwa, n_v=10, n_omega=20, unroll=1)  # unroll 1: ~2 s less compilation each
-    return jp.demo_warehouse(), dataclasses.replace(base, replan=False, max_time=150.0, dwa=dwa), \
+    return demo_warehouse(), dataclasses.replace(base, replan=False, max_time=150.0, dwa=dwa), \
         {"ants": 20, "iterations": 20, **engine}, {"n": 4, "speed": 0.5, "radius": 0.25}
 
 
@@ -208,19 +208,19 @@ def run_demo(out_dir: str | Path = "figures", *, seed: int = 0, quick: bool = Fa
       gif: write the animation.
       frames: animation frames (evenly spaced over the longer episode).
     """
-    import jaxplan as jp
+    from jaxplan.nav import navigate, random_obstacles
 
     scene, cfg, overrides, o = _settings(quick)
     grid = scene.grid
     res = float(grid.resolution)
     avoid = (np.stack([np.asarray(scene.start), np.asarray(scene.goal)]) + 0.5) * res
-    obs = jp.random_obstacles(grid, n=o["n"], speed=o["speed"], radius=o["radius"], seed=seed, avoid=avoid,
-                              avoid_radius=1.5)
+    obs = random_obstacles(grid, n=o["n"], speed=o["speed"], radius=o["radius"], seed=seed, avoid=avoid,
+                           avoid_radius=1.5)
     episodes, wall = {}, {}
     for name in PIPELINES:
         t0 = time.perf_counter()
-        episodes[name] = jp.navigate(grid, scene.start, scene.goal, pipeline=name, seed=seed, obstacles=obs,
-                                     config=cfg, **overrides)
+        episodes[name] = navigate(grid, scene.start, scene.goal, pipeline=name, seed=seed, obstacles=obs,
+                                  config=cfg, **overrides)
         wall[name] = time.perf_counter() - t0
     radius = float(cfg.dwa.robot.footprint.radius)
     columns = {name: _column(grid, ep, radius, wall[name]) for name, ep in episodes.items()}

@@ -426,8 +426,8 @@ def _paths(run, spec):
 
 
 def _pheromone(run, spec):
-    import jaxplan as jp
-    from jaxplan.aco._planners import COLONIES  # the ant colony planners (as the runner tells them apart)
+    from jaxplan.aco import COLONIES  # the ant colony planners (as the runner tells them apart)
+    from jaxplan.registry import plan
 
     mi, pi = _selected(run, spec, "plan")
     sc, seed, _ = _scenario_seed(run, spec, mi)
@@ -438,8 +438,8 @@ def _pheromone(run, spec):
     for ax, (m, p) in zip(axes[0], todo):
         mw, pc = run.prep.maps[m], run.config.planners[p]
         overrides = {k: tuple(v) if isinstance(v, list) else v for k, v in pc.overrides.items()}
-        res = jp.plan(mw.grid, mw.starts[sc], mw.goals[sc], planner=pc.name, seed=seed, keep_pheromone=True,
-                      **overrides)
+        res = plan(mw.grid, mw.starts[sc], mw.goals[sc], planner=pc.name, seed=seed, keep_pheromone=True,
+                   **overrides)
         plots.plot_pheromone(ax, mw.grid, res.info["tau"], log=spec.params.get("log", True),
                              title=f"{pc.label} on {mw.spec.name}")
         if res.success:
@@ -527,7 +527,8 @@ def _controls(run, spec):
 
 
 def _fan(run, spec):
-    import jaxplan as jp
+    from jaxplan.dwa import dwa_step
+    from jaxplan.nav import get_pipeline
 
     mi, pi = _selected(run, spec, "navigate")
     if not pi:
@@ -539,7 +540,7 @@ def _fan(run, spec):
         mw, pc = run.prep.maps[m], run.config.planners[p]
         navcfg, weights = nav_config(pc)
         dwa = navcfg.dwa
-        pipe = jp.nav.get_pipeline(pc.name)
+        pipe = get_pipeline(pc.name)
         if navcfg.evaluator is None and pipe.evaluator and hasattr(dwa, "evaluator"):
             dwa = dataclasses.replace(dwa, evaluator=pipe.evaluator)
         dwa = dataclasses.replace(dwa, keep_rollouts=True)  # episodes drop them; the fan needs them
@@ -567,8 +568,8 @@ def _fan(run, spec):
                 discs = discs_at(obs, s * dwa.period)
                 for c, rad in zip(np.asarray(discs.positions), np.asarray(discs.radii)):
                     ax.add_patch(plt.Circle(tuple(c), float(rad), color="tab:red", alpha=0.5))
-            _, info = jp.dwa_step(state, subgoal, mw.grid, obstacles=discs, params=weights or None, config=dwa,
-                                  path=plan if len(plan) > 1 else None)
+            _, info = dwa_step(state, subgoal, mw.grid, obstacles=discs, params=weights or None, config=dwa,
+                               path=plan if len(plan) > 1 else None)
             ro, ok = np.asarray(info.rollouts), np.asarray(info.feasible)
             for j in np.flatnonzero(~ok)[::2]:
                 ax.plot(ro[j, :, 0], ro[j, :, 1], color="tab:red", lw=0.3, alpha=0.4)
@@ -591,7 +592,7 @@ def _fan(run, spec):
 
 
 def _tours(run, spec):
-    import jaxplan as jp
+    from jaxplan.aco import load_tour, tour_length
 
     mi, pi = _selected(run, spec, "tsp")
     _, seed, r = _scenario_seed(run, spec)
@@ -602,17 +603,17 @@ def _tours(run, spec):
             raise ValueError(f"figure {spec.name!r}: instance {mw.spec.name!r} has no city coordinates")
         xy = np.asarray(mw.problem.coords, np.float64)
         if mw.spec.tour is not None:  # the optimal tour underneath, for comparison
-            t = jp.load_tour(mw.spec.tour)
+            t = load_tour(mw.spec.tour)
             c = xy[np.append(t, t[0])]
             ax.plot(c[:, 0], c[:, 1], color="0.6", ls="--", lw=2.5,
-                    label=f"optimal ({jp.tour_length(mw.problem, t):g})")
+                    label=f"optimal ({tour_length(mw.problem, t):g})")
         for p in pi:
             got = run.arrays(m, p, 0)
             if got is None or "tours" not in got[0]:
                 continue
             t = np.asarray(got[0]["tours"][got[1], r], np.int64)
             c = xy[np.append(t, t[0])]
-            label = f"{run.config.planners[p].label} ({jp.tour_length(mw.problem, t):g})"
+            label = f"{run.config.planners[p].label} ({tour_length(mw.problem, t):g})"
             ax.plot(c[:, 0], c[:, 1], lw=1.2, label=label)
         ax.plot(xy[:, 0], xy[:, 1], "k.", ms=5)
         ax.set_aspect("equal")

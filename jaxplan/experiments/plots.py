@@ -35,8 +35,7 @@ import numpy as np
 from matplotlib.colors import LogNorm, Normalize
 from numpy.typing import ArrayLike
 
-from jaxplan.grid._gridmap import GridMap
-from jaxplan.grid._neighbours import Neighbours, neighbour_table
+from jaxplan.grid import GridMap, Neighbours, neighbour_table
 
 __all__ = [
     "LAYERS", "plot_map", "plot_paths", "plot_pheromone", "pheromone_per_cell", "plot_convergence",

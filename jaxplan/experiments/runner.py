@@ -60,20 +60,21 @@ import shutil
 import subprocess
 import sys
 import time
-from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping, Sequence
 
 import numpy as np
 
+from jaxplan.core.cache import Built, memoize
 from jaxplan.experiments.config import (
     ACCURACY_GAP, METRICS, ConfigError, ExperimentConfig, MapSpec, PlannerConfig, applies, apply_quick, load_config,
     nav_config,
 )
 
 __all__ = ["run_experiment", "prepare", "Prepared", "MapWork", "Unit", "trial_columns", "read_manifest",
-           "load_chunk_arrays", "RunFolderError", "ID_COLUMNS", "accuracy", "reductions"]
+           "load_chunk_arrays", "RunFolderError", "ID_COLUMNS", "accuracy", "reductions", "atomic_write", "clock",
+           "load_map_spec", "spec_scenarios"]
 
 ID_COLUMNS = ("map", "planner", "kind", "scenario", "scen_row", "start_x", "start_y", "goal_x", "goal_y", "optimal",
               "seed")
@@ -149,13 +150,13 @@ def _sha(*chunks: bytes) -> str:
     return h.hexdigest()
 
 
-def _load_map(spec: MapSpec):
+def load_map_spec(spec: MapSpec):
     """(grid, default start, default goal, digest) of a map entry."""
-    import jaxplan as jp
+    from jaxplan.grid import load_map
     from jaxplan.experiments.config import _generators
 
     if spec.path is not None:
-        grid = jp.load_map(spec.path, resolution=spec.resolution)
+        grid = load_map(spec.path, resolution=spec.resolution)
         extra = spec.scen.read_bytes() if (spec.scen is not None and spec.scenarios.source == "scen") else b""
         return grid, None, None, _sha(spec.path.read_bytes(), extra)
     factory, is_dc = _generators()[spec.generator]
@@ -175,11 +176,11 @@ def _load_map(spec: MapSpec):
 def _load_instance(spec: MapSpec) -> MapWork:
     """A TSP instance as one scenario: the problem, its optimum (from the optimal tour, the configured length, or
     nan) and a digest of the files."""
-    import jaxplan as jp
+    from jaxplan.aco import load_tour, load_tsplib, tour_length
 
-    problem = jp.load_tsplib(spec.tsplib)
+    problem = load_tsplib(spec.tsplib)
     if spec.tour is not None:
-        optimum = float(jp.tour_length(problem, jp.load_tour(spec.tour)))
+        optimum = float(tour_length(problem, load_tour(spec.tour)))
         extra = spec.tour.read_bytes()
     else:
         optimum = math.nan if spec.optimum is None else float(spec.optimum)
@@ -236,9 +237,9 @@ def _random_pairs(grid, count: int, seed: int, min_distance: float,
     return np.asarray(S[:count], np.int64), np.asarray(G[:count], np.int64), np.asarray(L[:count], np.float64)
 
 
-def _scenarios(spec: MapSpec, grid, start0, goal0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def spec_scenarios(spec: MapSpec, grid, start0, goal0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(starts, goals, optimal m, scen rows) of a map, as its `ScenarioSpec` asks."""
-    import jaxplan as jp
+    from jaxplan.grid import load_scenarios
     from jaxplan.search import shortest_lengths
 
     sc = spec.scenarios
@@ -251,7 +252,7 @@ def _scenarios(spec: MapSpec, grid, start0, goal0) -> tuple[np.ndarray, np.ndarr
     if sc.source == "random":
         s, g, opt = _random_pairs(grid, sc.count or 10, sc.seed, sc.min_distance, sc.min_clearance)
         return s, g, opt, np.full(len(s), -1, np.int64)
-    scen = jp.load_scenarios(spec.scen, grid=grid)
+    scen = load_scenarios(spec.scen, grid=grid)
     keep = np.ones(len(scen.starts), bool)
     opt_file = np.asarray(scen.optimal, np.float64) * spec.resolution
     if sc.min_bucket is not None:
@@ -284,8 +285,8 @@ def prepare(cfg: ExperimentConfig) -> Prepared:
             if spec.is_tsp:
                 maps.append(_load_instance(spec))
                 continue
-            grid, s0, g0, digest = _load_map(spec)
-            s, g, opt, rows = _scenarios(spec, grid, s0, g0)
+            grid, s0, g0, digest = load_map_spec(spec)
+            s, g, opt, rows = spec_scenarios(spec, grid, s0, g0)
         except (ValueError, FileNotFoundError) as e:
             problems.append(f"{spec.key or f'maps[{i}]'} ({spec.name}): {e}")
             continue
@@ -411,7 +412,7 @@ def _los_metrics(grid, paths: np.ndarray, n: np.ndarray, ok: np.ndarray, fill: n
     Returns:
       ``{"los_length": f64[B], "los_turns": f64[B]}``.
     """
-    import jaxplan as jp
+    from jaxplan.metrics import path_metrics
     from jaxplan.smooth import smooth
 
     B, P = paths.shape[:2]
@@ -419,7 +420,7 @@ def _los_metrics(grid, paths: np.ndarray, n: np.ndarray, ok: np.ndarray, fill: n
     # smooth() checks every valid point against the map: a failed plan (−1 padding) becomes its start alone.
     pts = np.where(valid[..., None], paths, np.asarray(fill)[:, None, :]).astype(np.float64)
     sm = smooth(pts, grid, "los", n=np.where(ok, np.maximum(n, 1), 1))
-    pm = jp.path_metrics(np.asarray(sm.points, np.float64), grid, n=np.asarray(sm.n))
+    pm = path_metrics(np.asarray(sm.points, np.float64), grid, n=np.asarray(sm.n))
     return {"los_length": np.where(ok, np.asarray(pm["length"], np.float64), np.nan),
             "los_turns": np.where(ok, np.asarray(pm["turns"], np.float64), np.nan)}
 
@@ -448,37 +449,38 @@ def optimality_gaps(length: np.ndarray, optimal: np.ndarray) -> np.ndarray:
 def _hausdorff(mw: MapWork, idx: np.ndarray, paths: np.ndarray, n_cells: np.ndarray) -> np.ndarray:
     """``f64[n, R]`` Hausdorff distance (m) of each trial's global path ``[n, R, P, 2]`` (cells, ``n_cells``
     valid points) to the scenario's exact A* path (deterministic; nan where a path is empty)."""
-    import jaxplan as jp
+    from jaxplan.aco import plan_batch
+    from jaxplan.metrics import path_metrics
 
-    ref = jp.plan_batch(mw.grid, mw.starts[idx], mw.goals[idx], planner="astar", seeds=[0])
+    ref = plan_batch(mw.grid, mw.starts[idx], mw.goals[idx], planner="astar", seeds=[0])
     n, R, P = paths.shape[:3]
     rp = np.repeat(np.asarray(ref.paths[:, 0]), R, axis=0)
     rn = np.repeat(np.asarray(ref.n_cells[:, 0]), R, axis=0)
     nc = np.asarray(n_cells).reshape(-1)
     ok = (nc > 0) & (rn > 0)
-    pm = jp.path_metrics(np.asarray(paths, np.float64).reshape(n * R, P, 2), mw.grid, reference=rp.astype(np.float64),
-                         n=np.maximum(nc, 1), reference_n=np.maximum(rn, 1))
+    pm = path_metrics(np.asarray(paths, np.float64).reshape(n * R, P, 2), mw.grid, reference=rp.astype(np.float64),
+                      n=np.maximum(nc, 1), reference_n=np.maximum(rn, 1))
     return np.where(ok, np.asarray(pm["hausdorff"], np.float64), np.nan).reshape(n, R)
 
 
 def _run_plan(mw: MapWork, pc: PlannerConfig, idx: np.ndarray, seeds: tuple[int, ...], chunk: int,
               metrics: Sequence[str]) -> tuple[dict, dict, dict]:
     """Metric arrays ``[n, R]``, arrays to keep, and timings of one plan chunk (one `plan_batch` call)."""
-    import jaxplan as jp
-    from jaxplan.aco._planners import COLONIES
+    from jaxplan.aco import COLONIES, plan_batch
+    from jaxplan.metrics import path_metrics
 
     batched = pc.name in COLONIES
     run_idx = _pad(idx, chunk) if batched else idx  # equal shapes: one compilation per (map, planner)
     overrides = {k: tuple(v) if isinstance(v, tuple) else v for k, v in pc.overrides.items()}
-    br = jp.plan_batch(mw.grid, mw.starts[run_idx], mw.goals[run_idx], planner=pc.name, seeds=seeds, **overrides)
+    br = plan_batch(mw.grid, mw.starts[run_idx], mw.goals[run_idx], planner=pc.name, seeds=seeds, **overrides)
     n, R = len(idx), len(seeds)
     ok = br.success[:n]
     out: dict[str, np.ndarray] = {"success": ok.astype(np.int64)}
     los = any(m in _LOS_KEYS for m in metrics)
     if any(m in _PATH_KEYS for m in metrics) or los or "accuracy" in metrics:
         P = br.paths.shape[2]
-        pm = jp.path_metrics(br.paths[:n].reshape(n * R, P, 2), mw.grid, optimal=np.repeat(mw.optimal[idx], R),
-                             n=br.n_cells[:n].reshape(-1))
+        pm = path_metrics(br.paths[:n].reshape(n * R, P, 2), mw.grid, optimal=np.repeat(mw.optimal[idx], R),
+                          n=br.n_cells[:n].reshape(-1))
         raw = {k: np.where(ok, np.asarray(pm[k], np.float64).reshape(n, R), np.nan) for k in _PATH_KEYS}
         # The device's float32 sums depend on the batch's layout, so a --chunk change moved the last bits of a
         # stored path's length; DESIGN promises same seed, same result: recompute from the integer cells.
@@ -515,7 +517,7 @@ def _obstacle_fn(mw: MapWork, m: int, pc: PlannerConfig, run_idx: np.ndarray) ->
     o = pc.obstacles
     if o is None or o.n == 0:
         return None
-    import jaxplan as jp
+    from jaxplan.nav import random_obstacles
 
     res = float(mw.grid.resolution)
 
@@ -523,8 +525,8 @@ def _obstacle_fn(mw: MapWork, m: int, pc: PlannerConfig, run_idx: np.ndarray) ->
         sc = int(run_idx[e])
         s = int(np.random.SeedSequence([o.seed, m, sc, int(seed)]).generate_state(1)[0])
         avoid = (np.stack([mw.starts[sc], mw.goals[sc]]) + 0.5) * res
-        return jp.random_obstacles(mw.grid, n=o.n, speed=o.speed, radius=o.radius, seed=s, waypoints=o.waypoints,
-                                   avoid=avoid, avoid_radius=o.avoid_radius, loop=o.loop)
+        return random_obstacles(mw.grid, n=o.n, speed=o.speed, radius=o.radius, seed=s, waypoints=o.waypoints,
+                                avoid=avoid, avoid_radius=o.avoid_radius, loop=o.loop)
 
     return fn
 
@@ -538,7 +540,8 @@ def _executed_optimum(mw: MapWork, pc: PlannerConfig, idx: np.ndarray) -> np.nda
     the planning map (the map closed within d_safe of obstacles, as the pipelines plan) after the line-of-sight
     smoothing the pipelines apply (clearance d_safe) — DESIGN §6's "the same smoothing applied to the exact path".
     nan where the robot does not fit (start or goal closed, or not connected)."""
-    import jaxplan as jp
+    from jaxplan.aco import plan_batch
+    from jaxplan.metrics import path_metrics
     from jaxplan.nav import planning_grid
     from jaxplan.search import shortest_lengths
     from jaxplan.smooth import smooth
@@ -552,10 +555,10 @@ def _executed_optimum(mw: MapWork, pc: PlannerConfig, idx: np.ndarray) -> np.nda
     if ok.any():
         ok[ok] = np.isfinite(shortest_lengths(pg, s[ok], g[ok]))
     if ok.any():
-        ref = jp.plan_batch(pg, s[ok], g[ok], planner="astar", seeds=[0])
+        ref = plan_batch(pg, s[ok], g[ok], planner="astar", seeds=[0])
         sm = smooth(np.asarray(ref.paths[:, 0], np.float64), mw.grid, "los", n=np.asarray(ref.n_cells[:, 0]),
                     radius=d_safe)
-        out[ok] = np.asarray(jp.path_metrics(np.asarray(sm.points, np.float64), mw.grid, n=np.asarray(sm.n))["length"],
+        out[ok] = np.asarray(path_metrics(np.asarray(sm.points, np.float64), mw.grid, n=np.asarray(sm.n))["length"],
                              np.float64)
     return out
 
@@ -563,14 +566,14 @@ def _executed_optimum(mw: MapWork, pc: PlannerConfig, idx: np.ndarray) -> np.nda
 def _run_navigate(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, seeds: tuple[int, ...], chunk: int,
                   metrics: Sequence[str]) -> tuple[dict, dict, dict]:
     """Metric arrays ``[n, R]`` (and ``reason``), arrays to keep, and timings of one `navigate_batch` call."""
-    import jaxplan as jp
+    from jaxplan.nav import navigate_batch
 
     run_idx = _pad(idx, chunk)
     cfg, weights = nav_config(pc)
     overrides = {k: tuple(v) if isinstance(v, tuple) else v for k, v in pc.overrides.items()}
-    eb = jp.navigate_batch(mw.grid, mw.starts[run_idx], mw.goals[run_idx], pipeline=pc.name, seeds=list(seeds),
-                           obstacles=_obstacle_fn(mw, m, pc, run_idx), config=cfg, params=weights or None,
-                           **overrides)
+    eb = navigate_batch(mw.grid, mw.starts[run_idx], mw.goals[run_idx], pipeline=pc.name, seeds=list(seeds),
+                        obstacles=_obstacle_fn(mw, m, pc, run_idx), config=cfg, params=weights or None,
+                        **overrides)
     n = len(idx)
     out: dict[str, np.ndarray] = {}
     for k in _NAV_KEYS:
@@ -595,28 +598,21 @@ def _run_navigate(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, seeds
     return out, keep, timing
 
 
-# Compiled TSP programs keyed by (config, n, seeds, parameter names): one compile per (instance size, planner).
-_TSP_PROGRAMS: OrderedDict[tuple, Any] = OrderedDict()
-
-
 def _tsp_program(cfg, dist, params: dict, keys) -> tuple[Callable, float]:
     """`run_tsp` vmapped over ``keys [R]``, compiled for these shapes, and the seconds spent compiling now (0 if
-    cached)."""
+    cached): one compile per (config, instance size, seeds, parameter names); a sweep over many sizes keeps only
+    the last 8 executables alive."""
+    return _compiled_tsp(cfg, dist, params, keys).take()
+
+
+@memoize(maxsize=8, key=lambda cfg, dist, params, keys: (cfg, dist.shape, keys.shape, tuple(sorted(params))))
+def _compiled_tsp(cfg, dist, params: dict, keys) -> Built:
     import jax
 
-    from jaxplan.aco._tsp import run_tsp
+    from jaxplan.aco import run_tsp
 
-    sig = (cfg, dist.shape, keys.shape, tuple(sorted(params)))
-    if sig in _TSP_PROGRAMS:
-        _TSP_PROGRAMS.move_to_end(sig)
-        return _TSP_PROGRAMS[sig], 0.0
-    t0 = time.perf_counter()
-    fn = jax.jit(jax.vmap(lambda d, p, k: run_tsp(cfg, d, p, k), in_axes=(None, None, 0))).lower(
-        dist, params, keys).compile()
-    _TSP_PROGRAMS[sig] = fn
-    while len(_TSP_PROGRAMS) > 8:  # a sweep over many sizes must not keep every executable alive
-        _TSP_PROGRAMS.popitem(last=False)
-    return fn, time.perf_counter() - t0
+    program = jax.jit(jax.vmap(lambda d, p, k: run_tsp(cfg, d, p, k), in_axes=(None, None, 0)))
+    return Built.timed(lambda: program.lower(dist, params, keys).compile())
 
 
 def _run_tsp(mw: MapWork, pc: PlannerConfig, seeds: tuple[int, ...], metrics: Sequence[str]
@@ -630,13 +626,12 @@ def _run_tsp(mw: MapWork, pc: PlannerConfig, seeds: tuple[int, ...], metrics: Se
     import jax
     import jax.numpy as jnp
 
-    from jaxplan.aco._tsp import _STATIC, TSPConfig, _resolve
-    from jaxplan.aco._tsplib import tour_length
+    from jaxplan.aco import TSP_STATIC_PARAMS, TSPConfig, resolve_tsp, tour_length
 
     problem = mw.problem
-    p = _resolve(pc.name, {k: tuple(v) if isinstance(v, tuple) else v for k, v in pc.overrides.items()})
+    p = resolve_tsp(pc.name, {k: tuple(v) if isinstance(v, tuple) else v for k, v in pc.overrides.items()})
     cfg = TSPConfig(pc.name, int(p.get("colonies", 1)), int(p["ants"]), int(p["iterations"]), p["local_search"])
-    params = {k: jnp.asarray(v, jnp.float32) for k, v in p.items() if k not in _STATIC}
+    params = {k: jnp.asarray(v, jnp.float32) for k, v in p.items() if k not in TSP_STATIC_PARAMS}
     dist = jnp.asarray(np.asarray(problem.dist, np.float64), jnp.float32)
     keys = jax.random.wrap_key_data(jnp.stack([jax.random.key_data(jax.random.key(int(s))) for s in seeds]))
     fn, compile_s = _tsp_program(cfg, dist, params, keys)
@@ -705,7 +700,7 @@ def run_unit(prep: Prepared, u: Unit) -> tuple[str, dict, dict]:
 # Checkpoints
 
 
-def _atomic_write(path: Path, data: bytes) -> None:
+def atomic_write(path: Path, data: bytes) -> None:
     """Writes ``data`` to ``path`` so that a reader sees the old file or the new one, never a part."""
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     with open(tmp, "wb") as f:
@@ -753,7 +748,7 @@ class _Store:
         self._save()
 
     def _save(self) -> None:
-        _atomic_write(self.path, json.dumps(self.manifest, indent=1, sort_keys=True).encode())
+        atomic_write(self.path, json.dumps(self.manifest, indent=1, sort_keys=True).encode())
 
     def done(self, u: Unit) -> bool:
         e = self.manifest["chunks"].get(u.uid)
@@ -762,7 +757,7 @@ class _Store:
 
     def commit(self, u: Unit, info: dict, text: str, arrays: dict, timing: dict) -> None:
         data = text.encode()
-        _atomic_write(self.chunks / f"{u.uid}.csv", data)
+        atomic_write(self.chunks / f"{u.uid}.csv", data)
         arrays = {k: np.asarray(v) for k, v in arrays.items() if np.asarray(v).size}
         if arrays:
             import orbax.checkpoint as ocp
@@ -807,24 +802,25 @@ def _meta(run_dir: Path, cfg: ExperimentConfig, session: int, started: str) -> d
     import jax
     import scipy
 
-    import jaxplan
+    from jaxplan.core.version import VERSION
 
     p = run_dir / "meta.json"
     old = json.loads(p.read_text()) if p.is_file() else {}
     meta = {
         "experiment": cfg.name, "quick": cfg.is_quick, "chunk": cfg.chunk, "seeds": list(cfg.seeds),
-        "jaxplan_version": jaxplan.__version__, "git_revision": _git_revision(), "jax_version": jax.__version__,
+        "jaxplan_version": VERSION, "git_revision": _git_revision(), "jax_version": jax.__version__,
         "numpy_version": np.__version__, "scipy_version": scipy.__version__, "python": platform.python_version(),
         "platform": platform.platform(), "devices": [str(d) for d in jax.devices()],
         "started": old.get("started", started),
         "sessions": old.get("sessions", []) + [{"session": session, "started": started}],
         "config_sha256": _sha(cfg.text.encode()),
     }
-    _atomic_write(p, json.dumps(meta, indent=1).encode())
+    atomic_write(p, json.dumps(meta, indent=1).encode())
     return meta
 
 
-def _clock(s: float) -> str:
+def clock(s: float) -> str:
+    """Seconds as ``H:MM:SS``."""
     s = int(round(s))
     return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
 
@@ -844,7 +840,7 @@ class _Progress:
         new = done - self.start_done
         left = el / new * (self.total - done) if new else float("nan")
         msg = (f"{self.name}: {done}/{self.total} trials ({done / max(self.total, 1):.0%}) | chunk {chunk}/"
-               f"{self.chunks} {what} | elapsed {_clock(el)} | left ~{_clock(left) if math.isfinite(left) else '?'}")
+               f"{self.chunks} {what} | elapsed {clock(el)} | left ~{clock(left) if math.isfinite(left) else '?'}")
         print(("\r" + msg.ljust(110)) if self.tty else msg, end="" if self.tty else "\n", file=sys.stderr, flush=True)
 
     def close(self) -> None:
@@ -890,7 +886,7 @@ def run_experiment(config: ExperimentConfig | str | os.PathLike, out_dir: str | 
     run_dir.mkdir(parents=True, exist_ok=True)
     store = _Store(run_dir, fingerprint(prep))
     started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
-    _atomic_write(run_dir / "config.toml", cfg.text.encode())
+    atomic_write(run_dir / "config.toml", cfg.text.encode())
     _meta(run_dir, cfg, store.session, started)
 
     R = len(cfg.seeds)
@@ -916,7 +912,7 @@ def run_experiment(config: ExperimentConfig | str | os.PathLike, out_dir: str | 
     bar.close()
 
     header = ",".join(trial_columns(cfg)) + "\n"
-    _atomic_write(run_dir / "trials.csv", store.merged(prep.units, header))
+    atomic_write(run_dir / "trials.csv", store.merged(prep.units, header))
     from jaxplan.experiments import report, stats
 
     timings = [{"uid": u.uid, **store.manifest["chunks"][u.uid]} for u in prep.units]

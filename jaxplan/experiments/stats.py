@@ -267,7 +267,7 @@ def _cell(v) -> str:
 
 
 def _write_csv(path: str | os.PathLike, columns: Sequence[str], rows: list[list]) -> None:
-    from jaxplan.experiments.runner import _atomic_write
+    from jaxplan.experiments.runner import atomic_write
     import io
 
     buf = io.StringIO()
@@ -275,7 +275,7 @@ def _write_csv(path: str | os.PathLike, columns: Sequence[str], rows: list[list]
     w.writerow(columns)
     for r in rows:
         w.writerow([_cell(x) for x in r])
-    _atomic_write(Path(path), buf.getvalue().encode())
+    atomic_write(Path(path), buf.getvalue().encode())
 
 
 def write_summary(path: str | os.PathLike, a: Analysis) -> None:

@@ -1,12 +1,51 @@
-"""Maps: the `GridMap` pytree, MovingAI I/O, neighbourhoods, distance fields and generators."""
+"""Maps: the `GridMap` pytree, MovingAI I/O, neighbourhoods, the move graph and exact distances on it,
+distance fields, the exact collision geometry of cells (`CollisionMap`) and generators."""
 
+from jaxplan.grid._collision import (
+    PAD,
+    POINT_WINDOW,
+    TOUCH,
+    CollisionMap,
+    cached_collision_map,
+    collision_map,
+    point_clearance,
+    polyline_free,
+    segment_clearance,
+    segment_free,
+    segment_window,
+)
 from jaxplan.grid._fields import clearance_field, goal_distance_field
+from jaxplan.grid._generators import (
+    MountainGenerator,
+    RandomMapGenerator,
+    Scene,
+    UrbanGenerator,
+    WarehouseGenerator,
+    as_rng,
+    demo_warehouse,
+    poisson_risk,
+    warehouse_chen2023,
+    warehouse_yu2020,
+)
+from jaxplan.grid._graph import SearchGraph, distance_from, search_graph, shortest_lengths, shortest_path
 from jaxplan.grid._gridmap import GridMap, check_cell, check_cells, grid_from_array, passable
 from jaxplan.grid._movingai import Scenarios, load_map, load_scenarios, parse_map, parse_scenarios, save_map
-from jaxplan.grid._neighbours import CONNECTIVITIES, Neighbours, neighbour_table, offsets, segment_cells
+from jaxplan.grid._neighbours import (
+    CONNECTIVITIES,
+    Neighbours,
+    check_connectivity,
+    neighbour_table,
+    offsets,
+    segment_cells,
+)
 
 __all__ = [
-    "CONNECTIVITIES", "GridMap", "Neighbours", "Scenarios", "check_cell", "check_cells", "clearance_field",
-    "goal_distance_field", "grid_from_array", "load_map", "load_scenarios", "neighbour_table", "offsets",
-    "parse_map", "parse_scenarios", "passable", "save_map", "segment_cells",
+    "CONNECTIVITIES", "GridMap", "Neighbours", "Scenarios", "check_cell", "check_cells", "check_connectivity",
+    "clearance_field", "goal_distance_field", "grid_from_array", "load_map", "load_scenarios", "neighbour_table",
+    "offsets", "parse_map", "parse_scenarios", "passable", "save_map", "segment_cells",
+    "SearchGraph", "distance_from", "search_graph", "shortest_lengths", "shortest_path",
+    "PAD", "POINT_WINDOW", "TOUCH", "CollisionMap", "cached_collision_map", "collision_map", "point_clearance",
+    "polyline_free", "segment_clearance", "segment_free", "segment_window",
+    "MountainGenerator", "RandomMapGenerator", "Scene", "UrbanGenerator", "WarehouseGenerator", "as_rng",
+    "demo_warehouse", "poisson_risk", "warehouse_chen2023", "warehouse_yu2020",
 ]

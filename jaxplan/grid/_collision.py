@@ -12,27 +12,27 @@ the local planner ask two questions of it:
 Both are pure functions of a ``CollisionMap`` pytree and batch with ``vmap``.
 A segment is checked exactly, not by sampling alone: it is walked in steps of at
 most one cell, and around every step the blocked squares of a small window are
-tested with the exact segment-to-square distance, the window being wide enough
-that any square within the radius of the segment is seen from some step.
+tested with the exact segment-to-square distance (`jaxplan.core.geometry`), the window
+being wide enough that any square within the radius of the segment is seen from some step.
 """
 
 from __future__ import annotations
 
-import hashlib
 import math
-from collections import OrderedDict
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxplan.core.cache import digest, memoize
+from jaxplan.core.geometry import point_square_distance, segment_square_distance
 from jaxplan.grid._fields import clearance_field
 from jaxplan.grid._gridmap import GridMap
 
 __all__ = [
-    "CollisionMap", "collision_map", "cached_collision_map", "point_square_distance", "segment_square_distance", "point_clearance",
-    "segment_clearance", "segment_free", "polyline_free", "TOUCH",
+    "CollisionMap", "collision_map", "cached_collision_map", "point_clearance", "segment_clearance", "segment_free",
+    "polyline_free", "segment_window", "PAD", "POINT_WINDOW", "TOUCH",
 ]
 
 PAD = 4
@@ -76,65 +76,11 @@ def collision_map(grid: GridMap) -> CollisionMap:
     return CollisionMap(jnp.asarray(blocked), jnp.asarray(field, jnp.float32), jnp.asarray(res, jnp.float32))
 
 
-# Collision maps memoised by content (pure memoisation, bounded): building one runs a distance
-# transform, which would otherwise dominate repeated calls on the same map.
-_CMAPS: OrderedDict[tuple, CollisionMap] = OrderedDict()
-_CMAPS_MAX = 8
-
-
+@memoize(maxsize=8, key=lambda grid: (digest(np.asarray(grid.free, dtype=bool)), float(grid.resolution)))
 def cached_collision_map(grid: GridMap) -> CollisionMap:
-    """`collision_map(grid)`, memoised on the map's free cells and resolution."""
-    free = np.asarray(grid.free, dtype=bool)
-    key = (free.shape, hashlib.blake2b(np.packbits(free).tobytes(), digest_size=16).hexdigest(),
-           float(grid.resolution))
-    hit = _CMAPS.get(key)
-    if hit is not None:
-        _CMAPS.move_to_end(key)
-        return hit
-    cmap = collision_map(grid)
-    _CMAPS[key] = cmap
-    if len(_CMAPS) > _CMAPS_MAX:
-        _CMAPS.popitem(last=False)
-    return cmap
-
-
-def point_square_distance(p: jnp.ndarray, c: jnp.ndarray) -> jnp.ndarray:
-    """Distance from points ``p [..., 2]`` to the unit squares centred at ``c [..., 2]`` (0 inside)."""
-    d = jnp.maximum(jnp.abs(p - c) - 0.5, 0.0)
-    return jnp.sqrt(jnp.sum(d * d, axis=-1))
-
-
-def _point_segment_distance(x: jnp.ndarray, p: jnp.ndarray, q: jnp.ndarray) -> jnp.ndarray:
-    """Distance from points ``x [..., 2]`` to the segment ``p``–``q`` (each ``[..., 2]``)."""
-    d = q - p
-    dd = jnp.sum(d * d, axis=-1)
-    t = jnp.clip(jnp.sum((x - p) * d, axis=-1) / jnp.where(dd > 0, dd, 1.0), 0.0, 1.0)
-    e = x - (p + t[..., None] * d)
-    return jnp.sqrt(jnp.sum(e * e, axis=-1))
-
-
-def segment_square_distance(p: jnp.ndarray, q: jnp.ndarray, c: jnp.ndarray) -> jnp.ndarray:
-    """Exact distance between segments ``p``–``q`` and unit squares centred at ``c`` (broadcast ``[..., 2]``).
-
-    Zero when the segment meets the closed square; otherwise the minimum is attained
-    at an end point of the segment or a corner of the square (both are convex).
-    """
-    p, q, c = jnp.broadcast_arrays(p, q, c)
-    d = q - p
-    lo, hi = c - 0.5, c + 0.5
-    # Slab test: the parameter interval in which the line is inside each slab.
-    safe = jnp.where(d == 0, 1.0, d)
-    t1, t2 = (lo - p) / safe, (hi - p) / safe
-    inside_slab = (p >= lo) & (p <= hi)
-    tmin = jnp.where(d == 0, jnp.where(inside_slab, -jnp.inf, jnp.inf), jnp.minimum(t1, t2))
-    tmax = jnp.where(d == 0, jnp.where(inside_slab, jnp.inf, -jnp.inf), jnp.maximum(t1, t2))
-    enter = jnp.maximum(jnp.max(tmin, axis=-1), 0.0)
-    leave = jnp.minimum(jnp.min(tmax, axis=-1), 1.0)
-    meets = enter <= leave
-    ends = jnp.minimum(point_square_distance(p, c), point_square_distance(q, c))
-    corners = jnp.stack([c + jnp.asarray(s, c.dtype) for s in ((-.5, -.5), (-.5, .5), (.5, -.5), (.5, .5))], axis=-2)
-    to_corners = jnp.min(_point_segment_distance(corners, p[..., None, :], q[..., None, :]), axis=-1)
-    return jnp.where(meets, 0.0, jnp.minimum(ends, to_corners))
+    """`collision_map(grid)`, memoised on the map's free cells and resolution (building one runs a
+    distance transform, which would otherwise dominate repeated calls on the same map)."""
+    return collision_map(grid)
 
 
 def _window(w: int) -> jnp.ndarray:

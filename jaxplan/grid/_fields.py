@@ -6,7 +6,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import ndimage
 
-from jaxplan.grid._gridmap import GridMap, check_cell
+from jaxplan.grid._graph import distance_from
+from jaxplan.grid._gridmap import GridMap, check_cell, passable
 
 __all__ = ["clearance_field", "goal_distance_field"]
 
@@ -62,10 +63,6 @@ def goal_distance_field(
     Returns:
       ``f32[H, W]``: metres; ``inf`` for blocked cells and cells that cannot reach the goal.
     """
-    from jaxplan.search._exact import distance_from  # local: search depends on grid
-
-    from jaxplan.grid._gridmap import passable
-
     g = check_cell(grid, goal, "goal", passable(grid, vehicle_height))
     d = distance_from(grid, g, connectivity=connectivity, vehicle_height=vehicle_height)
     return d.astype(np.float32)

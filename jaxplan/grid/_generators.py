@@ -17,6 +17,7 @@ from typing import Any, NamedTuple
 import jax
 import numpy as np
 
+from jaxplan.grid._graph import shortest_lengths
 from jaxplan.grid._gridmap import GridMap, grid_from_array
 
 __all__ = [
@@ -65,8 +66,6 @@ def as_rng(key: Any) -> np.random.Generator:
 
 
 def _connected(free: np.ndarray, a, b, connectivity: int = 8) -> bool:
-    from jaxplan.search._exact import shortest_lengths
-
     g = grid_from_array(free)
     return bool(np.isfinite(shortest_lengths(g, [a], [b], connectivity=connectivity)[0]))
 

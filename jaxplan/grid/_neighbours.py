@@ -19,12 +19,13 @@ import numpy as np
 
 from jaxplan.grid._gridmap import GridMap, passable
 
-__all__ = ["Neighbours", "neighbour_table", "offsets", "segment_cells", "CONNECTIVITIES"]
+__all__ = ["Neighbours", "neighbour_table", "offsets", "segment_cells", "CONNECTIVITIES", "check_connectivity"]
 
 CONNECTIVITIES = (4, 8, 16)
 
 
-def _check_connectivity(connectivity: int) -> int:
+def check_connectivity(connectivity: int) -> int:
+    """``connectivity`` as an int if it is 4, 8 or 16; else ``ValueError``."""
     if connectivity not in CONNECTIVITIES:
         raise ValueError(f"connectivity must be one of {CONNECTIVITIES}, got {connectivity!r}")
     return int(connectivity)
@@ -37,7 +38,7 @@ def offsets(connectivity: int) -> np.ndarray:
     With y pointing down (rows), "counter-clockwise" is on screen clockwise; what
     matters is that consecutive indices are adjacent headings.
     """
-    k = _check_connectivity(connectivity)
+    k = check_connectivity(connectivity)
     moves = [(1, 0), (0, 1), (-1, 0), (0, -1)]
     if k >= 8:
         moves += [(1, 1), (-1, 1), (-1, -1), (1, -1)]
@@ -113,7 +114,7 @@ def neighbour_table(grid: GridMap, connectivity: int = 8, vehicle_height: float 
     Returns:
       `Neighbours` with ``C = H * W`` rows (blocked cells have no valid moves).
     """
-    k = _check_connectivity(connectivity)
+    k = check_connectivity(connectivity)
     ok = passable(grid, vehicle_height)
     H, W = ok.shape
     # Pad by two blocked cells so every move of up to 2 cells can be read without bounds checks.

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from jaxplan.grid._collision import CollisionMap, point_clearance
+from jaxplan.grid import CollisionMap, point_clearance
 from jaxplan.metrics._path import float_dtype
 
 __all__ = ["vertex_clearance", "clearance_metrics"]

@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
-from jaxplan.grid._collision import POINT_WINDOW, CollisionMap, point_clearance
+from jaxplan.grid import POINT_WINDOW, CollisionMap, point_clearance
 from jaxplan.metrics._path import float_dtype
 from jaxplan.metrics._polyline import point_polyline_distance
 

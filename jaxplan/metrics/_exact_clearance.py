@@ -14,12 +14,13 @@ point ``x`` is within ``[|x − b| − √½, |x − b| − ½]``.
 
 from __future__ import annotations
 
-import hashlib
 import math
-from collections import OrderedDict
 
 import numpy as np
 from scipy.spatial import cKDTree
+
+from jaxplan.core.cache import digest, memoize
+from jaxplan.core.geometry import point_square_distance_np, segment_square_distance_np
 
 __all__ = ["exact_point_clearance", "polyline_clearance", "SAMPLE_CELLS"]
 
@@ -33,25 +34,13 @@ _HALF_DIAG = math.sqrt(0.5)
 _SLACK = 1e-9  # float64 rounding in the ball radii: a candidate too many costs nothing
 _K_NEAR = 8  # nearest centres fetched per point; rows needing more fall back to a ball query
 
-_TREES: OrderedDict[tuple, tuple[np.ndarray, cKDTree]] = OrderedDict()
-_TREES_MAX = 8
-
-
+@memoize(maxsize=8, key=lambda free: digest(free))
 def _blocked_tree(free: np.ndarray) -> tuple[np.ndarray, cKDTree]:
     """``(centres f64[K, 2] (x, y), tree)`` of the blocked cells plus one outside ring, memoised by content."""
-    key = (free.shape, hashlib.blake2b(np.packbits(free).tobytes(), digest_size=16).hexdigest())
-    hit = _TREES.get(key)
-    if hit is not None:
-        _TREES.move_to_end(key)
-        return hit
     blocked = np.pad(~free, 1, constant_values=True)
     y, x = np.nonzero(blocked)
     centres = np.stack([x - 1.0, y - 1.0], axis=1)
-    out = (centres, cKDTree(centres))
-    _TREES[key] = out
-    if len(_TREES) > _TREES_MAX:
-        _TREES.popitem(last=False)
-    return out
+    return centres, cKDTree(centres)
 
 
 def _candidates(tree: cKDTree, pts: np.ndarray, radius: np.ndarray,
@@ -77,40 +66,6 @@ def _candidates(tree: cKDTree, pts: np.ndarray, radius: np.ndarray,
     return np.concatenate(rows), np.concatenate(cols).astype(np.int64)
 
 
-def _point_square(p: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """Distance from points ``p [..., 2]`` to unit squares centred at ``c [..., 2]`` (0 inside)."""
-    d = np.maximum(np.abs(p - c) - 0.5, 0.0)
-    return np.sqrt(np.sum(d * d, axis=-1))
-
-
-def _point_segment(x: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    d = q - p
-    dd = np.sum(d * d, axis=-1)
-    t = np.clip(np.sum((x - p) * d, axis=-1) / np.where(dd > 0, dd, 1.0), 0.0, 1.0)
-    e = x - (p + t[..., None] * d)
-    return np.sqrt(np.sum(e * e, axis=-1))
-
-
-def _segment_square(p: np.ndarray, q: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """Exact distance between segments ``p``–``q`` and unit squares centred at ``c`` (each ``[N, 2]``).
-
-    The float64 twin of `jaxplan.grid._collision.segment_square_distance`: zero when the
-    segment meets the square, else attained at a segment end or a square corner.
-    """
-    d = q - p
-    lo, hi = c - 0.5, c + 0.5
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t1, t2 = (lo - p) / d, (hi - p) / d
-    in_slab = (p >= lo) & (p <= hi)
-    tmin = np.where(d == 0, np.where(in_slab, -np.inf, np.inf), np.minimum(t1, t2))
-    tmax = np.where(d == 0, np.where(in_slab, np.inf, -np.inf), np.maximum(t1, t2))
-    meets = np.maximum(tmin.max(axis=-1), 0.0) <= np.minimum(tmax.min(axis=-1), 1.0)
-    ends = np.minimum(_point_square(p, c), _point_square(q, c))
-    corners = c[:, None, :] + np.array([[-.5, -.5], [-.5, .5], [.5, -.5], [.5, .5]])  # [N, 4, 2]
-    to_corners = _point_segment(corners, p[:, None, :], q[:, None, :]).min(axis=-1)
-    return np.where(meets, 0.0, np.minimum(ends, to_corners))
-
-
 def _outside(free: np.ndarray, pts: np.ndarray) -> np.ndarray:
     H, W = free.shape
     return ~np.all((pts >= -0.5) & (pts <= np.array([W - 0.5, H - 0.5])), axis=-1)
@@ -134,7 +89,7 @@ def exact_point_clearance(free: np.ndarray, points: np.ndarray) -> np.ndarray:
     # The nearest centre's square is at most d0 − ½ away; a nearer square's centre is within d0 − ½ + √½.
     rows, cols = _candidates(tree, pts, d0 + (_HALF_DIAG - 0.5) + _SLACK, near)
     out = np.full(len(pts), np.inf)
-    np.minimum.at(out, rows, _point_square(pts[rows], centres[cols]))
+    np.minimum.at(out, rows, point_square_distance_np(pts[rows], centres[cols]))
     return np.where(_outside(free, pts), 0.0, out)
 
 
@@ -196,7 +151,7 @@ def polyline_clearance(free: np.ndarray, paths: np.ndarray, n: np.ndarray) -> tu
         rows, cols = _candidates(tree, mids[ask], reach[ask] + _HALF_DIAG)
         segs = owner[ask][rows]
         exact = upper.copy()
-        np.minimum.at(exact, segs, _segment_square(p[segs], q[segs], centres[cols]))
+        np.minimum.at(exact, segs, segment_square_distance_np(p[segs], q[segs], centres[cols]))
         np.minimum.at(lo, sb, exact)
     return lo, mean
 

@@ -11,8 +11,6 @@ JAX per input shape, so a second call with the same ``(B, L-bucket)`` and map sh
 from __future__ import annotations
 
 import functools
-import hashlib
-from collections import OrderedDict
 from typing import Any
 
 import jax
@@ -20,8 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 from numpy.typing import ArrayLike
 
-from jaxplan.grid._collision import CollisionMap, cached_collision_map
-from jaxplan.grid._gridmap import GridMap
+from jaxplan.grid import CollisionMap, GridMap, cached_collision_map, shortest_lengths
 from jaxplan.metrics._clearance import clearance_metrics
 from jaxplan.metrics._exact_clearance import polyline_clearance
 from jaxplan.metrics._path import geometry_metrics
@@ -172,8 +169,6 @@ def _optimal(grid: GridMap, paths: np.ndarray, n: np.ndarray, optimal: ArrayLike
     if not _is_grid_path(paths, n):
         return None
     _check_grid_moves(np.asarray(grid.free, bool), paths, n)
-    from jaxplan.search import shortest_lengths  # deferred: search imports the host metrics
-
     opt = np.full(B, np.inf)
     has = n > 0
     if has.any():

@@ -12,7 +12,9 @@
 
 from jaxplan.nav._config import NavConfig
 from jaxplan.nav._episode import REASONS, EpisodeInputs, EpisodeOutput, run_episodes
-from jaxplan.nav._front import Episode, EpisodeBatch, navigate, navigate_batch, navigate_multi, planning_grid
+from jaxplan.nav._front import (
+    Episode, EpisodeBatch, navigate, navigate_batch, navigate_multi, planning_grid, resolve_config,
+)
 from jaxplan.nav._obstacles import (
     MovingObstacles, concat_obstacles, crossing_traffic, discs_at, head_on, moving_obstacles, no_obstacles,
     obstacle_state, pad_obstacles, random_obstacles, stack_obstacles, trajectories,
@@ -21,7 +23,8 @@ from jaxplan.nav._pipelines import PIPELINES, Pipeline, get_pipeline, pipelines
 
 __all__ = [
     "NavConfig", "REASONS", "EpisodeInputs", "EpisodeOutput", "run_episodes", "Episode", "EpisodeBatch", "navigate",
-    "navigate_batch", "navigate_multi", "planning_grid", "MovingObstacles", "concat_obstacles", "crossing_traffic",
-    "discs_at", "head_on", "moving_obstacles", "no_obstacles", "obstacle_state", "pad_obstacles", "random_obstacles",
-    "stack_obstacles", "trajectories", "PIPELINES", "Pipeline", "get_pipeline", "pipelines",
+    "navigate_batch", "navigate_multi", "planning_grid", "resolve_config", "MovingObstacles", "concat_obstacles",
+    "crossing_traffic", "discs_at", "head_on", "moving_obstacles", "no_obstacles", "obstacle_state",
+    "pad_obstacles", "random_obstacles", "stack_obstacles", "trajectories", "PIPELINES", "Pipeline", "get_pipeline",
+    "pipelines",
 ]

@@ -7,7 +7,7 @@ import math
 
 import jax
 
-from jaxplan.dwa._config import DWAConfig
+from jaxplan.dwa import DWAConfig
 
 __all__ = ["NavConfig", "LOCAL_PLANNERS", "SUBGOAL_MODES", "PREDICTIONS"]
 

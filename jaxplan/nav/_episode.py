@@ -33,12 +33,9 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
-from jaxplan.dwa._clearance import ClearanceTable, DiscObstacles, static_clearance
-from jaxplan.dwa._config import DWAParams
-from jaxplan.dwa._core import dwa_control
-from jaxplan.dwa._robot import Disc, advance, footprint_offsets, footprint_radius
-from jaxplan.dwa._window import dynamic_window
-from jaxplan.metrics._polyline import point_polyline_distance
+from jaxplan.dwa import ClearanceTable, DWAParams, DiscObstacles, dwa_control, static_clearance
+from jaxplan.dwa import Disc, advance, dynamic_window, footprint_offsets, footprint_radius
+from jaxplan.metrics import point_polyline_distance
 from jaxplan.nav._config import NavConfig
 from jaxplan.nav._obstacles import MovingObstacles, obstacle_state
 from jaxplan.nav._replan import descend, disc_cells, distance_field, path_blocked, turn_vertices

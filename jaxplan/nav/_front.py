@@ -27,9 +27,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import threading
 import time
-from collections import OrderedDict
 from typing import Any, Mapping, NamedTuple, Sequence
 
 import jax
@@ -39,20 +37,17 @@ from jax.sharding import Mesh
 from jax.sharding import PartitionSpec as P
 from numpy.typing import ArrayLike
 
-from jaxplan.dwa._config import DWAParams
-from jaxplan.dwa._step import table_of, validate_config, validate_params
-from jaxplan.grid._fields import clearance_field
-from jaxplan.grid._gridmap import GridMap
-from jaxplan.metrics._episode import EnergyModel, energy
+from jaxplan.core.cache import Built, memoize
+from jaxplan.dwa import DWAParams, table_of, validate_config, validate_params
+from jaxplan.grid import GridMap, clearance_field, shortest_lengths
+from jaxplan.metrics import EnergyModel, energy
 from jaxplan.nav._config import LOCAL_PLANNERS, PREDICTIONS, SUBGOAL_MODES, NavConfig
 from jaxplan.nav._episode import GOAL, REASONS, EpisodeInputs, run_episodes
 from jaxplan.nav._obstacles import MovingObstacles, no_obstacles, obstacle_state, stack_obstacles, trajectories
 from jaxplan.nav._pipelines import Pipeline, get_pipeline
-from jaxplan.scale._host_devices import auto_mesh
-from jaxplan.scale._mesh import BATCH_AXIS, pad_leading
-from jaxplan.search._exact import shortest_lengths
+from jaxplan.scale import BATCH_AXIS, auto_mesh, pad_leading
 
-__all__ = ["Episode", "EpisodeBatch", "navigate", "navigate_batch", "navigate_multi", "planning_grid",
+__all__ = ["Episode", "EpisodeBatch", "navigate", "navigate_batch", "navigate_multi", "planning_grid", "resolve_config",
            "CURVATURE_MIN_SPEED", "INFEASIBLE_START", "INFEASIBLE_GOAL", "UNREACHABLE", "PLAN_FAILED"]
 
 CURVATURE_MIN_SPEED = 0.1
@@ -64,26 +59,25 @@ UNREACHABLE = "infeasible: goal not reachable for the inflated footprint"
 PLAN_FAILED = "global planner found no path"
 _NOT_RUN = (INFEASIBLE_START, INFEASIBLE_GOAL, UNREACHABLE, PLAN_FAILED)
 
-_PROGRAMS: "OrderedDict[tuple, Any]" = OrderedDict()  # compiled episode programs, least recently used first
-_PROGRAM_CACHE = 16
-_PROGRAMS_LOCK = threading.Lock()  # navigate_batch may be called from several threads
-
-
 def _compiled_episodes(cfg: NavConfig, steps: int, mesh: Mesh | None, args: tuple) -> tuple[Any, float]:
     """The compiled episode program for ``args = (table, free, params, inputs)``'s shapes, and the
-    seconds spent compiling it now (0 if cached): one compilation per configuration and shape.
+    seconds spent compiling it now (0 if cached): one compilation per configuration and shape
+    (the last 16 programs are kept).
 
     With a ``mesh`` the episode axis of ``inputs`` (a multiple of the devices and of
     `NavConfig.replan_group`) is split over its devices with `jax.shard_map`; the map and
     the DWA params are replicated.
     """
+    return _episode_program(cfg, steps, mesh, args).take()
+
+
+def _program_key(cfg: NavConfig, steps: int, mesh: Mesh | None, args: tuple) -> tuple:
     sig = jax.tree_util.tree_map(lambda a: (np.shape(a), str(jnp.result_type(a))), args)
-    key = (cfg, steps, mesh, str(jax.tree_util.tree_structure(sig)), str(jax.tree_util.tree_leaves(sig)))
-    with _PROGRAMS_LOCK:
-        fn = _PROGRAMS.get(key)
-        if fn is not None:
-            _PROGRAMS.move_to_end(key)
-            return fn, 0.0
+    return cfg, steps, mesh, str(jax.tree_util.tree_structure(sig)), str(jax.tree_util.tree_leaves(sig))
+
+
+@memoize(maxsize=16, key=_program_key)  # thread-safe: navigate_batch may be called from several threads
+def _episode_program(cfg: NavConfig, steps: int, mesh: Mesh | None, args: tuple) -> Built:
     t0 = time.perf_counter()
     body = functools.partial(run_episodes, cfg, steps)
     if mesh is not None:
@@ -92,12 +86,7 @@ def _compiled_episodes(cfg: NavConfig, steps: int, mesh: Mesh | None, args: tupl
         body = jax.shard_map(body, mesh=mesh, in_specs=(P(), P(), P(), P(BATCH_AXIS)), out_specs=P(BATCH_AXIS),
                              check_vma=False)
     fn = jax.jit(body).lower(*args).compile()
-    compile_s = time.perf_counter() - t0
-    with _PROGRAMS_LOCK:
-        _PROGRAMS[key] = fn
-        while len(_PROGRAMS) > _PROGRAM_CACHE:
-            _PROGRAMS.popitem(last=False)
-    return fn, compile_s
+    return Built(fn, time.perf_counter() - t0)
 
 
 def planning_grid(grid: GridMap, d_safe: float) -> GridMap:
@@ -263,7 +252,9 @@ def _cells(name: str, a: ArrayLike, grid: GridMap, shape: tuple) -> np.ndarray:
     return arr
 
 
-def _config(config: NavConfig | None, pipeline: Pipeline, local_planner: str | None) -> NavConfig:
+def resolve_config(config: NavConfig | None, pipeline: Pipeline, local_planner: str | None) -> NavConfig:
+    """The `NavConfig` an episode runs with: ``config`` (default `NavConfig()`) with the local planner and DWA
+    evaluator of ``local_planner`` / the config / ``pipeline`` (in that order), every field checked (``ValueError``)."""
     cfg = NavConfig() if config is None else config
     if not isinstance(cfg, NavConfig):
         raise ValueError(f"config must be a NavConfig, got {type(cfg).__name__}")
@@ -300,6 +291,9 @@ def _config(config: NavConfig | None, pipeline: Pipeline, local_planner: str | N
     if not isinstance(cfg.replan_group, int) or cfg.replan_group < 0:
         raise ValueError(f"NavConfig.replan_group must be an integer >= 0 (0: the whole batch), got {cfg.replan_group!r}")
     return cfg.replace(dwa=dwa, local=local, evaluator=evaluator)
+
+
+_config = resolve_config  # the previous private name, still imported by jaxplan.experiments.config
 
 
 def _obstacle_sets(obstacles: Any, E: int, R: int, seeds: list[int]) -> list[list[MovingObstacles]]:
@@ -349,7 +343,7 @@ def _global_plans(plan_grid: GridMap, starts: np.ndarray, goals: np.ndarray, ok:
     others are called per scenario (and per seed unless deterministic), and an any-angle
     planner's exact polyline (``info["points"]``) is used rather than its rasterised cells.
     """
-    from jaxplan.aco._planners import COLONIES, plan_batch  # late: the ACO package imports the registry
+    from jaxplan.aco import COLONIES, plan_batch  # late: the ACO package imports the registry
     from jaxplan.registry import plan
 
     S, R = len(starts), len(seeds)
@@ -407,7 +401,7 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
         gp = "iaco" if global_planner is None else global_planner
         pipe = Pipeline(f"{gp}+{local_planner or 'dwa'}", gp, {}, ("key_nodes",), local_planner or "dwa",
                         "weighted", "custom")
-    cfg = _config(config, pipe, local_planner)
+    cfg = resolve_config(config, pipe, local_planner)
     robot = cfg.dwa.robot
     d_safe = float(cfg.dwa.d_safe)
     seeds = [int(s) for s in seeds]
@@ -423,7 +417,7 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
         raise ValueError(f"time_limit must be in (0, max_time = {cfg.max_time}] s, got {time_limit!r}")
     p = validate_params(params, cfg.dwa.evaluator)
     res = float(grid.resolution)
-    from jaxplan.dwa._robot import footprint_radius
+    from jaxplan.dwa import footprint_radius
 
     radius = float(footprint_radius(robot.footprint))
     if N > 1:  # teammates may not overlap at the start, nor share a goal (one would park on it)

@@ -65,11 +65,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import ndimage
 
-from jaxplan.dwa._clearance import DiscObstacles
-from jaxplan.grid._collision import TOUCH
-from jaxplan.grid._fields import clearance_field
-from jaxplan.grid._gridmap import GridMap, grid_from_array
-from jaxplan.search._exact import astar
+from jaxplan.core.geometry import segment_square_distance_np
+from jaxplan.dwa import DiscObstacles
+from jaxplan.grid import TOUCH, GridMap, clearance_field, grid_from_array
+from jaxplan.search import astar
 
 __all__ = [
     "MovingObstacles", "obstacle_state", "discs_at", "trajectories", "route_lengths", "no_obstacles",
@@ -429,9 +428,9 @@ class _Blocked:
 
     The generators run once per scenario on the host, where compiling the JAX segment
     walk for every map shape and path length would cost seconds per call; this numpy
-    twin of `jaxplan.grid._collision.segment_clearance` is exact too (the same
-    segment-to-square distance over every blocked square near the segment) and needs no
-    compilation. Outside the map counts as blocked.
+    twin of `jaxplan.grid.segment_clearance` is exact too (the numpy twin of the same
+    segment-to-square distance, `jaxplan.core.geometry`, over every blocked square near the
+    segment) and needs no compilation. Outside the map counts as blocked.
     """
 
     def __init__(self, free: np.ndarray):
@@ -454,36 +453,12 @@ class _Blocked:
         c = np.stack([xs[blocked], ys[blocked]], axis=-1).astype(np.float64)
         if len(c) == 0:
             return float("inf")
-        return float(_segment_square_distance(np.asarray(p, np.float64), np.asarray(q, np.float64), c).min())
+        return float(segment_square_distance_np(np.asarray(p, np.float64), np.asarray(q, np.float64), c).min())
 
     def free_for(self, p: np.ndarray, q: np.ndarray, r: float, margin: float = 0.0) -> bool:
         """`segment_free`'s rule: clearance >= max(r, TOUCH) (+ ``margin`` cells)."""
         thr = max(r, TOUCH) + margin
         return self.clearance(p, q, thr + 1.0) >= thr
-
-
-def _point_square_distance(x: np.ndarray, c: np.ndarray) -> np.ndarray:
-    d = np.maximum(np.abs(x - c) - 0.5, 0.0)
-    return np.sqrt(np.sum(d * d, axis=-1))
-
-
-def _segment_square_distance(p: np.ndarray, q: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """Exact distance (cells) from segment ``p``–``q`` (``[2]``) to unit squares centred at ``c [N, 2]``."""
-    d = q - p
-    lo, hi = c - 0.5, c + 0.5
-    flat = d == 0
-    safe = np.where(flat, 1.0, d)
-    t1, t2 = (lo - p) / safe, (hi - p) / safe
-    in_slab = (p >= lo) & (p <= hi)
-    tmin = np.where(flat, np.where(in_slab, -np.inf, np.inf), np.minimum(t1, t2))
-    tmax = np.where(flat, np.where(in_slab, np.inf, -np.inf), np.maximum(t1, t2))
-    meets = np.maximum(tmin.max(axis=-1), 0.0) <= np.minimum(tmax.min(axis=-1), 1.0)
-    ends = np.minimum(_point_square_distance(p, c), _point_square_distance(q, c))
-    corners = c[:, None, :] + np.array([[-.5, -.5], [-.5, .5], [.5, -.5], [.5, .5]])  # [N, 4, 2]
-    dd = float(d @ d)
-    t = np.clip(((corners - p) @ d) / (dd if dd > 0 else 1.0), 0.0, 1.0)
-    to_corners = np.linalg.norm(corners - (p + t[..., None] * d), axis=-1).min(axis=-1)
-    return np.where(meets, 0.0, np.minimum(ends, to_corners))
 
 
 _SHORTCUT_MARGIN = 1e-4  # cells: shortcuts keep this much beyond the radius, so float32 checks agree

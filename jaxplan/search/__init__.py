@@ -1,10 +1,12 @@
 """Global planners on the grid: exact (A*, Dijkstra), key-node-guided A* and sampling (RRT*, MRBS-RRT*).
 
 Importing this package registers ``astar``, ``dijkstra``, ``astar_kng``, ``rrt_star`` and
-``mrbs_rrt`` with `jaxplan.registry`.
+``mrbs_rrt`` with `jaxplan.registry`. The exact searches underneath (`search_graph`,
+`shortest_lengths`, `distance_from`) belong to `jaxplan.grid` and are re-exported here.
 """
 
-from jaxplan.search._exact import SearchGraph, astar, dijkstra, distance_from, path_cost, search_graph, shortest_lengths
+from jaxplan.grid import SearchGraph, distance_from, search_graph, shortest_lengths
+from jaxplan.search._exact import astar, dijkstra, path_cost
 from jaxplan.search._kng import astar_kng
 from jaxplan.search._sampling import mrbs_rrt, rrt_star
 

@@ -34,8 +34,8 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike
 
-from jaxplan.grid._gridmap import GridMap, passable
-from jaxplan.metrics._host import count_sharp_turns, count_turns, path_length
+from jaxplan.grid import GridMap, passable
+from jaxplan.metrics import count_sharp_turns, count_turns, path_length
 from jaxplan.result import PlanResult
 from jaxplan.search._exact import _validate_exact, astar
 from jaxplan.search._sampling import _clear, _threshold

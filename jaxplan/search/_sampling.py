@@ -75,9 +75,9 @@ from numba import njit
 from numpy.typing import ArrayLike
 from scipy import ndimage
 
-from jaxplan.grid._collision import TOUCH, cached_collision_map
-from jaxplan.grid._gridmap import GridMap, check_cell
-from jaxplan.metrics._host import count_turns, path_length
+from jaxplan.core.geometry import point_segment_distance_nb, segment_square_distance_nb
+from jaxplan.grid import TOUCH, GridMap, cached_collision_map, check_cell
+from jaxplan.metrics import count_turns, path_length
 from jaxplan.result import PlanResult
 
 __all__ = [
@@ -114,50 +114,8 @@ _QUICK = 0.70711  # > √2/2: a square is at least (distance to its centre − �
 
 
 # ---------------------------------------------------------------------------------------------
-# Exact geometry (float64, cell coordinates; a blocked cell (x, y) is the square [x±½]×[y±½])
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _point_segment(x, y, px, py, qx, qy):
-    dx, dy = qx - px, qy - py
-    dd = dx * dx + dy * dy
-    t = 0.0 if dd == 0.0 else min(max(((x - px) * dx + (y - py) * dy) / dd, 0.0), 1.0)
-    ex, ey = x - (px + t * dx), y - (py + t * dy)
-    return math.sqrt(ex * ex + ey * ey)
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _point_square(x, y, cx, cy):
-    ex = max(abs(x - cx) - 0.5, 0.0)
-    ey = max(abs(y - cy) - 0.5, 0.0)
-    return math.sqrt(ex * ex + ey * ey)
-
-
-@njit(cache=True, nogil=True)
-def _segment_square(px, py, qx, qy, cx, cy):
-    """Exact distance between segment p–q and the unit square centred at c (0 if they meet)."""
-    dx, dy = qx - px, qy - py
-    # Slab test: the parameter interval in which the segment is inside both slabs of the square.
-    lo_t, hi_t = 0.0, 1.0
-    meets = True
-    if dx == 0.0:
-        meets = cx - 0.5 <= px <= cx + 0.5
-    else:
-        t1, t2 = (cx - 0.5 - px) / dx, (cx + 0.5 - px) / dx
-        lo_t, hi_t = max(lo_t, min(t1, t2)), min(hi_t, max(t1, t2))
-    if dy == 0.0:
-        meets = meets and cy - 0.5 <= py <= cy + 0.5
-    else:
-        t1, t2 = (cy - 0.5 - py) / dy, (cy + 0.5 - py) / dy
-        lo_t, hi_t = max(lo_t, min(t1, t2)), min(hi_t, max(t1, t2))
-    if meets and lo_t <= hi_t:
-        return 0.0
-    # Both sets are convex: the minimum is at an end point of the segment or a corner of the square.
-    best = min(_point_square(px, py, cx, cy), _point_square(qx, qy, cx, cy))
-    for sx in (-0.5, 0.5):
-        for sy in (-0.5, 0.5):
-            best = min(best, _point_segment(cx + sx, cy + sy, px, py, qx, qy))
-    return best
+# Exact geometry (float64, cell coordinates; a blocked cell (x, y) is the square [x±½]×[y±½]; the
+# distances are the numba twins of jaxplan.core.geometry)
 
 
 @njit(cache=True, nogil=True)
@@ -171,9 +129,9 @@ def _clear(blocked, px, py, qx, qy, thr):
         for x in range(x0, x1 + 1):
             if 0 <= x < W and 0 <= y < H and not blocked[y, x]:
                 continue
-            if _point_segment(float(x), float(y), px, py, qx, qy) - _QUICK >= thr:
+            if point_segment_distance_nb(float(x), float(y), px, py, qx, qy) - _QUICK >= thr:
                 continue
-            if _segment_square(px, py, qx, qy, float(x), float(y)) < thr:
+            if segment_square_distance_nb(px, py, qx, qy, float(x), float(y)) < thr:
                 return False
     return True
 

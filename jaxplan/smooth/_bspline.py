@@ -17,9 +17,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxplan.grid._collision import CollisionMap, polyline_free, segment_free
+from jaxplan.grid import CollisionMap, polyline_free, segment_free
 from jaxplan.smooth._result import Smoothed, compact, drop_repeats
-from jaxplan.metrics._path import count_sharp_turns_padded as sharp_turn_count
+from jaxplan.metrics import count_sharp_turns_padded as sharp_turn_count
 
 __all__ = ["bspline"]
 

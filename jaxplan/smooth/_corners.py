@@ -25,7 +25,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxplan.grid._collision import CollisionMap, polyline_free, segment_free
+from jaxplan.grid import CollisionMap, polyline_free, segment_free
 from jaxplan.smooth._result import Smoothed, compact, drop_repeats
 
 __all__ = ["fillet", "bezier_corners"]

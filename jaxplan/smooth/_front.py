@@ -10,8 +10,8 @@ import jax.numpy as jnp
 import numpy as np
 from numpy.typing import ArrayLike
 
-from jaxplan.grid._collision import cached_collision_map
-from jaxplan.grid._gridmap import GridMap
+from jaxplan.core.cache import lru_cache
+from jaxplan.grid import GridMap, cached_collision_map
 from jaxplan.smooth._bspline import bspline
 from jaxplan.smooth._corners import bezier_corners, fillet
 from jaxplan.smooth._prune import key_nodes, los_prune
@@ -33,20 +33,16 @@ _STATIC_ALWAYS = {"threshold"}  # used to pick branches at trace time
 # pass the corner and the curve loops beyond it.
 _AT_MOST = {"kappa": 1.0}
 
-_FNS: dict = {}
-
-
+@lru_cache(maxsize=None)
 def _compiled(name: str, radius: float, static: tuple):
-    key = name, radius, static
-    if key not in _FNS:
-        fn, _ = SMOOTHERS[name]
-        st = dict(static)
+    """The jitted, vmapped smoother ``name`` for this radius and these static options (one per combination)."""
+    fn, _ = SMOOTHERS[name]
+    st = dict(static)
 
-        def run(cmap, points, n, traced):
-            return jax.vmap(lambda p, m: fn(cmap, p, m, radius=radius, **st, **traced))(points, n)
+    def run(cmap, points, n, traced):
+        return jax.vmap(lambda p, m: fn(cmap, p, m, radius=radius, **st, **traced))(points, n)
 
-        _FNS[key] = jax.jit(run)
-    return _FNS[key]
+    return jax.jit(run)
 
 
 def _bucket(n: int) -> int:

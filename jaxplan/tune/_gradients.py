@@ -210,7 +210,7 @@ def relaxed_dwa_loss(objective, split: str = "train", collision_weight: float = 
     the mean squared clearance deficit ``max(0, d_safe − c)²/d_safe²`` while it moves.
     Averaged over the split's scenarios × seeds. Differentiable in ``x`` through `lax.scan`.
     """
-    from jaxplan.dwa._config import DWAParams
+    from jaxplan.dwa import DWAParams
     from jaxplan.tune._objective import _scatter, dwa_episodes
 
     d = objective._dwa

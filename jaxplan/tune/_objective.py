@@ -42,8 +42,7 @@ import numpy as np
 
 from jax.sharding import PartitionSpec as P
 
-from jaxplan.scale._host_devices import auto_mesh
-from jaxplan.scale._mesh import BATCH_AXIS, pad_leading, padded_size
+from jaxplan.scale import BATCH_AXIS, auto_mesh, pad_leading, padded_size
 from jaxplan.tune._bounds import Bounds, make_bounds
 
 __all__ = ["Split", "Evaluation", "Objective", "aco_objective", "dwa_objective", "function_objective", "DWAEpisodes", "dwa_episodes",
@@ -184,7 +183,7 @@ class Objective:
                 # check_vma=False: the ACO walk is an FFI custom call without varying-axes types;
                 # every output is per member, split along BATCH_AXIS.
                 fn = jax.shard_map(fn, mesh=mesh, in_specs=P(BATCH_AXIS), out_specs=P(BATCH_AXIS), check_vma=False)
-            from jaxplan.aco._walk_numba import sharing_cores  # late, as this module's other ACO imports
+            from jaxplan.aco import sharing_cores  # late, as this module's other ACO imports
 
             with sharing_cores(1 if mesh is None else len(mesh.local_devices)):
                 self._compiled[key] = jax.jit(fn).lower(pop).compile()
@@ -264,12 +263,10 @@ def aco_objective(grid, train: Split, test: Split, planner: str = "iaco", space:
       ValueError: naming the parameter, for an unknown or static name, bad bounds, or bounds
         outside the parameter's valid range (negative; above 1 for ρ, δ, ρ_res, λ_p).
     """
-    from jaxplan.aco._colony import run_batch
-    from jaxplan.aco._context import goal_tables
-    from jaxplan.aco._planners import _STATIC, _UNIT, COLONIES, _seed_keys, cached_map_tables, split_params
-    from jaxplan.grid._collision import collision_map
-    from jaxplan.metrics._clearance import clearance_metrics
-    from jaxplan.metrics._path import geometry_metrics
+    from jaxplan.aco import goal_tables, run_batch
+    from jaxplan.aco import COLONIES, STATIC_PARAMS, UNIT_PARAMS, cached_map_tables, seed_keys, split_params
+    from jaxplan.grid import collision_map
+    from jaxplan.metrics import clearance_metrics, geometry_metrics
     from jaxplan.registry import resolve
 
     if planner not in COLONIES:
@@ -283,8 +280,8 @@ def aco_objective(grid, train: Split, test: Split, planner: str = "iaco", space:
     _, p = resolve(planner, dict(overrides or {}))
     cfg, base, connectivity, vh = split_params(grid, p)
     what = f"aco_objective({planner})"
-    _check_names(bounds, base, what, _STATIC)
-    _check_sign(bounds, what, _UNIT)
+    _check_names(bounds, base, what, STATIC_PARAMS)
+    _check_sign(bounds, what, UNIT_PARAMS)
     slots = _slots(bounds)
     defaults = np.array([float(np.asarray(base[n]) if i is None else np.asarray(base[n])[i]) for n, i in slots],
                         np.float32)
@@ -297,7 +294,7 @@ def aco_objective(grid, train: Split, test: Split, planner: str = "iaco", space:
     for split_name, sp in (("train", train), ("test", test)):
         gt = goal_tables(grid, np.asarray(sp.starts), np.asarray(sp.goals), connectivity, vh,
                          geodesic=cfg.heuristic == "geodesic")
-        prepared[split_name] = (gt, _seed_keys(sp.seeds), jnp.asarray(sp.optimal, jnp.float32))
+        prepared[split_name] = (gt, seed_keys(sp.seeds), jnp.asarray(sp.optimal, jnp.float32))
 
     def program(split_name: str):
         gt, keys, optimal = prepared[split_name]
@@ -358,9 +355,7 @@ def dwa_episodes(table, config, params, episodes: DWAEpisodes, steps: int, toler
     through `jnp.where`); with ``config.selection == "softmax"`` the trace is a smooth
     function of the critic weights. The sub-goal is the goal itself (no global path).
     """
-    from jaxplan.dwa._clearance import DiscObstacles, disc_clearance, static_clearance
-    from jaxplan.dwa._core import dwa_control
-    from jaxplan.dwa._robot import advance
+    from jaxplan.dwa import DiscObstacles, advance, disc_clearance, dwa_control, static_clearance
 
     period = config.period
 
@@ -404,7 +399,7 @@ def dwa_scenarios(grid, starts: np.ndarray, goals: np.ndarray, seeds: Sequence[i
     towards the goal ± ``heading_jitter`` rad, and ``n_discs`` discs that cross the start–goal line
     at 30–70 % of the way, at a random time a robot at 0.6 m/s would be there, at a speed drawn from
     ``speed`` (m/s) — drawn from ``numpy.random.default_rng((seed, scenario))`` for each seed."""
-    from jaxplan.dwa._clearance import DiscObstacles
+    from jaxplan.dwa import DiscObstacles
 
     res = float(grid.resolution)
     S, G, P, V, R = [], [], [], [], []
@@ -454,9 +449,8 @@ def dwa_objective(grid, train: Split, test: Split, evaluator: str = "weighted", 
       dwa: `DWAConfig` fields (static counts, distances); default a small, fast window.
       max_time: episode length (s).
     """
-    from jaxplan.dwa._clearance import clearance_table
-    from jaxplan.dwa._config import DWAConfig, DWAParams, default_params
-    from jaxplan.grid._collision import collision_map
+    from jaxplan.dwa import DWAConfig, DWAParams, clearance_table, default_params
+    from jaxplan.grid import collision_map
 
     space = space or {"heading": (0.01, 1.0), "velocity": (0.01, 1.0), "clearance": (0.01, 1.0)}
     weights = _metric_weights("dwa_objective", weights, DWA_METRICS, {"time": 1.0, "failure": 1.0})

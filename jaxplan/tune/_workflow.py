@@ -22,7 +22,7 @@ Run folder ``OUT/NAME`` (``OUT/NAME-quick`` for quick runs)::
     convergence.png           best-so-far and generation mean against evaluations
 
 A checkpoint commits in two steps — orbax writes the state, then the manifest (temporary
-file, fsync, rename: `jaxplan.experiments.runner._atomic_write`) names it — so a process
+file, fsync, rename: `jaxplan.experiments.runner.atomic_write`) names it — so a process
 killed at any instant leaves at worst a state the manifest does not name, and the resume
 recomputes those generations.
 """
@@ -43,7 +43,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxplan.experiments.runner import RunFolderError, _atomic_write, _clock
+from jaxplan.experiments.runner import RunFolderError, atomic_write, clock
 from jaxplan.tune._objective import Objective, Split
 from jaxplan.tune._strategies import Strategy, make_strategy, sanitize
 
@@ -107,7 +107,7 @@ class _Progress:
         el = time.perf_counter() - self.t0
         msg = (f"{self.name}: generation {row['generation']}/{self.total} | best {row['best']:.6g} | "
                f"gen mean {row['gen_mean']:.6g} | NaN/inf {row['n_bad']} | eval {eval_s:.2f} s | "
-               f"elapsed {_clock(el)}")
+               f"elapsed {clock(el)}")
         print(("\r" + msg.ljust(110)) if self.tty else msg, end="" if self.tty else "\n", file=sys.stderr, flush=True)
 
     def close(self) -> None:
@@ -177,7 +177,7 @@ def tune_loop(objective: Objective, strategy: Strategy, generations: int, run_di
     def commit(g: int) -> None:
         _save_state(ck / f"gen_{g:05d}", state)
         man = {"fingerprint": fp, "generation": g, "rows": rows, "times": times}
-        _atomic_write(manifest_path, json.dumps(man, indent=1).encode())
+        atomic_write(manifest_path, json.dumps(man, indent=1).encode())
         for old in ck.glob("gen_*"):  # keep the last two checkpoints
             if old.is_dir() and int(old.name[4:]) < g - checkpoint_every:
                 shutil.rmtree(old, ignore_errors=True)
@@ -199,8 +199,8 @@ def tune_loop(objective: Objective, strategy: Strategy, generations: int, run_di
                    **{n: float(v) for n, v in zip(b.names, bx)}}
             rows.append(row)
             times.append(f"{g + 1},{ev.time_s!r},{ev.compile_s!r}")
-            _atomic_write(run_dir / "generations.csv", _csv(rows, b.names))
-            _atomic_write(run_dir / "timings.csv", ("generation,eval_s,compile_s\n" + "\n".join(times) + "\n").encode())
+            atomic_write(run_dir / "generations.csv", _csv(rows, b.names))
+            atomic_write(run_dir / "timings.csv", ("generation,eval_s,compile_s\n" + "\n".join(times) + "\n").encode())
             prog.update(row, ev.time_s)
             if callback is not None:
                 callback(g + 1, row)
@@ -293,11 +293,11 @@ def _splits(cfg, grid, starts, goals, optimal) -> tuple[Split, Split]:
 
 def build_objective(cfg) -> Objective:
     """The `Objective` of a `TuneConfig` (map loaded, scenarios chosen and split)."""
-    from jaxplan.experiments.runner import _load_map, _scenarios
+    from jaxplan.experiments.runner import load_map_spec, spec_scenarios
     from jaxplan.tune._objective import aco_objective, dwa_objective
 
-    grid, s0, g0, _ = _load_map(cfg.map)
-    starts, goals, optimal, _ = _scenarios(cfg.map, grid, s0, g0)
+    grid, s0, g0, _ = load_map_spec(cfg.map)
+    starts, goals, optimal, _ = spec_scenarios(cfg.map, grid, s0, g0)
     train, test = _splits(cfg, grid, starts, goals, optimal)
     space = {k: (list(v) if isinstance(v, list) else tuple(v)) for k, v in cfg.space.items()}
     if cfg.kind == "aco":
@@ -366,7 +366,7 @@ def run_tuning(config_path, out="runs", quick: bool = False, data_dir=None, prog
     objective = build_objective(cfg)
     strategy = make_strategy(cfg.strategy, cfg.population, cfg.generations, **dict(cfg.options))
     fp = hashlib.sha256(cfg.text.encode() + (b"|quick" if cfg.is_quick else b"")).hexdigest()
-    _atomic_write(run_dir / "config.toml", cfg.text.encode())
+    atomic_write(run_dir / "config.toml", cfg.text.encode())
     t0 = time.perf_counter()
     res = tune_loop(objective, strategy, cfg.generations, run_dir, seed=cfg.seed,
                     checkpoint_every=cfg.checkpoint_every, resume=resume, progress=progress, fingerprint=fp)
@@ -383,7 +383,7 @@ def run_tuning(config_path, out="runs", quick: bool = False, data_dir=None, prog
         "train": compare(objective, best, "train", cfg.population), "test": compare(objective, best, "test"),
         "weights": dict(cfg.weights), "wall_s_this_session": wall,
     }
-    _atomic_write(run_dir / "summary.json", json.dumps(_json_safe(summary), indent=1, allow_nan=False).encode())
+    atomic_write(run_dir / "summary.json", json.dumps(_json_safe(summary), indent=1, allow_nan=False).encode())
     te = summary["test"]
     comment = (f"best weights of tuning run {cfg.name} ({cfg.strategy}, {res['evaluations']} evaluations)\n"
                f"held-out test objective: tuned {te['tuned']['objective']:.6g} ± {_sd_text(te['tuned']['seed_sd'])}, "
@@ -391,6 +391,6 @@ def run_tuning(config_path, out="runs", quick: bool = False, data_dir=None, prog
                f"(sd over {len(cfg.test_seeds)} seed{'s' if len(cfg.test_seeds) != 1 else ''})")
     frag = fragment_toml(objective, best, label=f"{cfg.planner}-tuned", overrides=dict(cfg.overrides),
                          pipeline=cfg.pipeline, comment=comment)
-    _atomic_write(run_dir / "best.toml", frag.encode())
+    atomic_write(run_dir / "best.toml", frag.encode())
     plot_tuning({cfg.strategy: res["rows"]}, run_dir / "convergence.png", title=f"{cfg.name}: {cfg.strategy}")
     return run_dir
