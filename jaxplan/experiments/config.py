@@ -588,7 +588,8 @@ def _read_scenarios(r: Reader, t: dict, path: str, is_file: bool) -> ScenarioSpe
     if source == "scen" and not is_file:
         r.bad(join(path, "source"), "a generated map has no scenario file; use 'random' or 'scene'")
     if source == "scene" and is_file:
-        r.bad(join(path, "source"), "'scene' is a generator's own start and goal; a MovingAI map uses 'scen' or 'random'")
+        r.bad(join(path, "source"),
+              "'scene' is a generator's own start and goal; a MovingAI map uses 'scen' or 'random'")
     if spec.min_bucket is not None and spec.max_bucket is not None and spec.min_bucket > spec.max_bucket:
         r.bad(path, f"min_bucket {spec.min_bucket} > max_bucket {spec.max_bucket}")
     if spec.min_optimal is not None and spec.max_optimal is not None and spec.min_optimal > spec.max_optimal:
@@ -980,7 +981,7 @@ def _read_figures(r: Reader, raw: dict, metrics: tuple, maps: set, labels: set,
                 if x not in known:
                     r.bad(f"{p}.{key}[{j}]", f"unknown {key[:-1]} {x!r} (configured: {', '.join(sorted(known))})")
         _check_figure_scenario(r, p, name, kind, f, sites, planners)
-        if "band" in t and t["band"] not in BANDS + (False,):
+        if "band" in t and not (t["band"] is False or (isinstance(t["band"], str) and t["band"] in BANDS)):
             r.bad(join(p, "band"), f"must be {', '.join(map(repr, BANDS))} or false, got {t['band']!r}")
         if kind == "sweep" and "metric" not in f:
             r.bad(join(p, "metric"), "required key is missing")

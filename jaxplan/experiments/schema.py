@@ -17,8 +17,7 @@ apply) stay in the code that reads each section and report to the same `Reader`.
 Example::
 
     @dataclass(frozen=True)
-    class Obstacles:
-        \"\"\"Moving discs per episode.\"\"\"
+    class Obstacles:  # a section: one TOML table
         n: int = setting("int", 0, "discs per episode", ge=0)
         speed: float = setting("float", 1.0, "m/s", ge=0)
 
@@ -51,6 +50,7 @@ TYPES = ("int", "float", "str", "bool", "seeds", "strings", "table", "section", 
 strings; ``table`` a free-form inline table (its keys optionally restricted); ``section`` a nested table
 and ``tables`` an array of tables, both described by another section; ``custom`` a value the section's
 own code checks (the setting gives its doc, Markdown type and JSON Schema)."""
+
 
 class _Unset:
     """The absence of a default (not None, which is a default: "unset")."""
@@ -283,27 +283,29 @@ class Reader:
 
     @staticmethod
     def _allowed(obj: Any, specs: Sequence[Setting], extra: bool) -> tuple[str, ...]:
-        """The keys a table may have: settings without ``when``, those whose sibling value matches, and every
-        present key when a section takes extra keys or a ``when`` sibling is missing or invalid."""
+        """The keys a table may have: settings without ``when``, and those whose sibling's value (or default)
+        matches; every setting when a ``when`` sibling has no valid value (its own problem is reported: which
+        keys it would allow is unknown); and every present key when the section takes extra keys."""
+        names = [s.name for s in specs]
         if not isinstance(obj, dict):
-            return tuple(s.name for s in specs)
+            return tuple(names)
         by_name = {s.name: s for s in specs}
-        allowed, open_ = [], extra
+        allowed = []
         for s in specs:
             if s.when is None:
                 allowed.append(s.name)
                 continue
             key, values = s.when
-            v = obj.get(key)
             sib = by_name[key]
+            v = obj.get(key, sib.fallback)
             v = (sib.aliases or {}).get(v, v) if isinstance(v, str) else v
-            if isinstance(v, str) and v in (sib.options() or ()):
-                if v in values:
-                    allowed.append(s.name)
-            else:
-                open_ = True
-        if open_:
-            allowed += [k for k in obj if k not in allowed]
+            if not (isinstance(v, str) and v in (sib.options() or ())):
+                allowed = names
+                break
+            if v in values:
+                allowed.append(s.name)
+        if extra:
+            allowed = allowed + [k for k in obj if k not in allowed]
         return tuple(allowed)
 
     def value(self, t: Mapping[str, Any], path: str, s: Setting, default: Any = UNSET) -> Any:
@@ -433,41 +435,47 @@ def toml_literal(v: Any) -> str:
 
 @dataclass(frozen=True)
 class _Node:
-    """A section at its place in the tree: TOML key path and whether it is an array of tables."""
+    """A section at its place in the tree: TOML key path, whether it is an array of tables, and where else it is
+    read (``(key, parent header)`` pairs)."""
 
     section: type
     path: str
     array: bool
-    also: tuple[str, ...] = ()
+    also: tuple[tuple[str, str], ...] = ()
 
     @property
     def header(self) -> str:
-        return f"[[{self.path}]]" if self.array else f"[{self.path}]"
+        return _header(self.path, self.array)
+
+
+def _header(path: str, array: bool) -> str:
+    return f"[[{path}]]" if array else (f"[{path}]" if path else "the top level")
 
 
 def _tree(root: type) -> list[_Node]:
     """Every section under ``root`` once, in depth-first order, each at its shallowest key path."""
-    depth: dict[type, tuple[int, str, bool]] = {}
-    seen: dict[type, list[str]] = {}
+    home: dict[type, tuple[str, bool]] = {}
+    uses: dict[type, list[tuple[str, str, str]]] = {}  # (path, key, parent header)
     frontier = [(root, "", False)]
-    level = 0
     while frontier:
         nxt = []
         for cls, path, array in frontier:
-            seen.setdefault(cls, []).append(path)
-            if cls in depth:
+            if cls in home:
                 continue
-            depth[cls] = (level, path, array)
+            home[cls] = (path, array)
             for s in settings(cls):
                 if s.type in ("section", "tables"):
-                    nxt.append((s.section, join(path, s.name), s.type == "tables"))
-        frontier, level = nxt, level + 1
+                    sub = join(path, s.name)
+                    uses.setdefault(s.section, []).append((sub, s.name, _header(path, array)))
+                    nxt.append((s.section, sub, s.type == "tables"))
+        frontier = nxt
     out: list[_Node] = []
 
     def visit(cls: type, path: str) -> None:
-        if depth[cls][1] != path or any(n.section is cls for n in out):
+        if home[cls][0] != path or any(n.section is cls for n in out):
             return
-        out.append(_Node(cls, path, depth[cls][2], tuple(p for p in seen[cls] if p != path)))
+        also = tuple((key, parent) for p, key, parent in uses.get(cls, []) if p != path)
+        out.append(_Node(cls, path, home[cls][1], also))
         for s in settings(cls):
             if s.type in ("section", "tables"):
                 visit(s.section, join(path, s.name))
@@ -557,7 +565,8 @@ def markdown(root: type, heading: str, *, level: int = 2, anchors: Mapping[type,
         lines += [f"{'#' * level} {title}", ""]
         intro = _first_paragraph(n.section)
         if n.also:
-            intro += " Also read at " + ", ".join(f"`{p}`" for p in n.also) + "."
+            intro += " Also the " + ", ".join(f"`{key}` key of `{parent}`" if parent.startswith("[") else
+                                               f"`{key}` key at {parent}" for key, parent in n.also) + "."
         if n.path == "" and root_header:
             intro = (intro + " " + root_header).strip()
         if intro:
@@ -620,7 +629,7 @@ def _json_property(s: Setting, ref: Callable[[type], str]) -> dict[str, Any]:
         j = dict(s.json or {})
     if s.type in ("int", "float", "str") and s.options() is not None:
         j["enum"] = list(s.options())
-    doc = s.doc + (f" Default: {s.default_text}." if s.default_text else "")
+    doc = s.doc + (f" (default: {s.default_text})" if s.default_text else "")
     if doc:
         j["description"] = doc
     if not s.default_text and s.default is not UNSET and s.default is not None:

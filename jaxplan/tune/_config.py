@@ -199,7 +199,8 @@ def parse_tune_config(text: str, *, data_dir: str | os.PathLike | None = None, s
     train_seeds = t["train_seeds"]
     test_seeds = r.value(tt, "tune", setting_of(TuneTable, "test_seeds")) or _default_test_seeds(train_seeds)
     if set(train_seeds) & set(test_seeds):
-        r.bad("tune.test_seeds", f"must not share seeds with tune.train_seeds: {sorted(set(train_seeds) & set(test_seeds))}")
+        shared = _shared_seeds(train_seeds, test_seeds)
+        r.bad("tune.test_seeds", f"must not share seeds with tune.train_seeds: {shared}")
     weights = r.value(tt, "tune", dataclasses.replace(setting_of(TuneTable, "weights"), keys=_metrics(kind)))
     weights = weights or dict(_DEFAULT_WEIGHTS[kind])
     quick = r.section(tt.get("quick"), "tune.quick", TuneQuickTable)
