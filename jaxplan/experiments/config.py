@@ -37,7 +37,8 @@ from types import MappingProxyType
 from typing import Any, Callable, Mapping, Sequence
 
 from jaxplan.experiments.schema import (
-    ConfigError, Reader, Setting, describe, did_you_mean, frozen, join, setting, setting_of, settings,
+    ConfigError, Reader, Setting, declaration, describe, did_you_mean, frozen, join, setting, setting_of,
+    settings,
 )
 
 __all__ = [
@@ -418,10 +419,10 @@ class ExperimentConfig:
         return frozenset(p.kind for p in self.planners)
 
 
-# TOML tables without a resolved object of their own: they declare keys only.
+# TOML tables without a resolved object of their own: declarations of keys only.
 
 
-@dataclass(frozen=True)
+@declaration
 class ExperimentTable:
     """The run: its name, seeds and chunking, and what ``--quick`` changes."""
 
@@ -434,7 +435,7 @@ class ExperimentTable:
     quick: Any = setting("section", None, "what `--quick` changes", section=QuickSpec)
 
 
-@dataclass(frozen=True)
+@declaration
 class MapTable:
     """A map for the plan and navigate planners: a MovingAI file (``path``) or a generator (``generator``),
     exactly one of them."""
@@ -456,7 +457,7 @@ class MapTable:
                              section=ScenarioSpec)
 
 
-@dataclass(frozen=True)
+@declaration
 class InstanceTable:
     """A TSPLIB instance for the tsp planners (no ``[[maps]]`` needed then)."""
 
@@ -469,7 +470,7 @@ class InstanceTable:
                              "is nan)", gt=0)
 
 
-@dataclass(frozen=True)
+@declaration
 class FigureTable:
     """A figure for `jaxplan figures`: stored with the run, not drawn by `jaxplan run`. Its kind decides which
     further keys it takes."""
@@ -516,7 +517,7 @@ FIGURE_KINDS: Mapping[str, frozenset] = MappingProxyType({
 """Figure kinds and the keys each accepts besides ``kind name title maps planners format`` (from `FigureTable`)."""
 
 
-@dataclass(frozen=True)
+@declaration
 class PaperValueTable:
     """One number the paper reports, for a planner (on one map, or every map)."""
 
@@ -531,7 +532,7 @@ class PaperValueTable:
              "properties": {k: {"type": "number"} for k in ("mean", "sd", "min", "max")}}]})
 
 
-@dataclass(frozen=True)
+@declaration
 class PaperTable:
     """The paper's numbers, shown beside ours and labelled "paper"."""
 
@@ -539,7 +540,7 @@ class PaperTable:
     values: Any = setting("tables", None, "the numbers", section=PaperValueTable)
 
 
-@dataclass(frozen=True)
+@declaration
 class ExperimentFile:
     """An experiment config (`jaxplan run CONFIG`). Top-level keys come before the first table in TOML."""
 

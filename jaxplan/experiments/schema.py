@@ -1,7 +1,8 @@
 """Config schemas declared once: each key's type, default, bounds or choices and one-line doc.
 
 A *section* is a dataclass whose fields carry a `Setting` (made with `setting`): one TOML table. Fields
-without a setting (resolved paths, provenance) are not keys. Everything else derives from these
+without a setting (resolved paths, provenance) are not keys. A table with no resolved object of its own is
+a `declaration`. Everything else derives from these
 declarations:
 
 * validation: `Reader.section` checks a parsed TOML table against a section and collects every problem
@@ -32,6 +33,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import functools
 import math
 import re
 import warnings
@@ -40,8 +42,9 @@ from types import MappingProxyType
 from typing import Any, Callable, Iterator, Mapping, Sequence
 
 __all__ = [
-    "TYPES", "UNSET", "MAX_SEED", "ConfigError", "Setting", "setting", "settings", "setting_of", "extra_setting",
-    "Reader", "check", "frozen", "describe", "did_you_mean", "join", "toml_literal", "markdown", "json_schema",
+    "TYPES", "UNSET", "MAX_SEED", "ConfigError", "Setting", "setting", "declaration", "settings", "setting_of",
+    "extra_setting", "Reader", "check", "frozen", "describe", "did_you_mean", "join", "toml_literal", "markdown",
+    "json_schema",
 ]
 
 TYPES = ("int", "float", "str", "bool", "seeds", "strings", "table", "section", "tables", "custom")
@@ -76,7 +79,7 @@ class ConfigError(ValueError):
         super().__init__(head + "\n" + "\n".join(f"  - {p}" for p in self.problems))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Setting:
     """One key of a section.
 
@@ -158,12 +161,19 @@ def setting(type: str, default: Any = UNSET, doc: str = "", **kw: Any) -> Any:
     return dataclasses.field(default=default, metadata=md)
 
 
+def declaration(cls: type) -> type:
+    """Makes ``cls`` a section that only declares keys: a TOML table read into a dict, with no resolved object of
+    its own. A dataclass without generated methods (it is never instantiated), so it costs little to import."""
+    return dataclass(init=False, repr=False, eq=False)(cls)
+
+
 def _empty() -> Mapping[str, Any]:
     return MappingProxyType({})
 
 
+@functools.lru_cache(maxsize=None)
 def settings(section: type) -> tuple[Setting, ...]:
-    """The settings of a section dataclass, in field order, named after their fields."""
+    """The settings of a section dataclass, in field order, named after their fields (cached per class)."""
     return tuple(dataclasses.replace(f.metadata["setting"], name=f.name) for f in dataclasses.fields(section)
                  if "setting" in f.metadata)
 

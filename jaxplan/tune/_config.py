@@ -20,7 +20,7 @@ from types import MappingProxyType
 from typing import Any, Mapping
 
 from jaxplan.experiments.config import RUN_NAME, MapSpec, MapTable, ScenarioSpec, default_data_dir, read_maps
-from jaxplan.experiments.schema import ConfigError, Reader, Setting, frozen, setting, setting_of
+from jaxplan.experiments.schema import ConfigError, Reader, Setting, declaration, frozen, setting, setting_of
 
 __all__ = ["TuneConfig", "load_tune_config", "parse_tune_config", "apply_tune_quick", "KINDS", "TuneFile",
            "TuneTable", "TuneQuickTable"]
@@ -60,7 +60,7 @@ _SPACE_JSON = {
          "items": {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2}}]}}
 
 
-@dataclass(frozen=True)
+@declaration
 class TuneQuickTable:
     """What ``quick=True`` (``jaxplan tune --quick``) changes: a smoke run in the run folder NAME-quick (every key
     optional)."""
@@ -76,7 +76,7 @@ class TuneQuickTable:
     max_time: float = setting("float", None, "dwa: episode length (s)", gt=0)
 
 
-@dataclass(frozen=True)
+@declaration
 class TuneTable:
     """The tuning run: what is tuned, by which strategy, on which scenarios and seeds."""
 
@@ -115,7 +115,7 @@ class TuneTable:
     quick: Any = setting("section", None, "what `--quick` changes", section=TuneQuickTable)
 
 
-@dataclass(frozen=True)
+@declaration
 class TuneFile:
     """A tuning config (`jaxplan tune CONFIG`)."""
 
