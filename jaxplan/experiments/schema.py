@@ -2,8 +2,9 @@
 
 A *section* is a dataclass whose fields carry a `Setting` (made with `setting`): one TOML table. Fields
 without a setting (resolved paths, provenance) are not keys. A table with no resolved object of its own is
-a `declaration`. Everything else derives from these
-declarations:
+a `declaration`. A section may also carry ``schema_extra`` (a `Setting` describing keys beyond its own, such
+as metric names) and ``schema_json`` (JSON Schema keywords added to its table's schema) as class attributes.
+Everything else derives from these declarations:
 
 * validation: `Reader.section` checks a parsed TOML table against a section and collects every problem
   with its key path (``maps[0].scenarios.count: must be >= 1, got 0``), with the closest known key or
