@@ -8,7 +8,7 @@
   and random search, CMA-ES and SNES (evosax), li2026's ISSA and the plain SSA, the
   score-function (REINFORCE) and surrogate routes; `relaxed_dwa` differentiates softmax-DWA
   episodes through `lax.scan` with optax.
-* `_config`, `_workflow`: TOML tuning configs and `run_tuning` (progress, CSV log, orbax
+* `_config`, `_workflow`: TOML tuning configs (schema: `TuneFile`) and `run_tuning` (progress, CSV log, orbax
   checkpoints with exact resume, best weights as a ``[[planners]]`` fragment, convergence figure).
 
 Example::
@@ -26,7 +26,7 @@ from jaxplan.tune._objective import (
     ACO_METRICS, DWA_METRICS, DWAEpisodes, Evaluation, Objective, Split, aco_objective, dwa_episodes, dwa_objective,
     dwa_scenarios, function_objective,
 )
-from jaxplan.tune._config import TuneConfig, apply_tune_quick, load_tune_config, parse_tune_config
+from jaxplan.tune._config import TuneConfig, TuneFile, apply_tune_quick, load_tune_config, parse_tune_config
 from jaxplan.tune._workflow import TuneResult, build_objective, compare, fragment_toml, plot_tuning, run_tuning, tune_loop
 from jaxplan.tune._sparrow import SparrowState, adaptive_weight, issa, levy, ssa
 
@@ -36,7 +36,7 @@ __all__ = [
     "RelaxedResult", "quadratic_features", "reinforce", "relaxed_dwa", "relaxed_dwa_loss", "score_function_grad",
     "surrogate", "ACO_METRICS", "DWA_METRICS", "DWAEpisodes", "Evaluation", "Objective", "Split", "aco_objective",
     "dwa_episodes", "dwa_objective", "dwa_scenarios", "function_objective",
-    "TuneConfig", "apply_tune_quick", "load_tune_config", "parse_tune_config", "TuneResult", "build_objective",
+    "TuneConfig", "TuneFile", "apply_tune_quick", "load_tune_config", "parse_tune_config", "TuneResult", "build_objective",
     "compare", "fragment_toml", "plot_tuning", "run_tuning", "tune_loop",
     "SparrowState", "adaptive_weight", "issa", "levy", "ssa",
 ]

@@ -1,45 +1,11 @@
 """Tuning configs: TOML read with `tomllib`, validated in full (every problem with its key path), frozen dataclasses.
 
-Schema (``#`` marks defaults)::
-
-    [tune]
-    name = "tune_iaco"          # the run folder OUT/NAME ([A-Za-z0-9][A-Za-z0-9_.-]*), required
-    kind = "aco"                # "aco" (a colony planner's weights) | "dwa" (DWA critic weights)
-    planner = "iaco"            # aco: aco | iaco | risk_aco | opt_ant | praco; dwa: weighted | fuzzy
-    strategy = "cma_es"         # grid | random | cma_es | snes | ssa | issa | reinforce | surrogate
-    population = 16             # weight vectors per generation (>= 2)
-    generations = 10            # (>= 1)
-    seed = 0                    # the strategy's PRNG seed
-    checkpoint_every = 2        # orbax checkpoint every k generations (and after the last)
-    train_count = 32            # the first train_count scenarios train, the rest are the held-out test set
-    train_seeds = 4             # count (0..n-1) or list
-    test_seeds = [1000, 1001, 1002, 1003]   # default: 1000.. as many as train_seeds; must not meet train_seeds
-    weights = { gap = 1.0, failure = 1.0 }  # metric weights (aco: gap failure turns roughness clearance;
-                                            #                 dwa: time failure collision clearance)
-    overrides = { ants = 16, iterations = 8 }   # aco: planner settings; dwa: DWAConfig fields (n_v, n_omega, ...)
-    options = { sigma = 0.3 }   # the strategy's own options
-    max_time = 20.0             # dwa: episode length (s)
-    discs = 2                   # dwa: moving discs per episode
-    pipeline = "astar_kng_dwa"  # dwa: the navigate pipeline the best-weights fragment names
-
-    [tune.space]                # the search box: name = [low, high], vector weights one pair per component
-    alpha = [0.5, 3.0]
-    lambdas = [[0.0, 1.0], [0.0, 1.0], [0.0, 1.0]]
-
-    [tune.quick]                # what quick=True changes; every key optional
-    population = 8
-    generations = 3
-    train_count = 4
-    test_count = 4              # at most this many test scenarios
-    train_seeds = 2
-    test_seeds = [1000, 1001]
-    overrides = { ants = 8, iterations = 4 }
-    max_time = 10.0
-
-    [[maps]]                    # exactly one map, as in experiment configs (`jaxplan.experiments.config`)
-    ...
-    [scenarios]                 # as in experiment configs; count = train + test scenarios
-    ...
+The schema is declared once, below, as `jaxplan.experiments.schema` settings: `TuneFile` is the top level,
+`TuneTable` its ``[tune]`` table, `TuneQuickTable` ``[tune.quick]``; the one ``[[maps]]`` entry and
+``[scenarios]`` are those of experiment configs (`jaxplan.experiments.config.MapTable`, `ScenarioSpec`).
+The reference page ``docs/guide/config.md`` and the editors' JSON Schema
+``configs/schema/tune.schema.json`` are generated from them (``python -m jaxplan.config_reference``);
+``configs/tune_*.toml`` are complete examples.
 """
 
 from __future__ import annotations
@@ -53,21 +19,116 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping
 
-from jaxplan.experiments.config import _NAME_RE, ConfigError, MapSpec, _Reader, _read_maps, _frozen, default_data_dir
+from jaxplan.experiments.config import RUN_NAME, MapSpec, MapTable, ScenarioSpec, default_data_dir, read_maps
+from jaxplan.experiments.schema import ConfigError, Reader, Setting, declaration, frozen, setting, setting_of
 
-__all__ = ["TuneConfig", "load_tune_config", "parse_tune_config", "apply_tune_quick", "KINDS"]
+__all__ = ["TuneConfig", "load_tune_config", "parse_tune_config", "apply_tune_quick", "KINDS", "TuneFile",
+           "TuneTable", "TuneQuickTable"]
 
 KINDS = ("aco", "dwa")
-_TUNE_KEYS = ("name", "kind", "planner", "strategy", "population", "generations", "seed", "checkpoint_every",
-              "train_count", "train_seeds", "test_seeds", "weights", "overrides", "options", "max_time", "discs",
-              "pipeline", "space", "quick", "description")
-_QUICK_KEYS = ("population", "generations", "train_count", "test_count", "train_seeds", "test_seeds", "overrides",
-               "max_time")
+_DWA_PLANNERS = ("weighted", "fuzzy")
+
+
+def _aco_planners() -> tuple[str, ...]:
+    from jaxplan.aco._planners import COLONIES
+
+    return tuple(sorted(COLONIES))
+
+
+def _planners() -> tuple[str, ...]:
+    return _aco_planners() + _DWA_PLANNERS
+
+
+def _strategies() -> tuple[str, ...]:
+    from jaxplan.tune._strategies import STRATEGIES
+
+    return STRATEGIES
+
+
+def _metrics(kind: str | None = None) -> tuple[str, ...]:
+    from jaxplan.tune._objective import ACO_METRICS, DWA_METRICS
+
+    return {"aco": ACO_METRICS, "dwa": DWA_METRICS}.get(kind, tuple(dict.fromkeys(ACO_METRICS + DWA_METRICS)))
+
+
+_DEFAULT_WEIGHTS = {"aco": {"gap": 1.0, "failure": 1.0}, "dwa": {"time": 1.0, "failure": 1.0}}
+_SPACE_JSON = {
+    "type": "object", "minProperties": 1,
+    "additionalProperties": {"oneOf": [
+        {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2},
+        {"type": "array", "minItems": 1,
+         "items": {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2}}]}}
+
+
+@declaration
+class TuneQuickTable:
+    """What ``quick=True`` (``jaxplan tune --quick``) changes: a smoke run in the run folder NAME-quick (every key
+    optional)."""
+
+    population: int = setting("int", None, "weight vectors per generation", ge=2)
+    generations: int = setting("int", None, "generations", ge=1)
+    train_count: int = setting("int", None, "training scenarios", ge=1)
+    test_count: int = setting("int", None, "at most this many test scenarios", ge=1)
+    train_seeds: Any = setting("seeds", None, "training seeds: a count or a list")
+    test_seeds: Any = setting("seeds", None, "test seeds: a count or a list",
+                              default_text="1000.. as many as the quick train_seeds, if those are given")
+    overrides: Mapping[str, Any] = setting("table", doc="merged over [tune] overrides")
+    max_time: float = setting("float", None, "dwa: episode length (s)", gt=0)
+
+
+@declaration
+class TuneTable:
+    """The tuning run: what is tuned, by which strategy, on which scenarios and seeds."""
+
+    name: str = setting("str", None, "the run folder OUT/NAME", required=True, pattern=RUN_NAME,
+                        hint="it names the run folder")
+    description: str = setting("str", "", "one line for the summary")
+    kind: str = setting("str", "aco", "aco: a colony planner's weights; dwa: DWA critic weights", required=True,
+                        choices=KINDS)
+    planner: str = setting("str", None, "aco: a colony planner; dwa: the DWA evaluator (weighted or fuzzy)",
+                           choices=_planners, default_text='`"iaco"`; dwa: `"weighted"`')
+    strategy: str = setting("str", "cma_es", "the search strategy (`jaxplan.tune.STRATEGIES`)", choices=_strategies)
+    population: int = setting("int", 16, "weight vectors per generation", ge=2)
+    generations: int = setting("int", 10, "generations", ge=1)
+    seed: int = setting("int", 0, "the strategy's PRNG seed", ge=0)
+    checkpoint_every: int = setting("int", 2, "orbax checkpoint every k generations (and after the last)", ge=1)
+    train_count: int = setting("int", 16, "the first train_count scenarios train; the rest are the held-out test "
+                               "set", ge=1)
+    train_seeds: Any = setting("seeds", 4, "training seeds: a count n (0..n-1) or a list")
+    test_seeds: Any = setting("seeds", None, "test seeds: a count or a list; must not meet train_seeds",
+                              default_text="1000.. as many as train_seeds")
+    weights: Mapping[str, float] = setting("table", doc="metric weights of the cost (aco: gap failure turns "
+                                           "roughness clearance; dwa: time failure collision clearance)",
+                                           keys=_metrics, values=Setting("float", ge=0),
+                                           default_text="aco: `{ gap = 1.0, failure = 1.0 }`; dwa: "
+                                                        "`{ time = 1.0, failure = 1.0 }`")
+    overrides: Mapping[str, Any] = setting("table", doc="aco: planner settings; dwa: `DWAConfig` fields (n_v, "
+                                           "n_omega, ...)")
+    options: Mapping[str, Any] = setting("table", doc="the strategy's own options")
+    max_time: float = setting("float", 20.0, "dwa: episode length (s)", gt=0)
+    discs: int = setting("int", 2, "dwa: moving discs per episode", ge=0)
+    pipeline: str = setting("str", None, "dwa: the navigate pipeline the best-weights fragment names",
+                            default_text='`"astar_kng_dwa"`; fuzzy planner: `"iaco_dwa"`')
+    space: Any = setting("custom", None, "the search box: name = [low, high], a vector weight one pair per "
+                         "component (e.g. lambdas = [[0.0, 1.0], [0.0, 1.0], [0.0, 1.0]])", required=True,
+                         type_text="table of [low, high] pairs", json=_SPACE_JSON)
+    quick: Any = setting("section", None, "what `--quick` changes", section=TuneQuickTable)
+
+
+@declaration
+class TuneFile:
+    """A tuning config (`jaxplan tune CONFIG`)."""
+
+    tune: Any = setting("section", None, "the tuning run", section=TuneTable, required=True)
+    maps: Any = setting("tables", None, "exactly one map, as in experiment configs", section=MapTable, required=True,
+                        nonempty=True)
+    scenarios: Any = setting("section", None, "as in experiment configs; count = train + test scenarios",
+                             section=ScenarioSpec)
 
 
 @dataclass(frozen=True)
 class TuneConfig:
-    """A validated tuning config (see the module docstring for every field's meaning)."""
+    """A validated tuning config (`TuneTable` documents every field)."""
 
     name: str
     description: str
@@ -96,7 +157,7 @@ class TuneConfig:
     path: Path | None = None
 
 
-def _space(r: _Reader, t: Any, path: str) -> dict:
+def _space(r: Reader, t: Any, path: str) -> dict:
     out: dict[str, Any] = {}
     if not isinstance(t, dict) or not t:
         r.bad(path, "a non-empty table of name = [low, high] bounds is required")
@@ -122,68 +183,41 @@ def _space(r: _Reader, t: Any, path: str) -> dict:
 def parse_tune_config(text: str, *, data_dir: str | os.PathLike | None = None, source: str = "config",
                       path: Path | None = None) -> TuneConfig:
     """Parses and validates a tuning config. Raises `ConfigError` listing every problem with its key path."""
-    from jaxplan.tune._objective import ACO_METRICS, DWA_METRICS
-    from jaxplan.tune._strategies import STRATEGIES
-
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise ConfigError([f"not valid TOML: {e}"], source) from None
-    r = _Reader()
-    r.table(raw, "", ("tune", "maps", "scenarios"))
-    t = r.table(raw.get("tune"), "tune", _TUNE_KEYS, required=("name", "kind", "space"))
-    name = r.get(t, "tune", "name", "str", "unnamed")
-    if isinstance(t.get("name"), str) and not _NAME_RE.match(t["name"]):
-        r.bad("tune.name", f"must match [A-Za-z0-9][A-Za-z0-9_.-]* (it names the run folder), got {name!r}")
-    kind = r.get(t, "tune", "kind", "str", "aco", choices=KINDS)
-    from jaxplan.aco._planners import COLONIES
-
-    planners = tuple(sorted(COLONIES)) if kind == "aco" else ("weighted", "fuzzy")
-    planner = r.get(t, "tune", "planner", "str", "iaco" if kind == "aco" else "weighted", choices=planners)
-    train_seeds = r.seeds(t, "tune", "train_seeds", (0, 1, 2, 3))
-    test_seeds = r.seeds(t, "tune", "test_seeds", None) or _default_test_seeds(train_seeds)
+    r = Reader()
+    r.section(raw, "", TuneFile)
+    tt = raw.get("tune") if isinstance(raw.get("tune"), dict) else {}
+    t = r.section(raw.get("tune"), "tune", TuneTable, defaults={"name": "unnamed"},
+                  skip=("planner", "test_seeds", "weights", "pipeline"))
+    kind = t["kind"]
+    planner = r.value(tt, "tune", dataclasses.replace(
+        setting_of(TuneTable, "planner"), choices=_aco_planners() if kind == "aco" else _DWA_PLANNERS),
+        "iaco" if kind == "aco" else "weighted")
+    train_seeds = t["train_seeds"]
+    test_seeds = r.value(tt, "tune", setting_of(TuneTable, "test_seeds")) or _default_test_seeds(train_seeds)
     if set(train_seeds) & set(test_seeds):
-        r.bad("tune.test_seeds", f"must not share seeds with tune.train_seeds: {sorted(set(train_seeds) & set(test_seeds))}")
-    metrics = ACO_METRICS if kind == "aco" else DWA_METRICS
-    weights = r.table(t.get("weights"), "tune.weights", metrics)
-    for k, v in weights.items():
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
-            r.bad(f"tune.weights.{k}", f"must be a finite number >= 0, got {v!r}")
-    weights = weights or ({"gap": 1.0, "failure": 1.0} if kind == "aco" else {"time": 1.0, "failure": 1.0})
-    q = r.table(t.get("quick"), "tune.quick", _QUICK_KEYS)
-    quick = {
-        "population": r.get(q, "tune.quick", "population", "int", None, lo=2),
-        "generations": r.get(q, "tune.quick", "generations", "int", None, lo=1),
-        "train_count": r.get(q, "tune.quick", "train_count", "int", None, lo=1),
-        "test_count": r.get(q, "tune.quick", "test_count", "int", None, lo=1),
-        "train_seeds": r.seeds(q, "tune.quick", "train_seeds"),
-        "test_seeds": r.seeds(q, "tune.quick", "test_seeds"),
-        "overrides": r.table(q.get("overrides"), "tune.quick.overrides", tuple(q.get("overrides") or {})),
-        "max_time": r.get(q, "tune.quick", "max_time", "float", None, lo=0, strict_lo=True),
-    }
+        shared = _shared_seeds(train_seeds, test_seeds)
+        r.bad("tune.test_seeds", f"must not share seeds with tune.train_seeds: {shared}")
+    weights = r.value(tt, "tune", dataclasses.replace(setting_of(TuneTable, "weights"), keys=_metrics(kind)))
+    weights = weights or dict(_DEFAULT_WEIGHTS[kind])
+    quick = r.section(tt.get("quick"), "tune.quick", TuneQuickTable)
     dd = Path(data_dir) if data_dir is not None else default_data_dir()
-    maps = _read_maps(r, raw, dd)
+    maps = read_maps(r, raw, dd)
     if len(maps) > 1:
         r.bad("maps", f"a tuning run uses exactly one map, got {len(maps)}")
     cfg = TuneConfig(
-        name=name,
-        description=r.get(t, "tune", "description", "str", ""),
-        kind=kind, planner=planner,
-        strategy=r.get(t, "tune", "strategy", "str", "cma_es", choices=STRATEGIES),
-        population=r.get(t, "tune", "population", "int", 16, lo=2),
-        generations=r.get(t, "tune", "generations", "int", 10, lo=1),
-        seed=r.get(t, "tune", "seed", "int", 0, lo=0),
-        checkpoint_every=r.get(t, "tune", "checkpoint_every", "int", 2, lo=1),
-        train_count=r.get(t, "tune", "train_count", "int", 16, lo=1),
-        test_count=None,
+        name=t["name"], description=t["description"], kind=kind, planner=planner, strategy=t["strategy"],
+        population=t["population"], generations=t["generations"], seed=t["seed"],
+        checkpoint_every=t["checkpoint_every"], train_count=t["train_count"], test_count=None,
         train_seeds=train_seeds, test_seeds=test_seeds,
         weights=MappingProxyType({k: float(v) for k, v in weights.items()}),
-        overrides=_frozen(r.table(t.get("overrides"), "tune.overrides", tuple(t.get("overrides") or {}))),
-        options=_frozen(r.table(t.get("options"), "tune.options", tuple(t.get("options") or {}))),
-        max_time=r.get(t, "tune", "max_time", "float", 20.0, lo=0, strict_lo=True),
-        discs=r.get(t, "tune", "discs", "int", 2, lo=0),
-        pipeline=r.get(t, "tune", "pipeline", "str", "astar_kng_dwa" if planner != "fuzzy" else "iaco_dwa"),
-        space=MappingProxyType(_space(r, t.get("space"), "tune.space")),
+        overrides=frozen(t["overrides"]), options=frozen(t["options"]), max_time=t["max_time"], discs=t["discs"],
+        pipeline=r.value(tt, "tune", setting_of(TuneTable, "pipeline"),
+                         "astar_kng_dwa" if planner != "fuzzy" else "iaco_dwa"),
+        space=MappingProxyType(_space(r, tt.get("space"), "tune.space")),
         map=maps[0] if maps else None,
         quick=MappingProxyType(quick),
         text=text, path=path,
@@ -199,7 +233,7 @@ def parse_tune_config(text: str, *, data_dir: str | os.PathLike | None = None, s
     return cfg
 
 
-def _check_options(r: _Reader, cfg: TuneConfig) -> None:
+def _check_options(r: Reader, cfg: TuneConfig) -> None:
     """``[tune] options`` against the strategy's signature and ranges (else: a raw TypeError, or NaN weights that
     run to the end)."""
     from jaxplan.tune._strategies import STRATEGIES, option_problems
