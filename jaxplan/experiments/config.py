@@ -139,7 +139,7 @@ _SCENARIO_FIGURE_PLANNERS: Mapping[str, tuple[str, ...]] = MappingProxyType({
 
 def _generators() -> dict[str, tuple[Callable[..., Any], bool]]:
     """name -> (factory, is_dataclass). Dataclass generators take their fields as params."""
-    from jaxplan.grid import _generators as G
+    from jaxplan import grid as G
 
     return {
         "warehouse": (G.WarehouseGenerator, True),
@@ -157,21 +157,21 @@ def _chen2023_risk(key: int = 0, lam: float = 1.0):
     """chen2023's Case 1 map with its unknown-factor layer: Poisson(λ = ``lam``) risk per free cell (§II, Fig. 8).
 
     The layer's key is the map key + 1, so the shelves stay those of `warehouse_chen2023(key)` for every λ."""
-    from jaxplan.grid import _generators as G
+    from jaxplan.grid import poisson_risk, warehouse_chen2023
 
-    scene = G.warehouse_chen2023(key)
-    return scene._replace(grid=G.poisson_risk(scene.grid, int(key) + 1, lam=float(lam)))
+    scene = warehouse_chen2023(key)
+    return scene._replace(grid=poisson_risk(scene.grid, int(key) + 1, lam=float(lam)))
 
 
 GENERATORS = ("warehouse", "random", "urban", "mountain", "warehouse_chen2023", "warehouse_yu2020", "demo_warehouse",
               "warehouse_chen2023_risk")
-"""Generator names a map may use (`jaxplan.grid._generators`)."""
+"""Generator names a map may use (the generators of `jaxplan.grid`)."""
 _FUNCTION_PARAMS = {"warehouse_chen2023": (), "warehouse_yu2020": ("size",), "demo_warehouse": (),
                     "warehouse_chen2023_risk": ("lam",)}
 
 GENERATORS = ("warehouse", "random", "urban", "mountain", "warehouse_chen2023", "warehouse_yu2020", "demo_warehouse",
               "warehouse_chen2023_risk")
-"""Generator names a map may use (`jaxplan.grid._generators`)."""
+"""Generator names a map may use (the generators of `jaxplan.grid`)."""
 DEPRECATED_GENERATORS: Mapping[str, str] = MappingProxyType({
     "warehouse_seed003": "warehouse_chen2023", "warehouse_seed004": "warehouse_yu2020",
     "warehouse_seed003_risk": "warehouse_chen2023_risk"})
@@ -745,13 +745,13 @@ _NAVIGATE_ONLY = ("nav", "dwa", "robot", "params", "obstacles")
 
 
 def _read_planners(r: Reader, raw: dict) -> tuple[PlannerConfig, ...]:
-    import jaxplan as jp
-    from jaxplan.registry import resolve
+    from jaxplan.nav import pipelines
+    from jaxplan.registry import planners, resolve
 
     entries = list(r.entries(raw, "planners", required=True))
     if not entries:
         return ()
-    registry, pipes = jp.planners(), jp.pipelines()
+    registry, pipes = planners(), pipelines()
     out, labels = [], {}
     for i, (p, e) in enumerate(entries):
         t = r.section(e, p, PlannerConfig, skip=("label",) + _NAVIGATE_ONLY)
@@ -801,7 +801,7 @@ def _read_planners(r: Reader, raw: dict) -> tuple[PlannerConfig, ...]:
 
 def _check_tsp(r: Reader, p: str, name: str, overrides: dict) -> None:
     """A tsp planner: its name, then unknown override names one by one, then `solve_tsp`'s own value checks."""
-    from jaxplan.aco._tsp import TSP_PLANNERS, _resolve as tsp_resolve, tsp_defaults
+    from jaxplan.aco import TSP_PLANNERS, resolve_tsp as tsp_resolve, tsp_defaults
 
     if name not in TSP_PLANNERS:
         r.bad(join(p, "name"), f"unknown TSP planner {name!r} (known: {', '.join(TSP_PLANNERS)})"
@@ -833,9 +833,9 @@ def _check_sites(r: Reader, maps: tuple[MapSpec, ...], planners: tuple[PlannerCo
 
 def _check_overrides(r: Reader, path: str, planner: str, overrides: dict, resolve, base: dict) -> None:
     """Unknown names one by one (with a close match), then the planner's own value checks."""
-    import jaxplan as jp
+    from jaxplan.registry import planners
 
-    accepted = list(jp.planners()[planner].defaults)
+    accepted = list(planners()[planner].defaults)
     unknown = [k for k in overrides if k not in accepted]
     for k in unknown:
         r.bad(join(path, k), f"planner {planner!r} has no parameter {k!r} (accepts: {', '.join(sorted(accepted))})"
@@ -879,15 +879,14 @@ def _check_nav(r: Reader, p: str, pipeline: str, nav: Mapping, dwa: Mapping, rob
 
 def _nav_problem(pipeline: str, nav: Mapping, dwa: Mapping, robot: Mapping, params: Mapping) -> str | None:
     """Why pipeline ``pipeline`` would refuse these settings, or None."""
-    from jaxplan.dwa._step import validate_params
-    from jaxplan.nav._front import _config
-    from jaxplan.nav._pipelines import get_pipeline
+    from jaxplan.dwa import validate_params
+    from jaxplan.nav import get_pipeline, resolve_config
 
     probe = PlannerConfig("probe", "navigate", pipeline, frozen({}), frozen(dict(nav)), frozen(dict(dwa)),
                           frozen(dict(robot)), frozen(dict(params)))
     try:
         cfg, weights = nav_config(probe)
-        cfg = _config(cfg, get_pipeline(pipeline), None)
+        cfg = resolve_config(cfg, get_pipeline(pipeline), None)
         validate_params(weights or None, cfg.dwa.evaluator)
     except (ValueError, TypeError) as e:
         return str(e)
@@ -1060,7 +1059,7 @@ def _read_paper(r: Reader, raw: dict, metrics: tuple, maps: set, labels: set) ->
 def _read_quick(r: Reader, q: dict, planners: tuple[PlannerConfig, ...], map_names: list[str] | None = None
                 ) -> QuickSpec:
     """Quick overrides: each key must be accepted by at least one planner, and valid for each that accepts it."""
-    from jaxplan.aco._tsp import _resolve as tsp_resolve
+    from jaxplan.aco import resolve_tsp as tsp_resolve
     from jaxplan.nav import get_pipeline
     from jaxplan.registry import resolve
 
@@ -1100,7 +1099,7 @@ def _read_quick(r: Reader, q: dict, planners: tuple[PlannerConfig, ...], map_nam
 
 def _overrides_ok(pc: PlannerConfig, overrides: Mapping) -> bool:
     """Whether planner ``pc`` accepts ``overrides`` (its own, without the quick ones)."""
-    from jaxplan.aco._tsp import _resolve as tsp_resolve
+    from jaxplan.aco import resolve_tsp as tsp_resolve
     from jaxplan.nav import get_pipeline
     from jaxplan.registry import resolve
 
@@ -1118,10 +1117,10 @@ def _overrides_ok(pc: PlannerConfig, overrides: Mapping) -> bool:
 def _check_quick_nav(r: Reader, quick_nav: Mapping, navs: Sequence[PlannerConfig]) -> None:
     """The quick nav values merged into each navigate planner's own, checked as `_check_nav` checks those: else a
     bad value surfaces only mid-run, after a chunk is committed, under no config key."""
-    import jaxplan as jp
+    from jaxplan.nav import pipelines
 
     for pc in navs:
-        if pc.name not in jp.pipelines():
+        if pc.name not in pipelines():
             continue  # reported at its planners[i].name
         own = (pc.nav, pc.dwa, pc.robot, pc.params)
         if _nav_problem(pc.name, *own) is not None:
@@ -1139,22 +1138,22 @@ def _check_quick_nav(r: Reader, quick_nav: Mapping, navs: Sequence[PlannerConfig
 
 def _accepted(pc: PlannerConfig) -> tuple[str, ...]:
     """The override names planner ``pc`` accepts (none for a name that failed validation)."""
-    import jaxplan as jp
-    from jaxplan.aco._tsp import TSP_PLANNERS, tsp_defaults
+    from jaxplan.aco import TSP_PLANNERS, tsp_defaults
+    from jaxplan.registry import planners
 
     if pc.kind == "tsp":
         return tuple(tsp_defaults(pc.name)) if pc.name in TSP_PLANNERS else ()
-    registry = jp.planners()
+    registry = planners()
     g = _global(pc)
     return tuple(registry[g].defaults) if g in registry else ()
 
 
 def _global(pc: PlannerConfig) -> str | None:
-    import jaxplan as jp
+    from jaxplan.nav import pipelines
 
     if pc.kind in ("plan", "tsp"):
         return pc.name
-    p = jp.pipelines().get(pc.name)
+    p = pipelines().get(pc.name)
     return p.global_planner if p else None
 
 

@@ -30,7 +30,7 @@ _DWA_PLANNERS = ("weighted", "fuzzy")
 
 
 def _aco_planners() -> tuple[str, ...]:
-    from jaxplan.aco._planners import COLONIES
+    from jaxplan.aco import COLONIES
 
     return tuple(sorted(COLONIES))
 
