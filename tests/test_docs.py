@@ -55,8 +55,9 @@ def blocks(text: str) -> list[tuple[str, str, str | None, int]]:
     return out
 
 
-def prose(text: str) -> str:
-    """``text`` with fenced blocks and inline code blanked out (links inside code are not links)."""
+def prose(text: str, keep_code: bool = False) -> str:
+    """``text`` with fenced blocks blanked out, and inline code too unless ``keep_code`` (links inside code are
+    not links; a heading's code is part of its anchor)."""
     kept, fence = [], None
     for line in text.splitlines():
         m = FENCE.match(line)
@@ -69,7 +70,7 @@ def prose(text: str) -> str:
                 fence = None
             kept.append("")
             continue
-        kept.append(re.sub(r"`[^`]*`", "``", line))
+        kept.append(line if keep_code else re.sub(r"`[^`]*`", "``", line))
     return "\n".join(kept)
 
 
@@ -85,7 +86,7 @@ def slug(heading: str) -> str:
 def anchors(path: Path) -> set[str]:
     seen: dict[str, int] = {}
     out = set()
-    for line in prose(path.read_text()).splitlines():
+    for line in prose(path.read_text(), keep_code=True).splitlines():
         m = re.match(r"^#{1,6}\s+(.*?)\s*#*\s*$", line)
         if not m:
             continue
