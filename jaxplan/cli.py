@@ -13,37 +13,6 @@ from typing import Sequence
 __all__ = ["main"]
 
 
-def _table(columns: Sequence[tuple[str, list[str]]], labels: list[str], title: str) -> str:
-    """A text table: one row per label, one column per (header, values)."""
-    heads = ["metric"] + [h for h, _ in columns]
-    rows = [[lab] + [vals[i] for _, vals in columns] for i, lab in enumerate(labels)]
-    widths = [max(len(r[j]) for r in rows + [heads]) for j in range(len(heads))]
-    line = "+" + "+".join("-" * (w + 2) for w in widths) + "+"
-
-    def fmt(r):
-        return "| " + " | ".join(c.ljust(w) if j == 0 else c.rjust(w) for j, (c, w) in enumerate(zip(r, widths))) + " |"
-
-    return "\n".join([title, line, fmt(heads), line] + [fmt(r) for r in rows] + [line])
-
-
-ROW_LABELS = [
-    "success", "length (m)", "cells on path", "turns", "sharp turns (>= 45 deg)", "smoothness",
-    "min clearance (m)", "mean clearance (m)", "planning time (ms)",
-]
-
-
-def _path_column(res, grid) -> list[str]:
-    from jaxplan.metrics import path_metrics
-
-    # The table shows no gap: the planner's own length as `optimal` skips a second exact search.
-    m = path_metrics(res.path, grid, optimal=res.length) if res.success else {
-        "sharp_turns": 0, "smoothness": 1.0, "min_clearance": float("nan"), "mean_clearance": float("nan")}
-    return [
-        str(res.success), f"{res.length:.3f}", str(len(res.path)), str(res.turns), str(m["sharp_turns"]),
-        f"{m['smoothness']:.3f}", f"{m['min_clearance']:.3f}", f"{m['mean_clearance']:.3f}", f"{res.time_s * 1e3:.2f}",
-    ]
-
-
 def _compilation_cache() -> None:
     """JAX's persistent compilation cache in ``$JAXPLAN_CACHE`` or ``~/.cache/jaxplan/jax`` (compiled programs are
     most of the demo's time; a second run loads them)."""
@@ -78,6 +47,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
+    from jaxplan.experiments.tables import PATH_ROWS, path_column, text_table
     from jaxplan.grid import load_map
     from jaxplan.registry import plan
 
@@ -85,7 +55,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     # Only grid planners take a connectivity (the sampling planners have none), so pass it only when asked.
     extra = {} if args.connectivity is None else {"connectivity": args.connectivity}
     res = plan(grid, tuple(args.start), tuple(args.goal), planner=args.planner, **extra)
-    print(_table([(args.planner, _path_column(res, grid))], ROW_LABELS, f"{args.planner} on {args.map}"))
+    print(text_table([(args.planner, path_column(res, grid))], PATH_ROWS, f"{args.planner} on {args.map}"))
     return 0 if res.success else 1
 
 

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from jaxplan.experiments import plots
+from jaxplan.experiments.tables import text_table
 
 __all__ = ["DemoResult", "run_demo", "demo_table", "ROWS", "PIPELINES"]
 
@@ -111,9 +112,7 @@ def _column(grid, ep, robot_radius: float, wall: float) -> list[str]:
 
 def demo_table(result: DemoResult) -> str:
     """The comparison as a text table (rows `ROWS`, one column per pipeline)."""
-    from jaxplan.cli import _table
-
-    return _table(list(result.columns.items()), list(ROWS),
+    return text_table(list(result.columns.items()), list(ROWS),
                   f"{result.scene.name}: two-level navigation among {result.episodes[PIPELINES[0]].obstacles.count} "
                   "moving discs (same start, goal, discs and seed)")
 
