@@ -44,8 +44,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxplan.experiments.runner import RunFolderError, atomic_write, clock
+from jaxplan.tune._base import Strategy, sanitize
 from jaxplan.tune._objective import Objective, Split
-from jaxplan.tune._strategies import Strategy, make_strategy, sanitize
+from jaxplan.tune._strategies import make_strategy
 
 __all__ = ["tune_loop", "run_tuning", "TuneResult", "fragment_toml", "plot_tuning"]
 
