@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import jaxplan as jp
+from jaxplan.core.io import TMP_GLOB
 from jaxplan.scale import MemoryLimitError, aco_memory, batch_mesh, check_memory, memory_limit, pad_leading
 
 
@@ -248,7 +249,8 @@ def test_host_shares_cover_the_batch_and_shards_merge(tmp_path):
     np.testing.assert_array_equal(merge_shards(tmp_path, "sweep", 3)["x"], data)
     with pytest.raises(FileNotFoundError, match="host 0 of 4"):
         merge_shards(tmp_path, "sweep", 4)
-    assert not list(tmp_path.glob("*.tmp"))
+    assert not list(tmp_path.glob(TMP_GLOB)) and sorted(p.name for p in tmp_path.iterdir()) == [
+        f"sweep.host-{k}-of-3.npz" for k in range(3)]
 
 
 def test_importing_jaxplan_leaves_the_backend_alone():

@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from jaxplan.core.io import atomic_path
 from jaxplan.experiments import plots
 from jaxplan.experiments.tables import text_table
 
@@ -183,15 +184,13 @@ def _animation(result: DemoResult, grid, path: Path, frames: int) -> list[str]:
         return trails + robots + discs + [title]
 
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.stem + ".tmp" + path.suffix)
     # The writer driven directly: `FuncAnimation.save` renders every frame twice (a draw, then
     # the grab's own savefig), half of this function's time.
     writer = PillowWriter(fps=10)
-    with writer.saving(fig, str(tmp), dpi=64):
+    with atomic_path(path) as tmp, writer.saving(fig, str(tmp), dpi=64):
         for t in idx:
             draw(int(t))
             writer.grab_frame()
-    tmp.replace(path)
     plt.close(fig)
     return [str(path)]
 

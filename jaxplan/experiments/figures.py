@@ -45,6 +45,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from jaxplan.core.io import atomic_write
 from jaxplan.experiments import plots
 from jaxplan.experiments.config import (
     METRICS, ExperimentConfig, FigureSpec, applies, apply_quick, nav_config, parse_config,
@@ -645,14 +646,14 @@ def write_index(out: Path, run_name: str, title: str, drawn: Sequence[Drawn], pr
                   "Files: " + ", ".join(f"[{x}]({x})" for x in f.files), ""]
     if problems:
         lines += ["## Not drawn", ""] + [f"- {p}" for p in problems] + [""]
-    (d / "index.md").write_text("\n".join(lines))
+    atomic_write(d / "index.md", "\n".join(lines))
     runs = sorted(p.parent.name for p in out.glob("*/index.md"))
     top = ["# Figures", "", "One page per run folder (`jaxplan figures RUN`).", ""]
     top += [f"- [{r}]({r}/index.md)" for r in runs]
     extra = sorted(p.name for ext in ("png", "gif") for p in out.glob(f"*.{ext}"))  # e.g. jaxplan demo's
     if extra:
         top += ["", "Other figures:", ""] + [f"- [{x}]({x})" for x in extra]
-    (out / "index.md").write_text("\n".join(top) + "\n")
+    atomic_write(out / "index.md", "\n".join(top) + "\n")
     return d / "index.md"
 
 

@@ -67,13 +67,14 @@ from typing import Any, Callable, Iterator, Mapping, Sequence
 import numpy as np
 
 from jaxplan.core.cache import Built, memoize
+from jaxplan.core.io import TMP_GLOB, atomic_write
 from jaxplan.experiments.config import (
     ACCURACY_GAP, METRICS, ConfigError, ExperimentConfig, MapSpec, PlannerConfig, applies, apply_quick, load_config,
     nav_config,
 )
 
 __all__ = ["run_experiment", "prepare", "Prepared", "MapWork", "Unit", "trial_columns", "read_manifest",
-           "load_chunk_arrays", "RunFolderError", "ID_COLUMNS", "accuracy", "reductions", "atomic_write", "clock",
+           "load_chunk_arrays", "RunFolderError", "ID_COLUMNS", "accuracy", "reductions", "clock",
            "load_map_spec", "spec_scenarios"]
 
 ID_COLUMNS = ("map", "planner", "kind", "scenario", "scen_row", "start_x", "start_y", "goal_x", "goal_y", "optimal",
@@ -700,16 +701,6 @@ def run_unit(prep: Prepared, u: Unit) -> tuple[str, dict, dict]:
 # Checkpoints
 
 
-def atomic_write(path: Path, data: bytes) -> None:
-    """Writes ``data`` to ``path`` so that a reader sees the old file or the new one, never a part."""
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    with open(tmp, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
-
-
 def read_manifest(run_dir: str | os.PathLike) -> dict:
     """The manifest of a run folder: ``{"fingerprint", "sessions", "chunks": {uid: entry}}``."""
     p = Path(run_dir) / "checkpoints" / "manifest.json"
@@ -739,7 +730,7 @@ class _Store:
         else:
             self.manifest = {"version": MANIFEST_VERSION, "fingerprint": fp, "sessions": 0, "chunks": {}}
         # Leftovers of a killed writer: our temporary files and orbax's unfinished saves.
-        for p in list(self.chunks.glob(".*.tmp-*")) + list(self.ck.glob(".*.tmp-*")):
+        for p in list(self.chunks.glob(TMP_GLOB)) + list(self.ck.glob(TMP_GLOB)):
             p.unlink(missing_ok=True)
         for p in self.arrays.glob("*.orbax-checkpoint-tmp*"):
             shutil.rmtree(p, ignore_errors=True)
@@ -921,6 +912,6 @@ def run_experiment(config: ExperimentConfig | str | os.PathLike, out_dir: str | 
     stats.write_summary(run_dir / "summary.csv", result)
     stats.write_significance(run_dir / "significance.csv", result)
     meta = json.loads((run_dir / "meta.json").read_text())
-    (run_dir / "summary.md").write_text(report.summary_markdown(result, cfg))
-    (run_dir / "report.md").write_text(report.report_markdown(result, cfg, prep, meta))
+    atomic_write(run_dir / "summary.md", report.summary_markdown(result, cfg))
+    atomic_write(run_dir / "report.md", report.report_markdown(result, cfg, prep, meta))
     return run_dir

@@ -267,7 +267,7 @@ def _cell(v) -> str:
 
 
 def _write_csv(path: str | os.PathLike, columns: Sequence[str], rows: list[list]) -> None:
-    from jaxplan.experiments.runner import atomic_write
+    from jaxplan.core.io import atomic_write
     import io
 
     buf = io.StringIO()
