@@ -81,9 +81,7 @@ import dataclasses
 import datetime as dt
 import json
 import os
-import platform
 import statistics
-import subprocess
 import sys
 import time
 import traceback
@@ -96,7 +94,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
-from _timing import Steal, cpu_info, machine_line, median_time  # noqa: E402
+from _timing import Steal, median_time  # noqa: E402
 
 PAPER_CHEN2023_MS = 8468.0
 SECTIONS = ("aco", "dwa", "exact", "metrics", "episodes", "tune", "tsp", "scale")
@@ -147,55 +145,22 @@ def status_row(section: str, status: str) -> Row:
 # Machine
 
 
-def _git(*args: str) -> str:
-    try:
-        return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return ""
-
-
-def _cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
-
-
-def _ram_gb() -> float | None:
-    try:
-        for line in Path("/proc/meminfo").read_text().splitlines():
-            if line.startswith("MemTotal:"):
-                return int(line.split()[1]) / 2**20
-    except OSError:
-        pass
-    return None
-
-
-def _version(name: str) -> str:
-    try:
-        from importlib.metadata import version
-
-        return version(name)
-    except Exception:  # noqa: BLE001 - a missing package is reported, not fatal
-        return "not installed"
-
-
 def machine() -> dict[str, Any]:
-    import jax
+    """The provenance record (`jaxplan.core.provenance`) under the keys this script's JSON has always used, plus
+    the load average at the start."""
+    from jaxplan.core.provenance import provenance
 
-    aff = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None
+    rec = provenance()
+    versions = {k: v or "not installed" for k, v in rec["versions"].items()}
     return {
-        "cpu": _cpu_model(), "cpu_info": cpu_info(), "cpu_line": machine_line(),
-        "cores": os.cpu_count(), "affinity": aff, "ram_gb": _ram_gb(),
+        "cpu": rec["cpu"], "cpu_info": rec["cpu_info"], "cpu_line": rec["cpu_line"],
+        "cores": rec["cores"], "affinity": rec["affinity"], "ram_gb": rec["ram_gb"],
         "load_avg": list(os.getloadavg()) if hasattr(os, "getloadavg") else None,
-        "python": platform.python_version(), "platform": platform.platform(),
-        "jax": _version("jax"), "jaxlib": _version("jaxlib"), "numba": _version("numba"),
-        "numpy": _version("numpy"), "scipy": _version("scipy"), "jaxplan": _version("jaxplan"),
-        "devices": [str(d) for d in jax.devices()], "XLA_FLAGS": os.environ.get("XLA_FLAGS", ""),
-        "git_rev": _git("rev-parse", "--short", "HEAD"), "git_dirty": bool(_git("status", "--porcelain", "-uno")),
+        "python": rec["python"], "platform": rec["platform"], "host": rec["host"],
+        "jax": versions["jax"], "jaxlib": versions["jaxlib"], "numba": versions["numba"],
+        "numpy": versions["numpy"], "scipy": versions["scipy"], "jaxplan": versions["jaxplan"],
+        "devices": rec["devices"], "XLA_FLAGS": rec["xla_flags"],
+        "git_rev": (rec["git_revision"] or "")[:7], "git_dirty": bool(rec["git_dirty"]),
     }
 
 

@@ -55,9 +55,7 @@ import io
 import json
 import math
 import os
-import platform
 import shutil
-import subprocess
 import sys
 import time
 from dataclasses import dataclass
@@ -777,34 +775,25 @@ def load_chunk_arrays(run_dir: str | os.PathLike, uid: str) -> dict[str, np.ndar
 # Meta and progress
 
 
-def _git_revision() -> str | None:
-    root = Path(__file__).resolve().parents[2]
-    try:
-        rev = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True,
-                             timeout=10).stdout.strip()
-        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "--untracked-files=no"],
-                               capture_output=True, text=True, timeout=10).stdout.strip()
-    except (OSError, subprocess.SubprocessError):
-        return None
-    return (rev + ("+dirty" if dirty else "")) if rev else None
-
-
 def _meta(run_dir: Path, cfg: ExperimentConfig, session: int, started: str) -> dict:
-    import jax
-    import scipy
-
+    """Writes ``meta.json``: the run's settings, its sessions and the provenance record (`jaxplan.core.provenance`).
+    The flat version keys of earlier run folders stay, so readers of old and new folders read the same keys."""
+    from jaxplan.core.provenance import provenance
     from jaxplan.core.version import VERSION
 
     p = run_dir / "meta.json"
     old = json.loads(p.read_text()) if p.is_file() else {}
+    record = provenance()
+    versions = record["versions"]
+    rev = record["git_revision"]
     meta = {
         "experiment": cfg.name, "quick": cfg.is_quick, "chunk": cfg.chunk, "seeds": list(cfg.seeds),
-        "jaxplan_version": VERSION, "git_revision": _git_revision(), "jax_version": jax.__version__,
-        "numpy_version": np.__version__, "scipy_version": scipy.__version__, "python": platform.python_version(),
-        "platform": platform.platform(), "devices": [str(d) for d in jax.devices()],
+        "jaxplan_version": VERSION, "git_revision": rev and (rev + ("+dirty" if record["git_dirty"] else "")),
+        "jax_version": versions["jax"], "numpy_version": versions["numpy"], "scipy_version": versions["scipy"],
+        "python": record["python"], "platform": record["platform"], "devices": record["devices"],
         "started": old.get("started", started),
         "sessions": old.get("sessions", []) + [{"session": session, "started": started}],
-        "config_sha256": _sha(cfg.text.encode()),
+        "config_sha256": _sha(cfg.text.encode()), "provenance": record,
     }
     atomic_write(p, json.dumps(meta, indent=1).encode())
     return meta
