@@ -35,17 +35,16 @@ from pathlib import Path
 import numpy as np
 
 import jaxplan as jp
-from jaxplan.experiments.runner import _random_pairs
-from jaxplan.grid._generators import RandomMapGenerator
+from jaxplan.experiments import random_pairs
 from jaxplan.tune import Split, aco_objective, compare, dwa_objective, make_strategy, plot_tuning, relaxed_dwa, tune_loop
 
 METHODS = ("grid", "random", "cma_es", "snes", "issa", "ssa", "reinforce", "surrogate")
 
 
 def aco_setup(quick: bool):
-    grid = RandomMapGenerator(width=24, height=24, obstacle_ratio=0.2)(3).grid
+    grid = jp.RandomMapGenerator(width=24, height=24, obstacle_ratio=0.2)(3).grid
     n_train, n_test = (12, 8) if quick else (32, 16)
-    s, g, opt = _random_pairs(grid, n_train + n_test, 0, 8.0)
+    s, g, opt = random_pairs(grid, n_train + n_test, 0, 8.0)
     seeds = (0, 1) if quick else (0, 1, 2, 3)
     tseeds = (1000, 1001) if quick else (1000, 1001, 1002, 1003)
     train = Split(s[:n_train], g[:n_train], opt[:n_train], seeds)
@@ -56,9 +55,9 @@ def aco_setup(quick: bool):
 
 
 def dwa_setup(quick: bool):
-    grid = RandomMapGenerator(width=24, height=24, obstacle_ratio=0.04, resolution=0.5)(1).grid
+    grid = jp.RandomMapGenerator(width=24, height=24, obstacle_ratio=0.04, resolution=0.5)(1).grid
     n_train, n_test = (6, 6) if quick else (16, 16)
-    s, g, opt = _random_pairs(grid, n_train + n_test, 0, 6.0)
+    s, g, opt = random_pairs(grid, n_train + n_test, 0, 6.0)
     seeds = (0, 1) if quick else (0, 1, 2, 3)
     tseeds = (1000, 1001) if quick else (1000, 1001, 1002, 1003)
     train = Split(s[:n_train], g[:n_train], opt[:n_train], seeds)

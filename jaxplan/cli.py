@@ -62,7 +62,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
 def _config_run(call) -> Path | None:
     """``call()``'s run folder, or None after printing a config's every problem (or a run-folder clash)."""
     from jaxplan.experiments.config import ConfigError
-    from jaxplan.experiments.runner import RunFolderError
+    from jaxplan.experiments.store import RunFolderError
 
     try:
         return call()

@@ -8,7 +8,6 @@ warehouse, which exercises the same code (about 33 s with an empty JAX cache).
 from __future__ import annotations
 
 import numpy as np
-import pytest
 from PIL import Image
 
 from jaxplan.cli import main

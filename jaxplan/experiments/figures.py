@@ -1,6 +1,6 @@
 """`draw_figures`: every ``[[figures]]`` entry of a run folder's config, as PNG and SVG, with an index page.
 
-A run folder (`jaxplan.experiments.runner`) holds what the figures need: ``config.toml``
+A run folder (`jaxplan.experiments.run_experiment`) holds what the figures need: ``config.toml``
 (the config verbatim; ``meta.json`` says whether it ran with ``--quick``), ``trials.csv``
 and, per chunk, orbax arrays (plan chunks: ``history``, ``diversity``, ``paths``,
 ``n_cells``; navigate chunks: ``states``, ``steps``, ``plans``, ``n_plan``). The maps and
@@ -72,14 +72,14 @@ class RunData:
 
     run_dir: Path
     config: ExperimentConfig
-    prep: Any  # runner.Prepared
+    prep: Any  # prepare.Prepared
     manifest: dict
     trials: dict | None
     _arrays: dict
 
     def arrays(self, m: int, p: int, scenario: int) -> tuple[dict, int] | None:
         """(chunk arrays, row of ``scenario`` in them) for map ``m``, planner ``p``; None if not stored."""
-        from jaxplan.experiments.runner import load_chunk_arrays
+        from jaxplan.experiments.store import load_chunk_arrays
 
         for u in self.prep.units:
             if u.m == m and u.p == p and u.lo <= scenario < u.hi:
@@ -102,7 +102,8 @@ def load_run(run_dir: str | os.PathLike, data_dir: str | os.PathLike | None = No
       FileNotFoundError: not a run folder (no config.toml), or no finished chunk.
     """
     from jaxplan.experiments import stats
-    from jaxplan.experiments.runner import prepare, read_manifest
+    from jaxplan.experiments.prepare import prepare
+    from jaxplan.experiments.store import read_manifest
 
     run_dir = Path(run_dir)
     cfg_path = run_dir / "config.toml"
@@ -210,9 +211,9 @@ def _cell_path_m(path: np.ndarray, n: int, res: float) -> np.ndarray:
 
 def _obstacles(run: RunData, m: int, p: int, sc: int, seed: int):
     """The trial's `MovingObstacles` (the runner's own per-trial draw), or None."""
-    from jaxplan.experiments.runner import _obstacle_fn
+    from jaxplan.experiments.execute import obstacle_fn
 
-    fn = _obstacle_fn(run.prep.maps[m], m, run.config.planners[p], np.asarray([sc]))
+    fn = obstacle_fn(run.prep.maps[m], m, run.config.planners[p], np.asarray([sc]))
     return None if fn is None else fn(0, seed)
 
 

@@ -44,7 +44,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxplan.core.io import atomic_write
-from jaxplan.experiments.runner import RunFolderError, clock
+from jaxplan.experiments import RunFolderError, clock
 from jaxplan.tune._base import Strategy, sanitize
 from jaxplan.tune._objective import Objective, Split
 from jaxplan.tune._strategies import make_strategy
@@ -295,7 +295,7 @@ def _splits(cfg, grid, starts, goals, optimal) -> tuple[Split, Split]:
 
 def build_objective(cfg) -> Objective:
     """The `Objective` of a `TuneConfig` (map loaded, scenarios chosen and split)."""
-    from jaxplan.experiments.runner import load_map_spec, spec_scenarios
+    from jaxplan.experiments import load_map_spec, spec_scenarios
     from jaxplan.tune._objective import aco_objective, dwa_objective
 
     grid, s0, g0, _ = load_map_spec(cfg.map)
