@@ -36,7 +36,9 @@ import numpy as np
 
 import jaxplan as jp
 from jaxplan.experiments import random_pairs
-from jaxplan.tune import Split, aco_objective, compare, dwa_objective, make_strategy, plot_tuning, relaxed_dwa, tune_loop
+from jaxplan.tune import (
+    Split, aco_objective, compare, dwa_objective, make_strategy, plot_tuning, relaxed_dwa, tune_loop,
+)
 
 METHODS = ("grid", "random", "cma_es", "snes", "issa", "ssa", "reinforce", "surrogate")
 
@@ -104,7 +106,8 @@ def run_part(label: str, obj, P: int, G: int, out: Path, gradient: bool) -> None
           f"(larger sd over test seeds) {spread:.4f}: {'BEATS' if margin > spread else 'does NOT beat'} the defaults "
           "by more than the spread")
     out.mkdir(parents=True, exist_ok=True)
-    print("  figure:", plot_tuning(rows_by, out / f"convergence_{obj.name}.png", title=f"{obj.name}: training objective")[0])
+    fig = plot_tuning(rows_by, out / f"convergence_{obj.name}.png", title=f"{obj.name}: training objective")
+    print("  figure:", fig[0])
 
 
 def population_call(obj) -> None:
@@ -142,4 +145,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    import jaxplan
+
+    jaxplan.use_host_devices()  # as the CLI: one host device per core (an XLA_FLAGS count stands), before JAX starts
     main()

@@ -63,7 +63,7 @@ Sections and rows (sizes: default / ``--quick``):
 
   scale    `jp.plan_batch(…, planner="iaco")` on ``jp.RandomMapGenerator(100, 100, 0.2)(0)``, 16 / 8
            scenarios (free pairs, numpy seed 0) x 2 seeds, 256 ants x 10 / 5 iterations: runs/s
-           split over this process's host devices (one per core by default, `jaxplan.scale`)
+           split over this process's host devices (one per core: `jaxplan.use_host_devices`)
            against ``mesh=None`` (one device), the two timed in turn (bench_scale.py has the
            1-device-process and thread variants).
 
@@ -653,7 +653,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
-    import jaxplan  # noqa: F401  first: its CPU default (one host device per core) must precede JAX's backend
+    import jaxplan
+
+    jaxplan.use_host_devices()  # first, before JAX's backend starts: one host device per core (the scale rows)
     started = dt.datetime.now(dt.timezone.utc)
     t_start = time.perf_counter()
     mach = machine()
@@ -688,7 +690,8 @@ def main(argv: list[str] | None = None) -> None:
     data = {"started_utc": started.isoformat(timespec="seconds"), "quick": args.quick, "machine": mach,
             "options": {k: v for k, v in vars(args).items() if k not in ("json",)}, "wall_s": wall,
             "section_wall_s": timings, "rows": [dataclasses.asdict(r) for r in rows]}
-    out = HERE / "results" / f"run_all-{started:%Y-%m-%d}-{mach['git_rev'] or 'norev'}{'-quick' if args.quick else ''}.json"
+    name = f"run_all-{started:%Y-%m-%d}-{mach['git_rev'] or 'norev'}{'-quick' if args.quick else ''}.json"
+    out = HERE / "results" / name
     write_json_atomic(out, data)
     print(f"JSON: {out}")
     if args.json:

@@ -1,4 +1,5 @@
-"""Tuning: bounds, the Strategy interface (every optimiser), NaN handling, gradients, objectives, workflow and resume."""
+"""Tuning: bounds, the Strategy interface (every optimiser), NaN handling, gradients, objectives, workflow and
+resume."""
 
 from __future__ import annotations
 

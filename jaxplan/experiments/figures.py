@@ -429,7 +429,7 @@ def _paths(run, spec):
 
 def _pheromone(run, spec):
     from jaxplan.aco import COLONIES  # the ant colony planners (as the runner tells them apart)
-    from jaxplan.registry import plan
+    from jaxplan.planning import plan
 
     mi, pi = _selected(run, spec, "plan")
     sc, seed, _ = _scenario_seed(run, spec, mi)

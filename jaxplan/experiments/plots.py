@@ -219,8 +219,8 @@ def plot_paths(
       grid: the map (for its resolution).
       paths: a list of ``[L_i, 2]`` arrays, one ``[L, 2]`` array (one path), or an array
         ``[P, L, 2]`` of padded paths with ``lengths`` (numpy or jax arrays; e.g.
-        ``BatchResult.paths[i]`` with ``n_cells[i]``, or a smoother's ``points``/``n``). Points are ``(x, y)``; integer cells
-        or floats (smoothed / any-angle paths), in cell coordinates where ``(x, y)`` is
+        ``BatchResult.paths[i]`` with ``n_cells[i]``, or a smoother's ``points``/``n``). Points are ``(x, y)``;
+        integer cells or floats (smoothed / any-angle paths), in cell coordinates where ``(x, y)`` is
         the centre of cell ``(x, y)``, or in metres with ``coords="m"``. Empty paths
         (failed plans) draw nothing.
       labels: one legend label per path.

@@ -241,8 +241,8 @@ def analyse(trials_path: str | os.PathLike, timings_path: str | os.PathLike | No
                         f, p = float(r.statistic), float(r.pvalue)
                     else:
                         f, p = math.nan, math.nan
-                    tests.append(TestRow(mp.name, metric, "anova", "", "", f, p, p, sum(v.size for v in groups.values()),
-                                         len(groups)))
+                    tests.append(TestRow(mp.name, metric, "anova", "", "", f, p, p,
+                                         sum(v.size for v in groups.values()), len(groups)))
                 if st.pairwise:
                     pairs = []
                     for a, b in itertools.combinations(groups, 2):

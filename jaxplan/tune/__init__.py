@@ -1,4 +1,5 @@
-"""Tuning the planners' weights (DESIGN §7): objectives over scenario batches, gradient-free and differentiable optimisers.
+"""Tuning the planners' weights (DESIGN §7): objectives over scenario batches, gradient-free and differentiable
+optimisers.
 
 * `_bounds`: the search box (`make_bounds`, validated: finite, low < high, named dimensions).
 * `_objective`: `Objective` — a population ``f32[P, D]`` of weight vectors evaluated over a
@@ -34,7 +35,9 @@ from jaxplan.tune._objective import (
     dwa_scenarios, function_objective,
 )
 from jaxplan.tune._config import TuneConfig, apply_tune_quick, load_tune_config, parse_tune_config
-from jaxplan.tune._workflow import TuneResult, build_objective, compare, fragment_toml, plot_tuning, run_tuning, tune_loop
+from jaxplan.tune._workflow import (
+    TuneResult, build_objective, compare, fragment_toml, plot_tuning, run_tuning, tune_loop,
+)
 from jaxplan.tune._sparrow import SparrowState, adaptive_weight, issa, levy, ssa
 
 __all__ = [
