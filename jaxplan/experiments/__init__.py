@@ -5,7 +5,9 @@
   `prepare` (the work plan), `execute` (one compiled call per chunk), `trial_metrics`, `store`
   (checkpoints, manifest, meta.json) and `progress`.
 * `stats`, `report`: per-seed summaries, ANOVA / Welch t-tests, Markdown reports.
-* `plots`: map, path, pheromone and convergence figures.
+* `plots`: map, path, pheromone and convergence figures; `figures` draws a run folder's ``[[figures]]``
+  (`run_data` reads the folder back, `figure_kinds` holds one drawing function per kind).
+* `tables`: plain-text tables for the terminal (`jaxplan plan`, `jaxplan demo`).
 """
 
 from jaxplan.experiments.config import (
