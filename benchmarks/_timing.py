@@ -1,21 +1,23 @@
-"""Timing and machine-description helpers shared by the benchmark scripts (run as `python benchmarks/bench_*.py`).
+"""Timing helpers shared by the benchmark scripts (run as `python benchmarks/bench_*.py`).
 
-The same script gives figures 2-4x apart on two of "the same" cloud VMs (2 cores named
-"AMD EPYC" either way; measured in two sessions of this project: 45 vs 94 M ant-steps/s,
-73 vs 335 M DWA points/s), and a VM's host may lend its cores to other guests during a run.
-So each benchmark prints `machine_line` (CPU generation and vector ISA, not only the
-marketing name) and, when it ends, `Steal.summary` (the share of CPU time the hypervisor
-gave to others while it ran): figures from different runs compare only when both agree.
+The same script gives figures several times apart on two of "the same" cloud VMs (the same
+marketing name of CPU either way; docs/benchmarks.md has the numbers), and a VM's host may lend
+its cores to other guests during a run. So each benchmark prints `machine_line` (CPU generation
+and vector ISA, not only the marketing name; from the library's one provenance record,
+`jaxplan.core.provenance`) and, when it ends, `Steal.summary` (the share of CPU time the
+hypervisor gave to others while it ran): figures from different runs compare only when both agree.
 """
 
 from __future__ import annotations
 
-import os
-import platform
 import statistics
 import time
 from pathlib import Path
 from typing import Callable
+
+from jaxplan.core.provenance import cpu_info, machine_line
+
+__all__ = ["median_time", "cpu_info", "machine_line", "Steal"]
 
 
 def median_time(fn: Callable[[], object], repeat: int) -> float:
@@ -26,41 +28,6 @@ def median_time(fn: Callable[[], object], repeat: int) -> float:
         fn()
         ts.append(time.perf_counter() - t0)
     return statistics.median(ts)
-
-
-def cpu_info() -> dict:
-    """CPU model name, family/model/stepping, widest vector ISA and cores (Linux's /proc/cpuinfo)."""
-    info = {"model_name": platform.processor() or platform.machine(), "family": None, "model": None,
-            "stepping": None, "isa": "unknown", "cores": os.cpu_count()}
-    try:
-        text = Path("/proc/cpuinfo").read_text()
-    except OSError:
-        return info
-    fields: dict[str, str] = {}
-    for line in text.splitlines():
-        if not line.strip():
-            break  # the first processor's block describes them all here
-        key, _, value = line.partition(":")
-        fields[key.strip()] = value.strip()
-    info["model_name"] = fields.get("model name", info["model_name"])
-    for key, name in (("cpu family", "family"), ("model", "model"), ("stepping", "stepping")):
-        if fields.get(key, "").isdigit():
-            info[name] = int(fields[key])
-    flags = set(fields.get("flags", "").split())
-    info["isa"] = ("AVX-512" if "avx512f" in flags else "AVX2" if "avx2" in flags else "AVX" if "avx" in flags
-                   else "no AVX" if flags else "unknown")
-    return info
-
-
-def machine_line() -> str:
-    """One line naming the CPU well enough to tell two VMs with the same model name apart."""
-    c = cpu_info()
-    gen = f" (family {c['family']}, model {c['model']})" if c["family"] is not None else ""
-    try:
-        usable = len(os.sched_getaffinity(0))
-    except AttributeError:
-        usable = c["cores"]
-    return f"{c['model_name']}{gen}, {c['isa']}, {c['cores']} cores ({usable} usable)"
 
 
 def _cpu_ticks() -> tuple[int, int] | None:

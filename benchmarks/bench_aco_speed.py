@@ -165,7 +165,8 @@ def main() -> None:
             j, n = row["jax"], row["numba"]
             print(f"{row['planner']:<8}{row['ants']:>6} | {j['ant_steps_per_s'] / 1e6:>8.2f}{j['slot_use']:>7.0%}"
                   f"{j['compile_s']:>9.2f}{j['first_minus_run_s']:>10.2f} | {n['ant_steps_per_s'] / 1e6:>8.2f}"
-                  f"{n['compile_s']:>9.2f}{n['first_minus_run_s']:>10.2f} | {n['run_s'] and j['run_s'] / n['run_s']:>7.1f}x")
+                  f"{n['compile_s']:>9.2f}{n['first_minus_run_s']:>10.2f} | "
+                  f"{n['run_s'] and j['run_s'] / n['run_s']:>7.1f}x")
     labels = list(results)
     print("\ncompile time per configuration, s (trace, lower and XLA compile; 100x100 bench map, default backend; "
           "target <= 2 s)")
@@ -182,11 +183,15 @@ def main() -> None:
         print(f"walk memory: skipped ({BRC202D} not found)")
     else:
         m = memory
-        print(f"memory, iaco with 1,024 ants x 2 iterations on brc202d (default backend, fresh child process): peak RSS "
+        print("memory, iaco with 1,024 ants x 2 iterations on brc202d (default backend, fresh child process): "
+              "peak RSS "
               f"{m['peak_rss_MB']:.0f} MB (bound 2,048 MB; {m['before_run_MB']:.0f} MB after imports and map loading); "
               f"walk buffers and move tables {m['walk_estimate_MB']:.0f} MB estimated; compile {m['compile_s']:.2f} s, "
               f"run {m['run_s']:.2f} s")
     print(steal.summary())
 
 if __name__ == "__main__":
+    import jaxplan
+
+    jaxplan.use_host_devices()  # as the CLI: one host device per core (an XLA_FLAGS count stands), before JAX starts
     main()

@@ -255,7 +255,8 @@ def section_speed(d: Path, args) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--data-dir", default=None, help="folder with movingai/ (default ../shared/benchmarks or $JAXPLAN_DATA)")
+    ap.add_argument("--data-dir", default=None,
+                    help="folder with movingai/ (default ../shared/benchmarks or $JAXPLAN_DATA)")
     ap.add_argument("--rows", type=int, default=50)
     ap.add_argument("--seeds", type=int, default=5)
     ap.add_argument("--teams", type=int, default=10)
@@ -289,9 +290,14 @@ def main() -> None:
     print(f"jax {jax.__version__} on {jax.devices()[0].platform}, {machine_line()}; maps from {d}")
     print(f"{args.rows} rows (optimal <= 80 cells) x {args.seeds} seeds per map")
     for s in args.sections.split(","):
-        {"maps": section_maps, "pipelines": section_pipelines, "multi": section_multi, "speed": section_speed}[s](d, args)
+        sections = {"maps": section_maps, "pipelines": section_pipelines, "multi": section_multi,
+                    "speed": section_speed}
+        sections[s](d, args)
     print(steal.summary())
 
 
 if __name__ == "__main__":
+    import jaxplan
+
+    jaxplan.use_host_devices()  # as the CLI: one host device per core (an XLA_FLAGS count stands), before JAX starts
     main()

@@ -4,8 +4,9 @@ Run:  python benchmarks/bench_scale.py [--quick] [--devices 1,2] [--only aco,nav
 
 XLA's host device count is fixed when the backend starts, so every configuration runs in a
 fresh interpreter (``XLA_FLAGS=--xla_force_host_platform_device_count=D``, plus the thread
-settings of the row) and reports back as JSON; the parent prints one table per workload
-with each row's ratio against the first row (1 device, default threads) of the same run.
+settings of the row; `jaxplan.use_host_devices` leaves that count as it is) and reports back as
+JSON; the parent prints one table per workload with each row's ratio against the first row
+(1 device, default threads) of the same run.
 
 Workloads (default / ``--quick``):
 
@@ -21,9 +22,9 @@ Workloads (default / ``--quick``):
         scenarios x 2 seeds, 64 ants x 10 / 5 iterations): population members per second for a
         population of 16 / 8, the objective sharded over all devices (`Objective.with_mesh`).
 
-The aco workload also runs with XLA's Eigen thread pool off (``--xla_cpu_multi_thread_eigen=false``). In the 2-device process the
-call is timed with the mesh and with ``mesh=None`` (one device) in turn, so that the machine's
-drift hits both alike; that ratio is the figure to quote. Each figure is
+The aco workload also runs with XLA's Eigen thread pool off (``--xla_cpu_multi_thread_eigen=false``).
+In the 2-device process the call is timed with the mesh and with ``mesh=None`` (one device) in turn,
+so that the machine's drift hits both alike; that ratio is the figure to quote. Each figure is
 the median of 5 timed calls after one untimed call (which compiles). Other
 processes sharing the cores make every figure noisy: run on an idle machine.
 """
@@ -45,6 +46,8 @@ import numpy as np
 import jax
 import jaxplan as jp
 from jaxplan.scale import batch_mesh
+
+jp.use_host_devices()  # the opt-in of the CLI; it leaves the row's XLA_FLAGS device count as it is
 
 work, quick = sys.argv[1], sys.argv[2] == "1"
 D = len(jax.devices())
@@ -75,7 +78,7 @@ if work == "aco":
     out = dict(rate=2 * n / t[0], unit="runs/s", n=2 * n, one=2 * n / t[-1])
 elif work == "nav":
     from jaxplan.nav import NavConfig
-    from jaxplan.nav._front import planning_grid
+    from jaxplan.nav import planning_grid
     grid = jp.WarehouseGenerator()(0).grid
     n = 8 if quick else 16
     pg = planning_grid(grid, 0.3)  # cells the robot's inflated footprint can use

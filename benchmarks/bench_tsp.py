@@ -90,4 +90,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    import jaxplan
+
+    jaxplan.use_host_devices()  # as the CLI: one host device per core (an XLA_FLAGS count stands), before JAX starts
     main()

@@ -35,17 +35,18 @@ from pathlib import Path
 import numpy as np
 
 import jaxplan as jp
-from jaxplan.experiments.runner import _random_pairs
-from jaxplan.grid._generators import RandomMapGenerator
-from jaxplan.tune import Split, aco_objective, compare, dwa_objective, make_strategy, plot_tuning, relaxed_dwa, tune_loop
+from jaxplan.experiments import random_pairs
+from jaxplan.tune import (
+    Split, aco_objective, compare, dwa_objective, make_strategy, plot_tuning, relaxed_dwa, tune_loop,
+)
 
 METHODS = ("grid", "random", "cma_es", "snes", "issa", "ssa", "reinforce", "surrogate")
 
 
 def aco_setup(quick: bool):
-    grid = RandomMapGenerator(width=24, height=24, obstacle_ratio=0.2)(3).grid
+    grid = jp.RandomMapGenerator(width=24, height=24, obstacle_ratio=0.2)(3).grid
     n_train, n_test = (12, 8) if quick else (32, 16)
-    s, g, opt = _random_pairs(grid, n_train + n_test, 0, 8.0)
+    s, g, opt = random_pairs(grid, n_train + n_test, 0, 8.0)
     seeds = (0, 1) if quick else (0, 1, 2, 3)
     tseeds = (1000, 1001) if quick else (1000, 1001, 1002, 1003)
     train = Split(s[:n_train], g[:n_train], opt[:n_train], seeds)
@@ -56,9 +57,9 @@ def aco_setup(quick: bool):
 
 
 def dwa_setup(quick: bool):
-    grid = RandomMapGenerator(width=24, height=24, obstacle_ratio=0.04, resolution=0.5)(1).grid
+    grid = jp.RandomMapGenerator(width=24, height=24, obstacle_ratio=0.04, resolution=0.5)(1).grid
     n_train, n_test = (6, 6) if quick else (16, 16)
-    s, g, opt = _random_pairs(grid, n_train + n_test, 0, 6.0)
+    s, g, opt = random_pairs(grid, n_train + n_test, 0, 6.0)
     seeds = (0, 1) if quick else (0, 1, 2, 3)
     tseeds = (1000, 1001) if quick else (1000, 1001, 1002, 1003)
     train = Split(s[:n_train], g[:n_train], opt[:n_train], seeds)
@@ -105,7 +106,8 @@ def run_part(label: str, obj, P: int, G: int, out: Path, gradient: bool) -> None
           f"(larger sd over test seeds) {spread:.4f}: {'BEATS' if margin > spread else 'does NOT beat'} the defaults "
           "by more than the spread")
     out.mkdir(parents=True, exist_ok=True)
-    print("  figure:", plot_tuning(rows_by, out / f"convergence_{obj.name}.png", title=f"{obj.name}: training objective")[0])
+    fig = plot_tuning(rows_by, out / f"convergence_{obj.name}.png", title=f"{obj.name}: training objective")
+    print("  figure:", fig[0])
 
 
 def population_call(obj) -> None:
@@ -143,4 +145,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    import jaxplan
+
+    jaxplan.use_host_devices()  # as the CLI: one host device per core (an XLA_FLAGS count stands), before JAX starts
     main()

@@ -63,7 +63,7 @@ Sections and rows (sizes: default / ``--quick``):
 
   scale    `jp.plan_batch(…, planner="iaco")` on ``jp.RandomMapGenerator(100, 100, 0.2)(0)``, 16 / 8
            scenarios (free pairs, numpy seed 0) x 2 seeds, 256 ants x 10 / 5 iterations: runs/s
-           split over this process's host devices (one per core by default, `jaxplan.scale`)
+           split over this process's host devices (one per core: `jaxplan.use_host_devices`)
            against ``mesh=None`` (one device), the two timed in turn (bench_scale.py has the
            1-device-process and thread variants).
 
@@ -81,11 +81,8 @@ import dataclasses
 import datetime as dt
 import json
 import os
-import platform
 import statistics
-import subprocess
 import sys
-import tempfile
 import time
 import traceback
 from pathlib import Path
@@ -97,7 +94,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
-from _timing import Steal, cpu_info, machine_line, median_time  # noqa: E402
+from _timing import Steal, median_time  # noqa: E402
 
 PAPER_CHEN2023_MS = 8468.0
 SECTIONS = ("aco", "dwa", "exact", "metrics", "episodes", "tune", "tsp", "scale")
@@ -148,55 +145,22 @@ def status_row(section: str, status: str) -> Row:
 # Machine
 
 
-def _git(*args: str) -> str:
-    try:
-        return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return ""
-
-
-def _cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
-
-
-def _ram_gb() -> float | None:
-    try:
-        for line in Path("/proc/meminfo").read_text().splitlines():
-            if line.startswith("MemTotal:"):
-                return int(line.split()[1]) / 2**20
-    except OSError:
-        pass
-    return None
-
-
-def _version(name: str) -> str:
-    try:
-        from importlib.metadata import version
-
-        return version(name)
-    except Exception:  # noqa: BLE001 - a missing package is reported, not fatal
-        return "not installed"
-
-
 def machine() -> dict[str, Any]:
-    import jax
+    """The provenance record (`jaxplan.core.provenance`) under the keys this script's JSON has always used, plus
+    the load average at the start."""
+    from jaxplan.core.provenance import provenance
 
-    aff = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None
+    rec = provenance()
+    versions = {k: v or "not installed" for k, v in rec["versions"].items()}
     return {
-        "cpu": _cpu_model(), "cpu_info": cpu_info(), "cpu_line": machine_line(),
-        "cores": os.cpu_count(), "affinity": aff, "ram_gb": _ram_gb(),
+        "cpu": rec["cpu"], "cpu_info": rec["cpu_info"], "cpu_line": rec["cpu_line"],
+        "cores": rec["cores"], "affinity": rec["affinity"], "ram_gb": rec["ram_gb"],
         "load_avg": list(os.getloadavg()) if hasattr(os, "getloadavg") else None,
-        "python": platform.python_version(), "platform": platform.platform(),
-        "jax": _version("jax"), "jaxlib": _version("jaxlib"), "numba": _version("numba"),
-        "numpy": _version("numpy"), "scipy": _version("scipy"), "jaxplan": _version("jaxplan"),
-        "devices": [str(d) for d in jax.devices()], "XLA_FLAGS": os.environ.get("XLA_FLAGS", ""),
-        "git_rev": _git("rev-parse", "--short", "HEAD"), "git_dirty": bool(_git("status", "--porcelain", "-uno")),
+        "python": rec["python"], "platform": rec["platform"], "host": rec["host"],
+        "jax": versions["jax"], "jaxlib": versions["jaxlib"], "numba": versions["numba"],
+        "numpy": versions["numpy"], "scipy": versions["scipy"], "jaxplan": versions["jaxplan"],
+        "devices": rec["devices"], "XLA_FLAGS": rec["xla_flags"],
+        "git_rev": (rec["git_revision"] or "")[:7], "git_dirty": bool(rec["git_dirty"]),
     }
 
 
@@ -656,17 +620,10 @@ def table(rows: list[Row]) -> str:
 
 
 def write_json_atomic(path: Path, data: dict) -> None:
+    from jaxplan.core.io import atomic_write
+
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name + ".", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as f:
-            json.dump(data, f, indent=1)
-            f.write("\n")
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    atomic_write(path, json.dumps(data, indent=1) + "\n")
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -696,7 +653,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
-    import jaxplan  # noqa: F401  first: its CPU default (one host device per core) must precede JAX's backend
+    import jaxplan
+
+    jaxplan.use_host_devices()  # first, before JAX's backend starts: one host device per core (the scale rows)
     started = dt.datetime.now(dt.timezone.utc)
     t_start = time.perf_counter()
     mach = machine()
@@ -731,7 +690,8 @@ def main(argv: list[str] | None = None) -> None:
     data = {"started_utc": started.isoformat(timespec="seconds"), "quick": args.quick, "machine": mach,
             "options": {k: v for k, v in vars(args).items() if k not in ("json",)}, "wall_s": wall,
             "section_wall_s": timings, "rows": [dataclasses.asdict(r) for r in rows]}
-    out = HERE / "results" / f"run_all-{started:%Y-%m-%d}-{mach['git_rev'] or 'norev'}{'-quick' if args.quick else ''}.json"
+    name = f"run_all-{started:%Y-%m-%d}-{mach['git_rev'] or 'norev'}{'-quick' if args.quick else ''}.json"
+    out = HERE / "results" / name
     write_json_atomic(out, data)
     print(f"JSON: {out}")
     if args.json:

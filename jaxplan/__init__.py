@@ -7,75 +7,99 @@ The public names of DESIGN §3 are re-exported here::
     scen = jp.load_scenarios("den520d.map.scen")
     opt = jp.shortest_lengths(grid, scen.starts, scen.goals)
     res = jp.plan(grid, scen.starts[0], scen.goals[0], planner="astar")
+
+Importing jaxplan has no side effect: it changes no JAX setting and loads no subpackage. Each
+public name is imported from its subpackage when first used (PEP 562 ``__getattr__``), so
+``import jaxplan`` and the command line's ``--help`` start without JAX or numba. To shard batches
+over one CPU host device per core, opt in with `use_host_devices` before the first JAX
+computation (the command line does).
 """
 
-# First, before anything can start JAX's backend: one CPU host device per core (see
-# jaxplan.scale.configure_host_devices for the measurement and $JAXPLAN_HOST_DEVICES to change it).
-from jaxplan.scale import configure_host_devices as _configure_host_devices
+from __future__ import annotations
 
-_configure_host_devices()
+import importlib
+import sys
+import types
+from typing import Any
 
-from jaxplan.grid import (
-    GridMap,
-    Neighbours,
-    Scenarios,
-    clearance_field,
-    goal_distance_field,
-    grid_from_array,
-    load_map,
-    load_scenarios,
-    neighbour_table,
-    passable,
-    save_map,
-    MountainGenerator,
-    RandomMapGenerator,
-    Scene,
-    UrbanGenerator,
-    WarehouseGenerator,
-    demo_warehouse,
-    poisson_risk,
-    warehouse_chen2023,
-    warehouse_yu2020,
-)
-from jaxplan.aco import BatchResult, TourResult, TSPProblem, load_tour, load_tsplib, plan_batch, solve_tsp, tour_length
-from jaxplan.registry import PlannerSpec, plan, planners, register_planner
-from jaxplan.result import PlanResult
-from jaxplan import metrics
-from jaxplan.dwa import (
-    Ackermann, Disc, DiscObstacles, DWAConfig, DWAInfo, DWAParams, Rectangle, Unicycle, dwa_control,
-    dwa_control_batch, dwa_step,
-)
-from jaxplan.metrics import EnergyModel, EpisodeTiming, path_metrics
-from jaxplan.smooth import Smoothed, smooth
-from jaxplan.nav import (
-    Episode, EpisodeBatch, MovingObstacles, NavConfig, crossing_traffic, head_on, moving_obstacles, navigate,
-    navigate_batch, navigate_multi, pipelines, random_obstacles,
-)
-from jaxplan.search import SearchGraph, astar, dijkstra, distance_from, search_graph, shortest_lengths
-from jaxplan.core.version import VERSION as __version__
+_EXPORTS: dict[str, tuple[str, ...]] = {
+    "grid": (
+        "GridMap", "Neighbours", "Scenarios", "clearance_field", "goal_distance_field", "grid_from_array", "load_map",
+        "load_scenarios", "neighbour_table", "passable", "save_map", "MountainGenerator", "RandomMapGenerator",
+        "Scene", "UrbanGenerator", "WarehouseGenerator", "demo_warehouse", "poisson_risk", "warehouse_chen2023",
+        "warehouse_yu2020",
+    ),
+    "aco": ("BatchResult", "TourResult", "TSPProblem", "load_tour", "load_tsplib", "plan_batch", "solve_tsp",
+            "tour_length"),
+    "planning": ("plan", "planners"),
+    "registry": ("PlannerSpec", "register_planner"),
+    "result": ("PlanResult",),
+    "dwa": ("Ackermann", "Disc", "DiscObstacles", "DWAConfig", "DWAInfo", "DWAParams", "Rectangle", "Unicycle",
+            "dwa_control", "dwa_control_batch", "dwa_step"),
+    "metrics": ("EnergyModel", "EpisodeTiming", "path_metrics"),
+    "smooth": ("Smoothed", "smooth"),
+    "nav": ("Episode", "EpisodeBatch", "MovingObstacles", "NavConfig", "crossing_traffic", "head_on",
+            "moving_obstacles", "navigate", "navigate_batch", "navigate_multi", "pipelines", "random_obstacles"),
+    "search": ("SearchGraph", "astar", "dijkstra", "distance_from", "search_graph", "shortest_lengths"),
+    "scale": ("use_host_devices",),
+}
+"""Subpackage (or module) of jaxplan -> the public names re-exported from it."""
+
+_SOURCE = {name: module for module, names in _EXPORTS.items() for name in names}
 
 _DEPRECATED = {"warehouse_seed003": "warehouse_chen2023", "warehouse_seed004": "warehouse_yu2020"}
 """Names of the previous release (papers by internal number) -> their author-year names; kept for one release."""
 
+_SUBMODULES = ("aco", "cli", "core", "dwa", "experiments", "grid", "metrics", "nav", "papers", "planning", "registry",
+               "result", "scale", "search", "tune")
+"""Subpackages and modules reachable as attributes (``jp.search.path_cost``), imported on first use (``smooth`` is
+the function; its subpackage is ``import jaxplan.smooth``)."""
 
-def __getattr__(name: str):
+__all__ = sorted([*_SOURCE, "metrics"])
+
+
+def _load(name: str) -> Any:
+    value = getattr(importlib.import_module(f"jaxplan.{_SOURCE[name]}"), name)
+    if name != "smooth":  # see _Package.smooth
+        globals()[name] = value  # later lookups skip __getattr__
+    return value
+
+
+def __getattr__(name: str) -> Any:
+    if name in _SOURCE:
+        return _load(name)
+    if name in _SUBMODULES:
+        return importlib.import_module(f"jaxplan.{name}")
+    if name == "__version__":
+        from jaxplan.core.version import VERSION
+
+        return VERSION
     if name in _DEPRECATED:
         import warnings
 
         new = _DEPRECATED[name]
         warnings.warn(f"jaxplan.{name} is deprecated; use jaxplan.{new} (papers are named by first author and year)",
                       DeprecationWarning, stacklevel=2)
-        return globals()[new]
+        return _load(new)
     raise AttributeError(f"module 'jaxplan' has no attribute {name!r}")
 
 
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__) | set(_SUBMODULES) | {"__version__"})
 
-__all__ = [
-    "BatchResult", "plan_batch", "TourResult", "TSPProblem", "load_tour", "load_tsplib", "solve_tsp", "tour_length", "GridMap", "MountainGenerator", "Neighbours", "PlanResult", "PlannerSpec", "RandomMapGenerator", "Scenarios",
-    "Scene", "SearchGraph", "UrbanGenerator", "WarehouseGenerator", "astar", "clearance_field", "demo_warehouse",
-    "dijkstra", "distance_from", "goal_distance_field", "grid_from_array", "load_map", "load_scenarios",
-    "neighbour_table", "passable", "plan", "planners", "poisson_risk", "register_planner", "save_map",
-    "search_graph", "shortest_lengths", "smooth", "Smoothed", "metrics", "path_metrics", "Ackermann", "Disc", "DiscObstacles", "DWAConfig", "DWAInfo", "DWAParams", "Rectangle", "Unicycle", "dwa_control", "dwa_control_batch", "dwa_step", "EnergyModel", "EpisodeTiming", "warehouse_chen2023", "warehouse_yu2020",
-    "Episode", "EpisodeBatch", "MovingObstacles", "NavConfig", "crossing_traffic", "head_on", "moving_obstacles",
-    "navigate", "navigate_batch", "navigate_multi", "pipelines", "random_obstacles",
-]
+
+class _Package(types.ModuleType):
+    """jaxplan's module type: ``jaxplan.smooth`` is the function `jaxplan.smooth.smooth`, as the public API says,
+    even after the subpackage ``jaxplan.smooth`` is imported (the import system binds a subpackage to its parent's
+    attribute of the same name; the property keeps the function there)."""
+
+    @property
+    def smooth(self) -> Any:
+        return _load("smooth")
+
+    @smooth.setter
+    def smooth(self, value: Any) -> None:  # the import system binding the subpackage: the function stays
+        pass
+
+
+sys.modules[__name__].__class__ = _Package

@@ -1,6 +1,10 @@
 """Command line: ``jaxplan demo | plan | run | figures | reproduce | tune | bench``.
 
-Subcommands for experiments, tuning, figures and benchmarks join as they are built.
+``jaxplan --help`` and every ``jaxplan CMD --help`` answer without importing JAX or numba: this
+module imports only the standard library at the top, and each command imports what it needs.
+Before a command runs, the process opts in to one JAX CPU host device per core
+(`jaxplan.use_host_devices`; ``$JAXPLAN_HOST_DEVICES`` overrides the count, ``off`` leaves JAX's
+default, and an ``XLA_FLAGS`` device count stands), so batched calls shard over the cores.
 """
 
 from __future__ import annotations
@@ -11,37 +15,6 @@ from pathlib import Path
 from typing import Sequence
 
 __all__ = ["main"]
-
-
-def _table(columns: Sequence[tuple[str, list[str]]], labels: list[str], title: str) -> str:
-    """A text table: one row per label, one column per (header, values)."""
-    heads = ["metric"] + [h for h, _ in columns]
-    rows = [[lab] + [vals[i] for _, vals in columns] for i, lab in enumerate(labels)]
-    widths = [max(len(r[j]) for r in rows + [heads]) for j in range(len(heads))]
-    line = "+" + "+".join("-" * (w + 2) for w in widths) + "+"
-
-    def fmt(r):
-        return "| " + " | ".join(c.ljust(w) if j == 0 else c.rjust(w) for j, (c, w) in enumerate(zip(r, widths))) + " |"
-
-    return "\n".join([title, line, fmt(heads), line] + [fmt(r) for r in rows] + [line])
-
-
-ROW_LABELS = [
-    "success", "length (m)", "cells on path", "turns", "sharp turns (>= 45 deg)", "smoothness",
-    "min clearance (m)", "mean clearance (m)", "planning time (ms)",
-]
-
-
-def _path_column(res, grid) -> list[str]:
-    from jaxplan.metrics import path_metrics
-
-    # The table shows no gap: the planner's own length as `optimal` skips a second exact search.
-    m = path_metrics(res.path, grid, optimal=res.length) if res.success else {
-        "sharp_turns": 0, "smoothness": 1.0, "min_clearance": float("nan"), "mean_clearance": float("nan")}
-    return [
-        str(res.success), f"{res.length:.3f}", str(len(res.path)), str(res.turns), str(m["sharp_turns"]),
-        f"{m['smoothness']:.3f}", f"{m['min_clearance']:.3f}", f"{m['mean_clearance']:.3f}", f"{res.time_s * 1e3:.2f}",
-    ]
 
 
 def _compilation_cache() -> None:
@@ -78,21 +51,22 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
+    from jaxplan.experiments.tables import PATH_ROWS, path_column, text_table
     from jaxplan.grid import load_map
-    from jaxplan.registry import plan
+    from jaxplan.planning import plan
 
     grid = load_map(args.map, resolution=args.resolution)
     # Only grid planners take a connectivity (the sampling planners have none), so pass it only when asked.
     extra = {} if args.connectivity is None else {"connectivity": args.connectivity}
     res = plan(grid, tuple(args.start), tuple(args.goal), planner=args.planner, **extra)
-    print(_table([(args.planner, _path_column(res, grid))], ROW_LABELS, f"{args.planner} on {args.map}"))
+    print(text_table([(args.planner, path_column(res, grid))], PATH_ROWS, f"{args.planner} on {args.map}"))
     return 0 if res.success else 1
 
 
 def _config_run(call) -> Path | None:
     """``call()``'s run folder, or None after printing a config's every problem (or a run-folder clash)."""
     from jaxplan.experiments.config import ConfigError
-    from jaxplan.experiments.runner import RunFolderError
+    from jaxplan.experiments.store import RunFolderError
 
     try:
         return call()
@@ -220,7 +194,8 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--out", default="figures", help="figure root (default: figures; files go to OUT/RUN/)")
     f.add_argument("--data-dir", default=None, help="folder that the config's map paths are relative to")
     f.set_defaults(func=cmd_figures)
-    g = sub.add_parser("reproduce", help="run every paper's reproduction config (configs/<paper>_*.toml, e.g. cui2025_table2.toml), then draw its figures")
+    g = sub.add_parser("reproduce", help="run every paper's reproduction config (configs/<paper>_*.toml, e.g. "
+                                         "cui2025_table2.toml), then draw its figures")
     g.add_argument("--quick", action="store_true", help="the configs' [experiment.quick] smoke runs (CI)")
     g.add_argument("--configs", default="configs", help="folder of the configs (default: configs)")
     g.add_argument("--pattern", default=None, help="which configs (glob; default: every <paper>_*.toml)")
@@ -245,9 +220,23 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _use_host_devices() -> None:
+    """One JAX CPU host device per core for this process (`jaxplan.use_host_devices`), unless JAX already runs
+    here: `main` called from a Python process that has computed with JAX keeps that process's devices."""
+    from jaxplan.scale import use_host_devices
+
+    try:
+        use_host_devices()
+    except RuntimeError:
+        pass
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    """Runs ``jaxplan ARGV``; returns the exit status (2 for a bad input, with the message on stderr)."""
     args = build_parser().parse_args(argv)
     try:
+        if args.func is not cmd_bench:  # the benchmarks run in a process of their own, which opts in itself
+            _use_host_devices()
         return int(args.func(args))
     except (ValueError, FileNotFoundError) as e:
         print(f"jaxplan: error: {e}", file=sys.stderr)

@@ -1,8 +1,11 @@
-"""The planner registry and the `plan` front door (DESIGN §3).
+"""The planner registry (DESIGN §3), at the bottom of the planners' import graph.
 
 Every planner has the signature ``fn(grid, start, goal, seed, **params) -> PlanResult``
-and registers its defaults; `plan` merges a call's overrides into them and
-rejects unknown names, so a typo never silently falls back to a default.
+and registers its defaults with `register_planner` when its module is imported; `resolve`
+merges a call's overrides into them and rejects unknown names, so a typo never silently
+falls back to a default. The registry sees the planners whose modules have been imported:
+the front door `jaxplan.plan` / `jaxplan.planners` (`jaxplan.planning`) imports every
+planner jaxplan ships first.
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from numpy.typing import ArrayLike
 from jaxplan.grid import GridMap
 from jaxplan.result import PlanResult
 
-__all__ = ["PlannerSpec", "register_planner", "planners", "plan"]
+__all__ = ["PlannerSpec", "register_planner", "registered", "resolve", "run_planner", "plan"]
 
 
 @dataclass(frozen=True)
@@ -57,8 +60,9 @@ def register_planner(
     return spec
 
 
-def planners() -> dict[str, PlannerSpec]:
-    """All registered planners by name, with their defaults and descriptions."""
+def registered() -> dict[str, PlannerSpec]:
+    """The planners registered so far by name, with their defaults and descriptions (`jaxplan.planners` lists
+    every planner jaxplan ships)."""
     return dict(_REGISTRY)
 
 
@@ -86,20 +90,17 @@ def resolve(planner: str, overrides: Mapping[str, Any]) -> tuple[PlannerSpec, di
     return spec, params
 
 
-def plan(grid: GridMap, start: ArrayLike, goal: ArrayLike, planner: str = "astar", seed: int = 0, **overrides: Any) -> PlanResult:
-    """Plans one path with a registered planner.
+def run_planner(grid: GridMap, start: ArrayLike, goal: ArrayLike, planner: str = "astar", seed: int = 0,
+                **overrides: Any) -> PlanResult:
+    """Plans one path with an already registered planner (the dispatch behind `jaxplan.plan`).
 
-    Args:
-      grid: the map.
-      start, goal: ``(x, y)`` cells.
-      planner: a name from `planners()`.
-      seed: PRNG seed (exact planners ignore it).
-      **overrides: planner parameters; an unknown name raises ``ValueError``.
-
-    Returns:
-      `PlanResult`; an unreachable goal gives ``success=False``, ``length=inf``.
+    Args and returns as `jaxplan.plan`; for modules inside jaxplan that import their planners' modules.
     """
     if not isinstance(grid, GridMap):
         raise TypeError(f"grid must be a GridMap (see jp.load_map / jp.grid_from_array), got {type(grid).__name__}")
     spec, params = resolve(planner, overrides)
     return spec.fn(grid, start, goal, seed, **params)
+
+
+plan = run_planner
+"""The name `jaxplan.nav` imports; users and the layers above nav call `jaxplan.plan` (`jaxplan.planning`)."""

@@ -1,6 +1,6 @@
 """One host's part of a multi-host ACO sweep over a MovingAI scenario file, and the merge step.
 
-Run the same command on every host (see `jaxplan.scale._hosts` for the variables), then merge:
+Run the same command on every host (see `jaxplan.scale.initialize` for the variables), then merge:
 
     JAXPLAN_COORDINATOR=HOST0:9876 JAXPLAN_NUM_PROCESSES=2 JAXPLAN_PROCESS_ID=0 \\
         python scripts/sweep_hosts.py MAP SCEN --planner iaco --seeds 10 --out results/   # host 0
@@ -32,7 +32,8 @@ def main() -> None:
     ap.add_argument("--merge", type=int, metavar="N", help="merge the shards of N hosts instead of running")
     args = ap.parse_args()
 
-    from jaxplan.scale._hosts import initialize, host_share, merge_shards, write_shard
+    import jaxplan as jp
+    from jaxplan.scale import batch_mesh, host_share, initialize, merge_shards, write_shard
 
     if args.merge:
         merged = merge_shards(args.out, args.name, args.merge)
@@ -40,11 +41,9 @@ def main() -> None:
         np.savez(path, **merged)
         print(f"merged {args.merge} shards: {merged['length'].shape[0]} scenarios -> {path}")
         return
+    jp.use_host_devices()  # as the CLI: one host device per core of this host, before JAX starts
     pid, n = initialize()
     import jax
-
-    import jaxplan as jp
-    from jaxplan.scale import batch_mesh
 
     grid = jp.load_map(args.map)
     scen = jp.load_scenarios(args.scen, grid=grid)

@@ -2,7 +2,41 @@
 
 from __future__ import annotations
 
-from jaxplan.cli import main
+import json
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from jaxplan.cli import build_parser, main
+
+COMMANDS = ("demo", "plan", "run", "figures", "reproduce", "tune", "bench")
+
+
+def test_every_command_is_listed():
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    assert tuple(sub.choices) == COMMANDS
+
+
+@pytest.mark.parametrize("argv", [["--help"]] + [[c, "--help"] for c in COMMANDS])
+def test_help_answers_without_jax_or_numba(argv):
+    """``jaxplan --help`` and ``jaxplan CMD --help`` import neither JAX nor numba (a fast answer)."""
+    code = textwrap.dedent(f"""
+        import contextlib, io, json, sys
+        from jaxplan.cli import main
+        out = io.StringIO()
+        try:
+            with contextlib.redirect_stdout(out):
+                main({argv!r})
+        except SystemExit as e:
+            status = e.code
+        print(json.dumps({{"status": status, "usage": out.getvalue().startswith("usage: jaxplan"),
+                           "loaded": [m for m in ("jax", "jaxlib", "numba") if m in sys.modules]}}))
+        """)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert json.loads(proc.stdout.strip().splitlines()[-1]) == {"status": 0, "usage": True, "loaded": []}
 
 
 def test_plan_reports_bad_start(movingai, capsys):

@@ -1,14 +1,13 @@
 """`jaxplan demo`: iaco_dwa beside aco_dwa among moving discs; table, demo.png and demo.gif.
 
-The full demo (the built-in 48x32 warehouse) compiles two navigation pipelines (under a
-minute cold on two cores); the test runs its ``--quick`` variant on a generated 14x10
-warehouse, which exercises the same code (about 33 s with an empty JAX cache).
+The full demo (the built-in 48x32 warehouse) compiles two navigation pipelines; the test runs
+its ``--quick`` variant on a generated 14x10 warehouse, which exercises the same code in a
+fraction of the time.
 """
 
 from __future__ import annotations
 
 import numpy as np
-import pytest
 from PIL import Image
 
 from jaxplan.cli import main

@@ -21,7 +21,7 @@ from scipy import stats as sps
 
 from jaxplan.cli import main
 from jaxplan.experiments.config import ConfigError, apply_quick, load_config, parse_config
-from jaxplan.experiments.runner import RunFolderError, read_manifest, run_experiment
+from jaxplan.experiments import RunFolderError, read_manifest, run_experiment
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -323,7 +323,7 @@ def test_chunk_size_does_not_change_lengths_or_gaps(tmp_path):
 
 
 def test_grid_path_lengths_are_float64_sums_independent_of_the_padding():
-    from jaxplan.experiments.runner import grid_path_lengths, optimality_gaps
+    from jaxplan.experiments import grid_path_lengths, optimality_gaps
 
     paths = np.array([[[0, 0], [1, 1], [2, 1], [-1, -1]], [[3, 3], [-1, -1], [-1, -1], [-1, -1]]], np.int32)
     got = grid_path_lengths(paths, np.array([3, 1]), 0.5)
@@ -384,7 +384,7 @@ def test_anova_and_welch_are_scipy_on_the_per_seed_means(reference):
 
 
 def test_orbax_arrays_are_kept_per_chunk(reference):
-    from jaxplan.experiments.runner import load_chunk_arrays
+    from jaxplan.experiments import load_chunk_arrays
 
     uid = sorted(read_manifest(reference)["chunks"])[-1]  # an Ant System chunk: 2 scenarios x 3 seeds
     arrays = load_chunk_arrays(reference, uid)

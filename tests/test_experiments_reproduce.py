@@ -1,6 +1,6 @@
 """The reproduction configs (configs/<paper>_*.toml): each validates, stores the paper's numbers and documents its
-deviations; `jaxplan reproduce --quick` runs them all and draws their figures (in CI: about 2 min on 2 cores; the issue's
-budget for all quick runs together is 3 min)."""
+deviations; `jaxplan reproduce --quick` runs them all and draws their figures (the quick runs together must stay
+within the issue's CI budget of 3 min)."""
 
 from __future__ import annotations
 
@@ -25,7 +25,8 @@ def test_every_paper_has_a_reproduction_config():
 @pytest.mark.parametrize("path", CONFIGS, ids=lambda p: p.stem)
 def test_reproduction_config_is_complete(path):
     cfg = load_config(path)
-    assert cfg.paper and cfg.paper_source.startswith(PAPERS[path.stem.split("_")[0]].short), "the paper's numbers, labelled with their table"
+    assert cfg.paper and cfg.paper_source.startswith(PAPERS[path.stem.split("_")[0]].short), \
+        "the paper's numbers, labelled with their table"
     assert cfg.quick.seeds and cfg.figures
     assert "Deviations from the paper" in path.read_text()
 
@@ -133,8 +134,8 @@ def test_reproduce_goes_on_after_a_config_fails_to_run_or_draw(tmp_path, monkeyp
 
 def test_reproduce_reports_every_failure_and_exits_2_at_the_end(tmp_path, monkeypatch, capsys):
     _fake_reproduction(tmp_path, monkeypatch, run_fails=("seedA",), figures_fail=("seedB",))
-    argv = ["reproduce", "--configs", str(tmp_path), "--pattern", "seed*.toml", "--out", str(tmp_path / "runs"), "--figures",
-            str(tmp_path / "figs"), "--no-progress", "--no-cache"]
+    argv = ["reproduce", "--configs", str(tmp_path), "--pattern", "seed*.toml", "--out", str(tmp_path / "runs"),
+            "--figures", str(tmp_path / "figs"), "--no-progress", "--no-cache"]
     assert main(argv) == 2
     out, err = capsys.readouterr()
     assert "seedA.toml: FloatingPointError: broke mid-run" in err

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import csv
 import itertools
-import math
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +17,7 @@ import pytest
 
 import jaxplan as jp
 from jaxplan.experiments.config import ConfigError, parse_config
-from jaxplan.experiments.runner import accuracy, read_manifest, reductions, run_experiment
+from jaxplan.experiments import accuracy, read_manifest, reductions, run_experiment
 
 CITIES = [(0, 0), (3, 1), (6, 0), (7, 4), (5, 7), (2, 8), (-1, 5), (1, 3)]
 OVERRIDES = {"colonies": 2, "ants": 4, "iterations": 6}
@@ -282,11 +281,12 @@ def test_executed_optimum_on_an_open_map_is_the_straight_line():
     """The reference of a navigation episode's gap: on a map without obstacles, the line-of-sight smoothed exact
     path is the straight segment between the cell centres."""
     from jaxplan.experiments.config import PlannerConfig
-    from jaxplan.experiments.runner import MapWork, _executed_optimum
+    from jaxplan.experiments import MapWork
+    from jaxplan.experiments.trial_metrics import executed_optimum
 
     grid = jp.grid_from_array(np.ones((12, 16), bool), resolution=0.5)  # all free; the outside counts as blocked
     starts, goals = np.array([[1, 1], [2, 9]]), np.array([[14, 7], [13, 2]])
     mw = MapWork(None, grid, starts, goals, np.zeros(2), np.full(2, -1), "")
     pc = PlannerConfig("p", "navigate", "iaco_dwa")
-    got = _executed_optimum(mw, pc, np.arange(2))
+    got = executed_optimum(mw, pc, np.arange(2))
     np.testing.assert_allclose(got, np.hypot(*(goals - starts).T) * 0.5, rtol=1e-5)

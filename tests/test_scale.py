@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import jaxplan as jp
+from jaxplan.core.io import TMP_GLOB
 from jaxplan.scale import MemoryLimitError, aco_memory, batch_mesh, check_memory, memory_limit, pad_leading
 
 
@@ -89,7 +90,8 @@ def test_navigate_batch_and_a_tuning_generation_on_four_devices_equal_one_device
         a = jp.navigate_batch(grid, s, g, mesh=None, **kw)
         b = jp.navigate_batch(grid, s, g, mesh=batch_mesh(), **kw)
         same = lambda x, y: np.array_equal(x, y, equal_nan=x.dtype.kind == "f")
-        res["nav"] = [f for f in a._fields if isinstance(getattr(a, f), np.ndarray) and not same(getattr(a, f), getattr(b, f))]
+        res["nav"] = [f for f in a._fields
+                      if isinstance(getattr(a, f), np.ndarray) and not same(getattr(a, f), getattr(b, f))]
         res["replans"] = int(a.replans.sum())
         after = np.arange(a.states.shape[-2]) > a.steps[..., None]  # rows after each robot's last step
         res["rest"] = bool(np.all(a.states[..., 3:][after] == 0) and np.all(b.states[..., 3:][after] == 0))
@@ -146,16 +148,24 @@ def test_default_host_devices_and_auto_mesh(monkeypatch):
     assert (m is None) == (n == 1)
     out = _child("""
         import json, jax, jaxplan
-        print(json.dumps({"devices": len(jax.devices())}))
+        print(json.dumps({"before": jaxplan.use_host_devices(), "devices": len(jax.devices()),
+                          "again": jaxplan.use_host_devices()}))
         """, devices=None)
-    assert out["devices"] == host_devices_setting("auto")
+    assert out["devices"] == out["before"] == out["again"] == host_devices_setting("auto")
     out = _child("""
         import json, jax
-        jax.config.update("jax_num_cpu_devices", 1)  # the user's own choice, before the import
+        jax.config.update("jax_num_cpu_devices", 1)  # the user's own choice, before the opt-in
         import jaxplan
-        print(json.dumps({"devices": len(jax.devices())}))
+        print(json.dumps({"set": jaxplan.use_host_devices(), "devices": len(jax.devices())}))
         """, devices=None)
-    assert out["devices"] == 1
+    assert out == {"set": 1, "devices": 1}
+    out = _child("""
+        import json, os, jax
+        import jaxplan
+        os.environ["JAXPLAN_HOST_DEVICES"] = "3"
+        print(json.dumps({"set": jaxplan.use_host_devices(), "devices": len(jax.devices())}))
+        """, devices=None)
+    assert out == {"set": 3, "devices": 3}
     scene = jp.RandomMapGenerator(12, 12, 0.1)(0)
     for planner in ("astar", "aco"):
         with pytest.raises(ValueError, match="'auto'"):
@@ -248,7 +258,39 @@ def test_host_shares_cover_the_batch_and_shards_merge(tmp_path):
     np.testing.assert_array_equal(merge_shards(tmp_path, "sweep", 3)["x"], data)
     with pytest.raises(FileNotFoundError, match="host 0 of 4"):
         merge_shards(tmp_path, "sweep", 4)
-    assert not list(tmp_path.glob("*.tmp"))
+    assert not list(tmp_path.glob(TMP_GLOB)) and sorted(p.name for p in tmp_path.iterdir()) == [
+        f"sweep.host-{k}-of-3.npz" for k in range(3)]
+
+
+def test_importing_jaxplan_leaves_jax_as_the_user_had_it():
+    """``import jaxplan`` and a small `jp.plan` (an ant colony: JAX runs) change no ``jax.config`` value and leave
+    the device count at JAX's own default; the opt-in is explicit, and too late is a clear error."""
+    out = _child("""
+        import json
+        import jax
+        before = dict(jax.config.values)
+        import jaxplan as jp
+        scene = jp.RandomMapGenerator(12, 12, 0.1)(0)
+        res = jp.plan(scene.grid, scene.start, scene.goal, planner="aco", ants=8, iterations=3)
+        changed = sorted(k for k, v in jax.config.values.items() if before.get(k, "missing") != v)
+        try:
+            jp.use_host_devices(jax.device_count() + 1)
+            late = "no error"
+        except RuntimeError as e:
+            late = str(e)
+        print(json.dumps({"changed": changed, "devices": jax.device_count(), "success": bool(res.success),
+                          "late": late, "same": jp.use_host_devices(jax.device_count())}))
+        """, devices=None)
+    plain = _child("""
+        import json, jax
+        print(json.dumps({"devices": jax.device_count()}))
+        """, devices=None)
+    assert out["changed"] == [] and out["success"]
+    assert out["devices"] == plain["devices"]
+    assert "too late" in out["late"] and "before any JAX computation" in out["late"]
+    assert out["same"] == out["devices"]  # asking for the count in effect is no error
+    with pytest.raises(ValueError, match="positive integer"):
+        jp.use_host_devices(0)
 
 
 def test_importing_jaxplan_leaves_the_backend_alone():

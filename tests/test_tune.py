@@ -1,4 +1,5 @@
-"""Tuning: bounds, the Strategy interface (every optimiser), NaN handling, gradients, objectives, workflow and resume."""
+"""Tuning: bounds, the Strategy interface (every optimiser), NaN handling, gradients, objectives, workflow and
+resume."""
 
 from __future__ import annotations
 
@@ -283,7 +284,7 @@ def test_nan_objectives_are_counted_and_never_crash(box, tmp_path):
 def test_a_folder_of_another_run_is_refused(box, tmp_path):
     obj = function_objective(toy, box)
     tune_loop(obj, make_strategy("random", 4, 2), 2, tmp_path / "r", progress=False)
-    from jaxplan.experiments.runner import RunFolderError
+    from jaxplan.experiments import RunFolderError
 
     with pytest.raises(RunFolderError):
         tune_loop(obj, make_strategy("random", 4, 2), 2, tmp_path / "r", seed=1, progress=False)

@@ -6,6 +6,8 @@ helper does not pull in JAX or numba with another:
 * `jaxplan.core.cache`: the one cache of the library (`functools.lru_cache` where keys hash,
   `memoize` with content keys for maps and arrays, `Built` for "seconds spent compiling now").
 * `jaxplan.core.geometry`: exact point/segment-to-unit-square distances, as numpy, JAX and numba twins.
+* `jaxplan.core.io`: the one atomic write (temporary file beside the target, fsync, `os.replace`).
+* `jaxplan.core.provenance`: the one provenance record (git, CPU, versions, devices) of runs and benchmarks.
 
 Layers. Imports flow strictly downward through these layers: a module may import from its own
 package and from any lower layer, never from a higher one, and there is no import cycle::
@@ -14,18 +16,20 @@ package and from any lower layer, never from a higher one, and there is no impor
     tune                                  objectives and optimisers over scenario batches
     experiments                           configs, runner, statistics, reports, figures
     nav                                   two-level navigation (global plan -> DWA episodes)
+    planning                              the front door `plan`/`planners` over every shipped planner
     aco, smooth, dwa                      colonies (+ TSP), path post-processing, the local planner
     search                                A*/Dijkstra planners, key-node A*, RRT*/MRBS-RRT*
-    registry                              the planner registry (`register_planner`, `plan`)
+    registry                              the planner registry (`register_planner`, `resolve`)
     metrics                               path, run and episode metrics (numpy host twins included)
     grid                                  maps, move graph and exact distances, fields, collision geometry,
                                           generators
     core, papers, result, scale           shared helpers, paper keys, `PlanResult`, device meshes and
                                           memory estimates (each imports nothing from the layers above;
-                                          `scale` imports nothing from jaxplan outside itself)
+                                          `scale` imports only `core` from jaxplan)
 
-The top package ``jaxplan`` re-exports the public names and sits above everything; modules inside
-jaxplan never import it (``import jaxplan as jp`` is for users, tests, scripts and benchmarks).
+The top package ``jaxplan`` re-exports the public names lazily (each on first use) and sits above
+everything; modules inside jaxplan never import it (``import jaxplan as jp`` is for users, tests,
+scripts and benchmarks).
 Across subpackages, imports go through a package's public namespace (``from jaxplan.grid import
 GridMap``), never a private module or an underscore name.
 """

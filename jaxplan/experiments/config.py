@@ -746,7 +746,8 @@ _NAVIGATE_ONLY = ("nav", "dwa", "robot", "params", "obstacles")
 
 def _read_planners(r: Reader, raw: dict) -> tuple[PlannerConfig, ...]:
     from jaxplan.nav import pipelines
-    from jaxplan.registry import planners, resolve
+    from jaxplan.planning import planners
+    from jaxplan.registry import resolve
 
     entries = list(r.entries(raw, "planners", required=True))
     if not entries:
@@ -833,7 +834,7 @@ def _check_sites(r: Reader, maps: tuple[MapSpec, ...], planners: tuple[PlannerCo
 
 def _check_overrides(r: Reader, path: str, planner: str, overrides: dict, resolve, base: dict) -> None:
     """Unknown names one by one (with a close match), then the planner's own value checks."""
-    from jaxplan.registry import planners
+    from jaxplan.planning import planners
 
     accepted = list(planners()[planner].defaults)
     unknown = [k for k in overrides if k not in accepted]
@@ -1139,7 +1140,7 @@ def _check_quick_nav(r: Reader, quick_nav: Mapping, navs: Sequence[PlannerConfig
 def _accepted(pc: PlannerConfig) -> tuple[str, ...]:
     """The override names planner ``pc`` accepts (none for a name that failed validation)."""
     from jaxplan.aco import TSP_PLANNERS, tsp_defaults
-    from jaxplan.registry import planners
+    from jaxplan.planning import planners
 
     if pc.kind == "tsp":
         return tuple(tsp_defaults(pc.name)) if pc.name in TSP_PLANNERS else ()

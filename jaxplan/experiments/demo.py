@@ -7,13 +7,13 @@ shows the executed trajectories over their global paths and the speed profiles, 
 ``demo.gif`` animates both robots with the discs (matplotlib's pillow writer).
 
 Speed. Each pipeline compiles its global planner and its episode program once (most of
-the demo's time); the settings below keep the demo under a minute on two CPU cores, the
-first run after install included: in-episode re-planning off (it would compile a second
-planner program), a 10 x 20 velocity window without unrolling, colonies of 20 ants x 20
-iterations walked and updated in JAX (``walk_backend="jax", update_backend="jax"``: the
-numba walk is the faster engine for large colonies, but its one-time compilation, about
-50 s per install, would be most of a first demo whose colonies take milliseconds either
-way; the results are the same). `jaxplan demo` also keeps JAX's persistent compilation
+the demo's time); the settings below keep the demo short on a small CPU, the first run
+after install included (timings: docs/benchmarks.md): in-episode re-planning off (it would
+compile a second planner program), a 10 x 20 velocity window without unrolling (less to
+compile), colonies of 20 ants x 20 iterations walked and updated in JAX
+(``walk_backend="jax", update_backend="jax"``: the numba walk is the faster engine for
+large colonies, but its one-time compilation per install would be most of a first demo
+whose colonies take milliseconds either way; the results are the same). `jaxplan demo` also keeps JAX's persistent compilation
 cache (``~/.cache/jaxplan/jax``), so later runs skip most of it. ``quick=True`` (tests) uses
 a generated 14x10 warehouse, a 5 x 9 window, small colonies and a 30 s limit.
 
@@ -33,7 +33,9 @@ from typing import Any
 
 import numpy as np
 
+from jaxplan.core.io import atomic_path
 from jaxplan.experiments import plots
+from jaxplan.experiments.tables import text_table
 
 __all__ = ["DemoResult", "run_demo", "demo_table", "ROWS", "PIPELINES"]
 
@@ -69,7 +71,7 @@ def _settings(quick: bool):
         dwa = dataclasses.replace(base.dwa, n_v=5, n_omega=9)
         return scene, dataclasses.replace(base, replan=False, max_time=30.0, dwa=dwa), \
             {"ants": 8, "iterations": 5, **engine}, {"n": 2, "speed": 0.4, "radius": 0.2}
-    dwa = dataclasses.replace(base.dwa, n_v=10, n_omega=20, unroll=1)  # unroll 1: ~2 s less compilation each
+    dwa = dataclasses.replace(base.dwa, n_v=10, n_omega=20, unroll=1)  # unroll 1: less to compile per pipeline
     return demo_warehouse(), dataclasses.replace(base, replan=False, max_time=150.0, dwa=dwa), \
         {"ants": 20, "iterations": 20, **engine}, {"n": 4, "speed": 0.5, "radius": 0.25}
 
@@ -111,9 +113,7 @@ def _column(grid, ep, robot_radius: float, wall: float) -> list[str]:
 
 def demo_table(result: DemoResult) -> str:
     """The comparison as a text table (rows `ROWS`, one column per pipeline)."""
-    from jaxplan.cli import _table
-
-    return _table(list(result.columns.items()), list(ROWS),
+    return text_table(list(result.columns.items()), list(ROWS),
                   f"{result.scene.name}: two-level navigation among {result.episodes[PIPELINES[0]].obstacles.count} "
                   "moving discs (same start, goal, discs and seed)")
 
@@ -184,15 +184,13 @@ def _animation(result: DemoResult, grid, path: Path, frames: int) -> list[str]:
         return trails + robots + discs + [title]
 
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.stem + ".tmp" + path.suffix)
     # The writer driven directly: `FuncAnimation.save` renders every frame twice (a draw, then
     # the grab's own savefig), half of this function's time.
     writer = PillowWriter(fps=10)
-    with writer.saving(fig, str(tmp), dpi=64):
+    with atomic_path(path) as tmp, writer.saving(fig, str(tmp), dpi=64):
         for t in idx:
             draw(int(t))
             writer.grab_frame()
-    tmp.replace(path)
     plt.close(fig)
     return [str(path)]
 

@@ -23,7 +23,6 @@ statistics of convergence curves over seeds); metrics come from `jaxplan.metrics
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Mapping, Sequence
 
@@ -35,6 +34,7 @@ import numpy as np
 from matplotlib.colors import LogNorm, Normalize
 from numpy.typing import ArrayLike
 
+from jaxplan.core.io import atomic_path
 from jaxplan.grid import GridMap, Neighbours, neighbour_table
 
 __all__ = [
@@ -219,8 +219,8 @@ def plot_paths(
       grid: the map (for its resolution).
       paths: a list of ``[L_i, 2]`` arrays, one ``[L, 2]`` array (one path), or an array
         ``[P, L, 2]`` of padded paths with ``lengths`` (numpy or jax arrays; e.g.
-        ``BatchResult.paths[i]`` with ``n_cells[i]``, or a smoother's ``points``/``n``). Points are ``(x, y)``; integer cells
-        or floats (smoothed / any-angle paths), in cell coordinates where ``(x, y)`` is
+        ``BatchResult.paths[i]`` with ``n_cells[i]``, or a smoother's ``points``/``n``). Points are ``(x, y)``;
+        integer cells or floats (smoothed / any-angle paths), in cell coordinates where ``(x, y)`` is
         the centre of cell ``(x, y)``, or in metres with ``coords="m"``. Empty paths
         (failed plans) draw nothing.
       labels: one legend label per path.
@@ -544,7 +544,6 @@ def save_figure(fig: plt.Figure, path: str) -> list[str]:
     """Writes ``path`` (its suffix decides the format) atomically; returns the files written."""
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
-    tmp = p.with_name(p.stem + ".tmp" + p.suffix)
-    fig.savefig(tmp, dpi=150, bbox_inches="tight")
-    os.replace(tmp, p)
+    with atomic_path(p) as tmp:
+        fig.savefig(tmp, dpi=150, bbox_inches="tight")
     return [str(p)]

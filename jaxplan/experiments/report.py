@@ -13,7 +13,7 @@ from jaxplan.experiments.config import METRICS, ExperimentConfig, applies
 from jaxplan.experiments.stats import PER_CHUNK, PER_SEED, Analysis, SummaryRow
 
 if TYPE_CHECKING:  # pragma: no cover
-    from jaxplan.experiments.runner import Prepared
+    from jaxplan.experiments.prepare import Prepared
 
 __all__ = ["summary_markdown", "report_markdown", "fmt"]
 
@@ -191,5 +191,5 @@ def report_markdown(a: Analysis, cfg: ExperimentConfig, prep: "Prepared", meta: 
             "- `summary.csv`, `summary.md`: the tables above; `significance.csv`: the tests",
             "- `timings.csv`: compile and run time per chunk",
             "- `checkpoints/`: manifest, per-chunk rows and arrays (orbax: convergence histories, paths, tours, "
-            "trajectories; `jaxplan.experiments.runner.load_chunk_arrays`)", ""]
+            "trajectories; `jaxplan.experiments.load_chunk_arrays`)", ""]
     return "\n".join(out)

@@ -85,7 +85,7 @@ def reproduce(configs: Sequence[str | os.PathLike], out: str | os.PathLike = "ru
 def _describe_error(e: Exception) -> str:
     """The message of an expected failure (bad config, data, run folder); the type too for anything else."""
     from jaxplan.experiments.config import ConfigError
-    from jaxplan.experiments.runner import RunFolderError
+    from jaxplan.experiments.store import RunFolderError
 
     return str(e) if isinstance(e, (ConfigError, RunFolderError, ValueError, FileNotFoundError)) \
         else f"{type(e).__name__}: {e}"

@@ -241,8 +241,8 @@ def analyse(trials_path: str | os.PathLike, timings_path: str | os.PathLike | No
                         f, p = float(r.statistic), float(r.pvalue)
                     else:
                         f, p = math.nan, math.nan
-                    tests.append(TestRow(mp.name, metric, "anova", "", "", f, p, p, sum(v.size for v in groups.values()),
-                                         len(groups)))
+                    tests.append(TestRow(mp.name, metric, "anova", "", "", f, p, p,
+                                         sum(v.size for v in groups.values()), len(groups)))
                 if st.pairwise:
                     pairs = []
                     for a, b in itertools.combinations(groups, 2):
@@ -267,7 +267,7 @@ def _cell(v) -> str:
 
 
 def _write_csv(path: str | os.PathLike, columns: Sequence[str], rows: list[list]) -> None:
-    from jaxplan.experiments.runner import atomic_write
+    from jaxplan.core.io import atomic_write
     import io
 
     buf = io.StringIO()

@@ -26,6 +26,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from jaxplan.core.io import atomic_write
 from jaxplan.grid._gridmap import GridMap, grid_from_array
 
 __all__ = ["load_map", "save_map", "parse_map", "load_scenarios", "parse_scenarios", "Scenarios"]
@@ -131,10 +132,7 @@ def save_map(grid: GridMap, path: str | os.PathLike) -> None:
     h, w = free.shape
     body = "\n".join("".join("." if c else "@" for c in row) for row in free)
     text = f"type octile\nheight {h}\nwidth {w}\nmap\n{body}\n"
-    p = Path(path)
-    tmp = p.with_name(p.name + ".tmp")
-    tmp.write_text(text, encoding="ascii")
-    os.replace(tmp, p)
+    atomic_write(path, text, encoding="ascii")
 
 
 @dataclass(frozen=True)

@@ -6,15 +6,19 @@ estimates its working memory (`aco_memory`) and refuses a batch above `memory_li
 (``$JAXPLAN_MEMORY_LIMIT``, default 80 % of the available memory) with `MemoryLimitError`,
 naming the largest batch that fits. Multi-host sweeps: `initialize` (`jax.distributed`), each
 host's `host_share` of the batch, `write_shard` and `merge_shards` (recipe in
-``scripts/sweep_hosts.py``). The CPU default (one host device per core, batches sharded over them
-with ``mesh="auto"``) and how to change it: `jaxplan.scale._host_devices`.
+``scripts/sweep_hosts.py``). On a CPU, `use_host_devices` (also ``jaxplan.use_host_devices``) is the
+explicit opt-in to one host device per core, after which ``mesh="auto"`` shards large batches over
+them; importing jaxplan changes no JAX setting (`jaxplan.scale._host_devices`).
 """
 
-from jaxplan.scale._host_devices import AUTO_MIN_PER_DEVICE, HOST_DEVICES_ENV, auto_mesh, configure_host_devices, host_devices_setting
+from jaxplan.scale._host_devices import (
+    AUTO_MIN_PER_DEVICE, HOST_DEVICES_ENV, auto_mesh, host_devices_setting, use_host_devices,
+)
 from jaxplan.scale._hosts import host_share, initialize, merge_shards, shard_path, write_shard
 from jaxplan.scale._memory import MemoryEstimate, MemoryLimitError, aco_memory, check_memory, dwa_memory, memory_limit
 from jaxplan.scale._mesh import BATCH_AXIS, batch_mesh, check_mesh, pad_leading, padded_size
 
-__all__ = ["AUTO_MIN_PER_DEVICE", "HOST_DEVICES_ENV", "auto_mesh", "configure_host_devices", "host_devices_setting", "BATCH_AXIS", "batch_mesh", "check_mesh", "pad_leading", "padded_size", "MemoryEstimate",
+__all__ = ["AUTO_MIN_PER_DEVICE", "HOST_DEVICES_ENV", "auto_mesh", "host_devices_setting", "use_host_devices",
+           "BATCH_AXIS", "batch_mesh", "check_mesh", "pad_leading", "padded_size", "MemoryEstimate",
            "MemoryLimitError", "aco_memory", "check_memory", "dwa_memory", "memory_limit", "host_share", "initialize",
            "merge_shards", "shard_path", "write_shard"]

@@ -1,35 +1,34 @@
-"""The library's CPU default: one XLA host device per core, and batches sharded over them.
+"""The explicit opt-in to one XLA host device per core, and the `mesh="auto"` rule of the batched entry points.
 
-Measured on the 2-core machine of DESIGN §7 (``python benchmarks/bench_scale.py``; in one
-2-device process each call is timed with the mesh and with ``mesh=None`` in turn, medians of
-5, so the machine's drift hits both alike): two host devices beat one by 1.20× for an `iaco`
-`plan_batch` (16 scenarios × 2 seeds, 256 ants, 100×100 map; 1.07–1.15× in two runs of
-``benchmarks/run_all.py --only scale``), 1.36× for `navigate_batch` (16
-static `iaco_dwa` episodes) and 1.26× for one tuning generation (16 members); a 1-device
-process with XLA's Eigen thread pool off (``--xla_cpu_multi_thread_eigen=false``) ran as
-fast as with the default (1.00×).
-XLA runs one host device's scan-heavy program mostly on one thread; two devices keep both
-cores busy. A sharded ACO walk takes its device's share of the cores
-(`jaxplan.aco._walk_numba.sharing_cores`; with two walk threads per device, three
-between-process runs gave 0.96–1.25×). So, at ``import jaxplan``:
+XLA runs one host device's scan-heavy program mostly on one thread, so on a CPU with several
+cores several host devices, with batches sharded over them, keep every core busy (the speed-ups
+and the measurements behind the rules below: docs/decisions.md). JAX decides its CPU device count
+once, when its backend starts, and the setting is process-wide: it is the user's to choose. So
+importing jaxplan changes no JAX setting; programs that want the devices opt in, before their
+first JAX computation (DESIGN §9)::
 
-* the CPU backend gets one host device per core of this process's affinity
-  (``jax.config.update("jax_num_cpu_devices", n)``) — unless ``$JAXPLAN_HOST_DEVICES``
-  says otherwise (a count, or ``auto`` = cores, or ``off`` = leave JAX alone), the user
-  already chose (``XLA_FLAGS=--xla_force_host_platform_device_count``,
-  ``$JAX_NUM_CPU_DEVICES``, ``jax.config.update("jax_num_cpu_devices", n)`` before the
-  import), or JAX's backend has already started (then nothing changes). "Cores" are the
-  process's CPU affinity capped by a cgroup CPU quota;
-* batched entry points (`jaxplan.plan_batch`, `Objective.evaluate` of `jaxplan.tune`,
-  `jaxplan.navigate_batch` when its re-planning budget is per group of episodes) take
-  ``mesh="auto"``: a batch that gives every local device at least `AUTO_MIN_PER_DEVICE`
-  elements is split over them (`auto_mesh`); ``mesh=None`` keeps it on one device. Sharding changes no
-  path, cost or episode (every batch element is computed on its own; tests compare 4
-  devices with 1); float sums that XLA compiles per batch shape (a tuning objective's mean
-  clearance) can differ in the last bit, as between batch sizes on one device.
+    import jaxplan as jp
+    jp.use_host_devices()          # one CPU host device per core (or jp.use_host_devices(4))
+    batch = jp.plan_batch(grid, starts, goals, planner="iaco", seeds=range(8))   # mesh="auto": sharded
 
-Unbatched work (one `jaxplan.plan`, one DWA step) is not split: it runs on the first device as
-before. On a GPU the CPU setting is irrelevant and ``"auto"`` shards over the local GPUs.
+The command line (`jaxplan ...`) and the benchmarks call `use_host_devices()`. With no count it
+defers to a choice made elsewhere: ``XLA_FLAGS=--xla_force_host_platform_device_count=N``,
+``$JAX_NUM_CPU_DEVICES`` or ``jax.config.update("jax_num_cpu_devices", n)`` are left as they are,
+and ``$JAXPLAN_HOST_DEVICES`` (a count, ``auto`` = cores, or ``off`` = leave JAX alone) overrides
+the one-per-core default — the variable only acts through this opt-in, never at import. "Cores"
+are the process's CPU affinity capped by a cgroup CPU quota.
+
+Batched entry points (`jaxplan.plan_batch`, `Objective.evaluate` of `jaxplan.tune`,
+`jaxplan.navigate_batch` when its re-planning budget is per group of episodes) take
+``mesh="auto"``: a batch that gives every local device at least `AUTO_MIN_PER_DEVICE` elements is
+split over them (`auto_mesh`); with one device (no opt-in) nothing is split; ``mesh=None`` keeps a
+batch on one device. Sharding changes no path, cost or episode (every batch element is computed
+on its own; tests compare 4 devices with 1); float sums that XLA compiles per batch shape (a
+tuning objective's mean clearance) can differ in the last bit, as between batch sizes on one
+device. A sharded ACO walk takes its device's share of the cores (`jaxplan.aco.sharing_cores`).
+
+Unbatched work (one `jaxplan.plan`, one DWA step) is not split: it runs on the first device. On a
+GPU the CPU setting is irrelevant and ``"auto"`` shards over the local GPUs.
 """
 
 from __future__ import annotations
@@ -43,7 +42,7 @@ from jax.sharding import Mesh
 
 from jaxplan.scale._mesh import batch_mesh, check_mesh
 
-__all__ = ["HOST_DEVICES_ENV", "AUTO_MIN_PER_DEVICE", "host_devices_setting", "configure_host_devices", "auto_mesh"]
+__all__ = ["HOST_DEVICES_ENV", "AUTO_MIN_PER_DEVICE", "host_devices_setting", "use_host_devices", "auto_mesh"]
 
 HOST_DEVICES_ENV = "JAXPLAN_HOST_DEVICES"
 
@@ -88,36 +87,63 @@ def host_devices_setting(value: str | None = None) -> int | None:
     return n
 
 
-def _user_chose() -> bool:
-    return ("xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", "")
-            or bool(os.environ.get("JAX_NUM_CPU_DEVICES"))
-            or jax.config.jax_num_cpu_devices != -1)  # set in-process before `import jaxplan`
+def _chosen_elsewhere() -> int | None:
+    """The CPU device count chosen outside jaxplan's default (``jax.config``, then the environment), or None;
+    -1 when ``XLA_FLAGS`` forces a count (XLA reads it when the backend starts)."""
+    if jax.config.jax_num_cpu_devices != -1:
+        return int(jax.config.jax_num_cpu_devices)
+    env = os.environ.get("JAX_NUM_CPU_DEVICES", "").strip()
+    if env:
+        return int(env) if env.lstrip("-").isdigit() else -1
+    return -1 if "xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", "") else None
 
 
-def configure_host_devices() -> int | None:
-    """Applies `host_devices_setting` to JAX's CPU backend if nobody chose and it has not started.
+def use_host_devices(n: int | None = None) -> int | None:
+    """Opts in to ``n`` JAX CPU host devices (default: one per core), so that ``mesh="auto"`` shards batches.
 
-    Returns the count set, or None when it left JAX alone.
+    Must run before JAX's backend starts (the first JAX computation, ``jax.devices()``, …): the count
+    is fixed from then on. Calling it again with the count in effect is harmless.
+
+    Args:
+      n: the number of host devices, a positive integer. None: a choice made elsewhere stands
+        (``jax.config``'s ``jax_num_cpu_devices``, ``$JAX_NUM_CPU_DEVICES``, ``XLA_FLAGS`` with
+        ``--xla_force_host_platform_device_count``); else ``$JAXPLAN_HOST_DEVICES`` (a count, ``auto``,
+        ``off``); else one device per core this process may use.
+
+    Returns:
+      The host device count set (or already in effect); None when JAX's own setting was left alone
+      (chosen through the environment, or ``$JAXPLAN_HOST_DEVICES=off``).
+
+    Raises:
+      ValueError: ``n`` (or ``$JAXPLAN_HOST_DEVICES``) is not a positive integer.
+      RuntimeError: JAX's backend already runs with a different number of CPU devices.
     """
-    if _user_chose():
-        return None
-    n = host_devices_setting()
     if n is None:
-        return None
+        chosen = _chosen_elsewhere()
+        if chosen is not None:
+            return chosen if chosen > 0 else None
+        n = host_devices_setting()
+        if n is None:
+            return None
+    elif isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise ValueError(f"use_host_devices: n must be a positive integer or None, got {n!r}")
     try:
         jax.config.update("jax_num_cpu_devices", n)
-    except RuntimeError:  # the backend is already running: its device count is fixed
-        return None
+    except RuntimeError:  # JAX refuses once its backend runs; fine if the count is already the one asked for
+        running = len(jax.devices("cpu"))
+        if running != n:
+            raise RuntimeError(
+                f"jaxplan.use_host_devices({n}) came too late: JAX's backend already runs with {running} CPU "
+                f"device(s), fixed when it started. Call it right after `import jaxplan`, before any JAX "
+                f"computation (or set XLA_FLAGS=--xla_force_host_platform_device_count={n} before Python starts)."
+            ) from None
     return n
 
 
 AUTO_MIN_PER_DEVICE = 8
-"""``mesh="auto"`` splits a batch only if every device gets at least this many elements.
-
-Measured (`benchmarks/run_all.py --only scale`, 2 devices against ``mesh=None`` timed in turn):
-an `iaco` `plan_batch` of 8 scenarios (4 per device) ran at 0.87–1.03×, one of 16 (8 per
-device) at 1.07–1.20×: with few scenarios per device, the device with the longer walks
-keeps the other waiting, while one device's walk threads share all its ants."""
+"""``mesh="auto"`` splits a batch only if every device gets at least this many elements: with few
+scenarios per device, the device with the longer walks keeps the other waiting, while one device's
+walk threads share all its ants (measurements: docs/decisions.md)."""
 
 
 def auto_mesh(mesh: Any, batch: int) -> Mesh | None:

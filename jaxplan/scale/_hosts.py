@@ -18,12 +18,13 @@ result equals a single-host run of the whole batch.
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 from typing import Mapping
 
 import jax
 import numpy as np
+
+from jaxplan.core.io import atomic_file
 
 __all__ = ["initialize", "host_share", "shard_path", "write_shard", "merge_shards"]
 
@@ -75,17 +76,8 @@ def write_shard(out_dir: str | Path, name: str, arrays: Mapping[str, np.ndarray]
     """Writes this host's arrays (leading axis = its share) atomically: a killed host leaves no half file."""
     path = shard_path(out_dir, name, process_id, num_processes)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, **{k: np.asarray(v) for k, v in arrays.items()})
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    with atomic_file(path) as f:
+        np.savez(f, **{k: np.asarray(v) for k, v in arrays.items()})
     return path
 
 

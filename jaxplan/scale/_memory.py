@@ -7,10 +7,9 @@ anything, and refuses a batch above the limit with the largest batch that would 
 
 The estimate counts the arrays that scale with the batch (each with the number of copies the
 compiled program keeps alive at once, read off its buffer assignment) plus the per-map tables;
-it does not count the process itself (Python, JAX, numba and the compiled code: about 0.4 GB).
-Measured as the rise of the peak RSS during a run of an already compiled program, it was an upper
-bound within a factor of 1.2–2.3 (iaco with 1,024 ants on brc202d; iaco, praco and opt_ant with
-64 runs on 100x100); `tests/test_scale.py` checks the bound on real runs.
+it does not count the process itself (Python, JAX, numba and the compiled code). Against the rise
+of the peak RSS during a run of an already compiled program it is an upper bound, not far above
+(the measured factors: docs/decisions.md); `tests/test_scale.py` checks the bound on real runs.
 """
 
 from __future__ import annotations

@@ -1,13 +1,16 @@
-"""Tuning the planners' weights (DESIGN §7): objectives over scenario batches, gradient-free and differentiable optimisers.
+"""Tuning the planners' weights (DESIGN §7): objectives over scenario batches, gradient-free and differentiable
+optimisers.
 
 * `_bounds`: the search box (`make_bounds`, validated: finite, low < high, named dimensions).
 * `_objective`: `Objective` — a population ``f32[P, D]`` of weight vectors evaluated over a
   training split of scenarios × seeds in ONE compiled call (`aco_objective`, `dwa_objective`,
   `function_objective`); a held-out test split kept apart.
-* `_strategies`, `_sparrow`, `_gradients`: one `Strategy` interface (``init/ask/tell``) for grid
-  and random search, CMA-ES and SNES (evosax), li2026's ISSA and the plain SSA, the
-  score-function (REINFORCE) and surrogate routes; `relaxed_dwa` differentiates softmax-DWA
-  episodes through `lax.scan` with optax.
+* `_base`: the one `Strategy` interface (``init/ask/tell``) and the helpers every state shares;
+  `_search`, `_evosax`, `_sparrow`, `_gradients`: grid and random search, CMA-ES and SNES
+  (evosax), li2026's ISSA and the plain SSA, the score-function (REINFORCE) and surrogate routes;
+  `relaxed_dwa` differentiates softmax-DWA episodes through `lax.scan` with optax.
+* `_strategies`: the registry of strategies by name (`STRATEGY_SPECS`, `make_strategy`), used by
+  configs, the workflow and the benchmarks.
 * `_config`, `_workflow`: TOML tuning configs (schema: `TuneFile`) and `run_tuning` (progress, CSV log, orbax
   checkpoints with exact resume, best weights as a ``[[planners]]`` fragment, convergence figure).
 
@@ -18,7 +21,12 @@ Example::
 """
 
 from jaxplan.tune._bounds import Bounds, clip, from_unit, make_bounds, reflect, to_unit
-from jaxplan.tune._strategies import STRATEGIES, Strategy, cma_es, grid_search, make_strategy, random_search, sanitize, snes
+from jaxplan.tune._base import Strategy, sanitize
+from jaxplan.tune._evosax import cma_es, snes
+from jaxplan.tune._search import grid_search, random_search
+from jaxplan.tune._strategies import (
+    STRATEGIES, STRATEGY_SPECS, StrategySpec, make_strategy, option_problems, strategy_options,
+)
 from jaxplan.tune._gradients import (
     RelaxedResult, quadratic_features, reinforce, relaxed_dwa, relaxed_dwa_loss, score_function_grad, surrogate,
 )
@@ -27,12 +35,15 @@ from jaxplan.tune._objective import (
     dwa_scenarios, function_objective,
 )
 from jaxplan.tune._config import TuneConfig, TuneFile, apply_tune_quick, load_tune_config, parse_tune_config
-from jaxplan.tune._workflow import TuneResult, build_objective, compare, fragment_toml, plot_tuning, run_tuning, tune_loop
+from jaxplan.tune._workflow import (
+    TuneResult, build_objective, compare, fragment_toml, plot_tuning, run_tuning, tune_loop,
+)
 from jaxplan.tune._sparrow import SparrowState, adaptive_weight, issa, levy, ssa
 
 __all__ = [
     "Bounds", "clip", "from_unit", "make_bounds", "reflect", "to_unit",
-    "STRATEGIES", "Strategy", "cma_es", "grid_search", "make_strategy", "random_search", "sanitize", "snes",
+    "STRATEGIES", "STRATEGY_SPECS", "Strategy", "StrategySpec", "cma_es", "grid_search", "make_strategy",
+    "option_problems", "random_search", "sanitize", "snes", "strategy_options",
     "RelaxedResult", "quadratic_features", "reinforce", "relaxed_dwa", "relaxed_dwa_loss", "score_function_grad",
     "surrogate", "ACO_METRICS", "DWA_METRICS", "DWAEpisodes", "Evaluation", "Objective", "Split", "aco_objective",
     "dwa_episodes", "dwa_objective", "dwa_scenarios", "function_objective",

@@ -27,7 +27,6 @@
 
 from __future__ import annotations
 
-import math
 from typing import Any, Callable, NamedTuple
 
 import jax
@@ -35,8 +34,8 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
+from jaxplan.tune._base import Strategy, box, require_positive, sanitize, track_best
 from jaxplan.tune._bounds import Bounds, reflect
-from jaxplan.tune._strategies import Strategy, _box, _track_best, require_positive, sanitize
 
 __all__ = ["score_function_grad", "reinforce", "surrogate", "relaxed_dwa_loss", "relaxed_dwa", "RelaxedResult",
            "quadratic_features"]
@@ -86,7 +85,7 @@ def reinforce(population_size: int, sigma: float = 0.1, learning_rate: float = 0
     opt = optax.adam(learning_rate)
 
     def init(key, bounds: Bounds, x0=None):
-        low, high = _box(bounds)
+        low, high = box(bounds)
         mu = jnp.full(bounds.dim, 0.5) if x0 is None else jnp.clip((jnp.asarray(x0) - low) / (high - low), 0, 1)
         return ReinforceState(mu, opt.init(mu), jnp.zeros((population_size, bounds.dim)), low, high,
                               low + mu * (high - low), jnp.asarray(jnp.inf, jnp.float32), jnp.asarray(0, jnp.int32))
@@ -104,7 +103,7 @@ def reinforce(population_size: int, sigma: float = 0.1, learning_rate: float = 0
         g = score_function_grad(f, eps, sigma)
         upd, o = opt.update(g, state.opt, state.mu)
         mu = jnp.clip(optax.apply_updates(state.mu, upd), 0.0, 1.0)
-        bx, bf = _track_best(state.best_x, state.best_f, pop, fitness)
+        bx, bf = track_best(state.best_x, state.best_f, pop, fitness)
         return state._replace(mu=mu, opt=o, eps=eps, best_x=bx, best_f=bf, generation=state.generation + 1)
 
     return Strategy("reinforce", population_size, init, ask, tell)
@@ -146,7 +145,7 @@ def surrogate(population_size: int, generations: int, ridge: float = 1e-3, steps
     opt = optax.adam(learning_rate)
 
     def init(key, bounds: Bounds, x0=None):
-        low, high = _box(bounds)
+        low, high = box(bounds)
         D = bounds.dim
         best = (low + high) / 2 if x0 is None else jnp.asarray(x0, jnp.float32)
         return SurrogateState(jnp.zeros((cap, D)), jnp.zeros(cap), jnp.asarray(0, jnp.int32), low, high, best,
@@ -189,7 +188,7 @@ def surrogate(population_size: int, generations: int, ridge: float = 1e-3, steps
         fitness, _ = sanitize(fitness)
         z = (pop - state.low) / (state.high - state.low)
         idx = (state.n + jnp.arange(population_size)) % cap
-        bx, bf = _track_best(state.best_x, state.best_f, pop, fitness)
+        bx, bf = track_best(state.best_x, state.best_f, pop, fitness)
         return state._replace(Z=state.Z.at[idx].set(z), F=state.F.at[idx].set(fitness),
                               n=jnp.minimum(state.n + population_size, cap), best_x=bx, best_f=bf,
                               generation=state.generation + 1)

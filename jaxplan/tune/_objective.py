@@ -45,8 +45,8 @@ from jax.sharding import PartitionSpec as P
 from jaxplan.scale import BATCH_AXIS, auto_mesh, pad_leading, padded_size
 from jaxplan.tune._bounds import Bounds, make_bounds
 
-__all__ = ["Split", "Evaluation", "Objective", "aco_objective", "dwa_objective", "function_objective", "DWAEpisodes", "dwa_episodes",
-           "dwa_scenarios", "ACO_METRICS", "DWA_METRICS", "FAIL_GAP"]
+__all__ = ["Split", "Evaluation", "Objective", "aco_objective", "dwa_objective", "function_objective", "DWAEpisodes",
+           "dwa_episodes", "dwa_scenarios", "ACO_METRICS", "DWA_METRICS", "FAIL_GAP"]
 
 ACO_METRICS = ("gap", "failure", "turns", "roughness", "clearance")
 DWA_METRICS = ("time", "failure", "collision", "clearance")
@@ -517,4 +517,5 @@ def function_objective(fn: Callable, space: Mapping | Bounds, defaults=None, tra
     dummy = Split(np.zeros((1, 2), np.int64), np.zeros((1, 2), np.int64), np.ones(1), tuple(train_seeds))
     test = dummy._replace(seeds=tuple(test_seeds))
     return Objective(name, "function", name, bounds, np.clip(defaults, bounds.low, bounds.high), {"cost": 1.0},
-                     {"train": dummy, "test": test}, program, {n: np.asarray(v) for n, v in zip(bounds.names, defaults)})
+                     {"train": dummy, "test": test}, program,
+                     {n: np.asarray(v) for n, v in zip(bounds.names, defaults)})

@@ -43,8 +43,8 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
+from jaxplan.tune._base import Strategy, box, require_positive, sanitize, track_best
 from jaxplan.tune._bounds import Bounds
-from jaxplan.tune._strategies import Strategy, _box, _track_best, require_positive, sanitize
 
 __all__ = ["SparrowState", "ssa", "issa", "adaptive_weight", "levy"]
 
@@ -77,7 +77,7 @@ def levy(key, shape, zeta: float = 1.5, scale: float = 1.0) -> jnp.ndarray:
 
 
 def _init(key, bounds: Bounds, x0=None, *, P: int) -> SparrowState:
-    low, high = _box(bounds)
+    low, high = box(bounds)
     D = bounds.dim
     best = (low + high) / 2 if x0 is None else jnp.asarray(x0, jnp.float32)
     return SparrowState(jnp.full((P, D), 0.5), jnp.full((P,), jnp.inf), low, high, best,
@@ -90,7 +90,7 @@ def _tell(state: SparrowState, pop, fitness) -> SparrowState:
     better = fitness < state.F  # F = inf before the first tell: everything is taken
     X = jnp.where(better[:, None], z, state.X)
     F = jnp.where(better, fitness, state.F)
-    bx, bf = _track_best(state.best_x, state.best_f, pop, fitness)
+    bx, bf = track_best(state.best_x, state.best_f, pop, fitness)
     return state._replace(X=X, F=F, best_x=bx, best_f=bf, generation=state.generation + 1)
 
 
@@ -179,11 +179,15 @@ def _make(name: str, P: int, T: int, improved: bool, pd=0.2, sd=0.2, st=0.8, lam
     return Strategy(name, P, init, ask, _tell)
 
 
-def ssa(population_size: int, generations: int, **options) -> Strategy:
-    """The plain sparrow search (Xue & Shen 2020) over ``generations`` generations."""
-    return _make("ssa", population_size, generations, False, **options)
+def ssa(population_size: int, generations: int, pd: float = 0.2, sd: float = 0.2, st: float = 0.8,
+        lam_max: float = 0.9, lam_min: float = 0.4, levy_scale: float = 1.0) -> Strategy:
+    """The plain sparrow search (Xue & Shen 2020) over ``generations`` generations (producer share ``pd``,
+    sentinel share ``sd``, alarm threshold ``st``; ``lam_*`` and ``levy_scale`` act in ISSA only)."""
+    return _make("ssa", population_size, generations, False, pd, sd, st, lam_max, lam_min, levy_scale)
 
 
-def issa(population_size: int, generations: int, **options) -> Strategy:
-    """li2026's improved sparrow search (see the module docstring)."""
-    return _make("issa", population_size, generations, True, **options)
+def issa(population_size: int, generations: int, pd: float = 0.2, sd: float = 0.2, st: float = 0.8,
+         lam_max: float = 0.9, lam_min: float = 0.4, levy_scale: float = 1.0) -> Strategy:
+    """li2026's improved sparrow search (see the module docstring; options as `ssa`'s, with the adaptive
+    weight's ``lam_max``/``lam_min`` of Eq. 6 and the Lévy step scale)."""
+    return _make("issa", population_size, generations, True, pd, sd, st, lam_max, lam_min, levy_scale)

@@ -22,7 +22,7 @@ Run folder ``OUT/NAME`` (``OUT/NAME-quick`` for quick runs)::
     convergence.png           best-so-far and generation mean against evaluations
 
 A checkpoint commits in two steps — orbax writes the state, then the manifest (temporary
-file, fsync, rename: `jaxplan.experiments.runner.atomic_write`) names it — so a process
+file, fsync, rename: `jaxplan.core.io.atomic_write`) names it — so a process
 killed at any instant leaves at worst a state the manifest does not name, and the resume
 recomputes those generations.
 """
@@ -43,9 +43,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxplan.experiments.runner import RunFolderError, atomic_write, clock
+from jaxplan.core.io import atomic_write
+from jaxplan.experiments import RunFolderError, clock
+from jaxplan.tune._base import Strategy, sanitize
 from jaxplan.tune._objective import Objective, Split
-from jaxplan.tune._strategies import Strategy, make_strategy, sanitize
+from jaxplan.tune._strategies import make_strategy
 
 __all__ = ["tune_loop", "run_tuning", "TuneResult", "fragment_toml", "plot_tuning"]
 
@@ -293,7 +295,7 @@ def _splits(cfg, grid, starts, goals, optimal) -> tuple[Split, Split]:
 
 def build_objective(cfg) -> Objective:
     """The `Objective` of a `TuneConfig` (map loaded, scenarios chosen and split)."""
-    from jaxplan.experiments.runner import load_map_spec, spec_scenarios
+    from jaxplan.experiments import load_map_spec, spec_scenarios
     from jaxplan.tune._objective import aco_objective, dwa_objective
 
     grid, s0, g0, _ = load_map_spec(cfg.map)

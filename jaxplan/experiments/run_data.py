@@ -1,0 +1,183 @@
+"""A run folder read back for its figures: the config, the work plan, the manifest, the trials and each
+chunk's stored arrays, with the selection helpers every figure kind shares (`jaxplan.experiments.figure_kinds`).
+
+The maps and scenarios are rebuilt from the config (`jaxplan.experiments.prepare`: deterministic, no
+planning); a chunk's arrays are read from its orbax checkpoint on first use.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from jaxplan.experiments import plots
+from jaxplan.experiments.config import METRICS, ExperimentConfig, FigureSpec, applies, apply_quick, parse_config
+
+__all__ = ["RunData", "load_run", "selected", "panel_grid", "map_layer", "figure_title", "figure_metric",
+           "metric_label", "need_trials", "scenario_of", "scenario_seed", "cell_path_m", "trial_obstacles",
+           "disc_positions"]
+
+plt = plots.plt  # the Agg backend is chosen in plots
+
+
+@dataclass
+class RunData:
+    """A run folder read back: config (quick applied if it ran quick), maps, manifest, trials."""
+
+    run_dir: Path
+    config: ExperimentConfig
+    prep: Any  # prepare.Prepared
+    manifest: dict
+    trials: dict | None
+    _arrays: dict
+
+    def arrays(self, m: int, p: int, scenario: int) -> tuple[dict, int] | None:
+        """(chunk arrays, row of ``scenario`` in them) for map ``m``, planner ``p``; None if not stored."""
+        from jaxplan.experiments.store import load_chunk_arrays
+
+        for u in self.prep.units:
+            if u.m == m and u.p == p and u.lo <= scenario < u.hi:
+                if u.uid not in self.manifest.get("chunks", {}):
+                    return None
+                if u.uid not in self._arrays:
+                    try:
+                        self._arrays[u.uid] = load_chunk_arrays(self.run_dir, u.uid)
+                    except (FileNotFoundError, ValueError):
+                        self._arrays[u.uid] = None
+                a = self._arrays[u.uid]
+                return None if a is None else (a, scenario - u.lo)
+        return None
+
+
+def load_run(run_dir: str | os.PathLike, data_dir: str | os.PathLike | None = None) -> RunData:
+    """Reads a run folder written by `run_experiment`.
+
+    Raises:
+      FileNotFoundError: not a run folder (no config.toml), or no finished chunk.
+    """
+    from jaxplan.experiments import stats
+    from jaxplan.experiments.prepare import prepare
+    from jaxplan.experiments.store import read_manifest
+
+    run_dir = Path(run_dir)
+    cfg_path = run_dir / "config.toml"
+    if not cfg_path.is_file():
+        raise FileNotFoundError(f"{run_dir} is not a run folder (no config.toml); run `jaxplan run CONFIG` first")
+    meta_path = run_dir / "meta.json"
+    meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
+    cfg = parse_config(cfg_path.read_text(), data_dir=data_dir, source=str(cfg_path))
+    if meta.get("quick"):
+        cfg = apply_quick(cfg)
+    if meta.get("chunk"):
+        cfg = cfg.replace(chunk=int(meta["chunk"]))  # `--chunk` may have overridden the config's
+    manifest = read_manifest(run_dir)
+    if not manifest.get("chunks"):
+        raise FileNotFoundError(f"{run_dir} has no finished chunk yet")
+    trials_path = run_dir / "trials.csv"
+    trials = stats.read_trials(trials_path) if trials_path.is_file() else None
+    return RunData(run_dir, cfg, prepare(cfg), manifest, trials, {})
+
+
+# ---------------------------------------------------------------------------------------------
+# Helpers shared by the figure kinds
+
+
+def selected(run: RunData, spec: FigureSpec, kind: str | tuple[str, ...] | None = None
+              ) -> tuple[list[int], list[int]]:
+    """Indices of the maps and planners the figure names (default all; ``kind`` filters planners, and the maps
+    are those at least one selected planner runs on)."""
+    cfg = run.config
+    kinds = (kind,) if isinstance(kind, str) else kind
+    maps = spec.params.get("maps") or [m.spec.name for m in run.prep.maps]
+    labels = spec.params.get("planners") or [p.label for p in cfg.planners]
+    pi = [i for i, p in enumerate(cfg.planners) if p.label in labels and (kinds is None or p.kind in kinds)]
+    mi = [i for i, m in enumerate(run.prep.maps) if m.spec.name in maps
+          and any(applies(cfg.planners[p], m.spec) for p in pi)]
+    if not mi or not pi:  # e.g. a --quick run that keeps none of the figure's maps or planners
+        what = (f"{'/'.join(kinds)} planner" if kinds else "planner") if not pi else "map"
+        raise ValueError(f"figure {spec.name!r}: no {what} of this run selected")
+    return mi, pi
+
+
+def panel_grid(n: int, w: float = 5.0, h: float = 4.2, rows: int = 1):
+    fig, axes = plt.subplots(rows, n, figsize=(w * n, h * rows), constrained_layout=True, squeeze=False)
+    return fig, axes
+
+
+def map_layer(grid) -> str | None:
+    """The map layer worth showing: risk (chen2023) or terrain height (chu2024), else none."""
+    if np.any(np.asarray(grid.risk) > 0):
+        return "risk"
+    if np.ptp(np.asarray(grid.height)) > 0:
+        return "height"
+    return None
+
+
+def figure_title(spec: FigureSpec, default: str) -> str:
+    return spec.params.get("title") or default
+
+
+def figure_metric(run: RunData, spec: FigureSpec) -> str:
+    m = spec.params.get("metric")
+    if m is None:
+        m = (run.config.stats.metrics or run.config.metrics)[0]
+    return m
+
+
+def metric_label(metric: str) -> str:
+    unit = METRICS[metric].unit
+    return f"{metric} ({unit})" if unit else metric
+
+
+def need_trials(run: RunData) -> dict:
+    if run.trials is None:
+        raise FileNotFoundError(f"{run.run_dir}/trials.csv is missing: the run has not finished")
+    return run.trials
+
+
+def scenario_of(run: RunData, spec: FigureSpec, maps: Sequence[int]) -> int:
+    """The figure's ``scenario`` (default 0), checked against each of ``maps``' scenarios (the config cannot
+    always tell: scen filters and ``--quick`` counts keep fewer)."""
+    sc = int(spec.params.get("scenario", 0))
+    for m in maps:
+        n = len(run.prep.maps[m].starts)
+        if sc >= n:
+            quick = " in this --quick run" if run.config.is_quick else ""
+            raise ValueError(f"figure {spec.name!r}: scenario {sc} is past map {run.prep.maps[m].spec.name!r}'s "
+                             f"{n} scenario{'s' if n > 1 else ''}{quick} (0..{n - 1})")
+    return sc
+
+
+def scenario_seed(run: RunData, spec: FigureSpec, maps: Sequence[int] = ()) -> tuple[int, int, int]:
+    """(scenario, seed value, seed column) of a per-trial figure (defaults: scenario 0, the first seed)."""
+    seeds = run.config.seeds
+    sc = scenario_of(run, spec, maps)
+    seed = int(spec.params.get("seed", seeds[0]))
+    if seed not in seeds:
+        raise ValueError(f"figure {spec.name!r}: seed {seed} is not one of the run's seeds {list(seeds)}")
+    return sc, seed, seeds.index(seed)
+
+
+def cell_path_m(path: np.ndarray, n: int, res: float) -> np.ndarray:
+    """``[n, 2]`` cell-coordinate points -> metres (cell centres)."""
+    return (np.asarray(path[:n], np.float64) + 0.5) * res
+
+
+def trial_obstacles(run: RunData, m: int, p: int, sc: int, seed: int):
+    """The trial's `MovingObstacles` (the runner's own per-trial draw), or None."""
+    from jaxplan.experiments.execute import obstacle_fn
+
+    fn = obstacle_fn(run.prep.maps[m], m, run.config.planners[p], np.asarray([sc]))
+    return None if fn is None else fn(0, seed)
+
+
+def disc_positions(obs, times: np.ndarray) -> np.ndarray:
+    """``f64[len(times), M, 2]`` disc centres (m) at ``times`` (s)."""
+    from jaxplan.nav import trajectories
+
+    return np.asarray(trajectories(obs, np.asarray(times, np.float32)), np.float64)  # one vmapped call
