@@ -37,7 +37,7 @@ from jaxplan.dwa import ClearanceTable, DWAParams, DiscObstacles, dwa_control, s
 from jaxplan.dwa import Disc, advance, dynamic_window, footprint_offsets, footprint_radius
 from jaxplan.metrics import point_polyline_distance
 from jaxplan.nav._config import NavConfig
-from jaxplan.nav._obstacles import MovingObstacles, obstacle_state
+from jaxplan.nav._moving import MovingObstacles, obstacle_state
 from jaxplan.nav._replan import descend, disc_cells, distance_field, path_blocked, turn_vertices
 
 __all__ = ["RUNNING", "GOAL", "COLLISION", "TIMEOUT", "REASONS", "EpisodeInputs", "EpisodeOutput", "run_episodes"]

@@ -43,7 +43,7 @@ from jaxplan.grid import GridMap, clearance_field, shortest_lengths
 from jaxplan.metrics import EnergyModel, energy
 from jaxplan.nav._config import LOCAL_PLANNERS, PREDICTIONS, SUBGOAL_MODES, NavConfig
 from jaxplan.nav._episode import GOAL, REASONS, EpisodeInputs, run_episodes
-from jaxplan.nav._obstacles import MovingObstacles, no_obstacles, obstacle_state, stack_obstacles, trajectories
+from jaxplan.nav._moving import MovingObstacles, no_obstacles, obstacle_state, stack_obstacles, trajectories
 from jaxplan.nav._pipelines import Pipeline, get_pipeline
 from jaxplan.scale import BATCH_AXIS, auto_mesh, pad_leading
 
