@@ -3,7 +3,8 @@
 * `navigate` / `navigate_batch` / `navigate_multi` (`_front`): host fronts with validation,
   the planning map inflated to d_safe, global plans, waypoints, one compiled episode call,
   metrics; results as `Episode` / `EpisodeBatch` (`_results`); argument checks (`_checks`).
-* `run_episodes` (`_episode`): the pure episode program (``[B episodes, N robots]``).
+* `run_episodes` (`_episode`): the pure episode program (``[B episodes, N robots]``), its state and
+  inputs (`_state`), the tracking rules (`_tracking`).
 * `NavConfig` (`_config`), `Pipeline`/`pipelines` (`_pipelines`: the seeds' systems and
   cui2025's ablations), in-episode re-planning (`_replan`).
 * Moving obstacles: the motion model (`_moving`: `MovingObstacles`, `moving_obstacles`, the pure
@@ -13,7 +14,7 @@
 
 from jaxplan.nav._checks import resolve_config
 from jaxplan.nav._config import NavConfig
-from jaxplan.nav._episode import REASONS, EpisodeInputs, EpisodeOutput, run_episodes
+from jaxplan.nav._episode import run_episodes
 from jaxplan.nav._front import navigate, navigate_batch, navigate_multi, planning_grid
 from jaxplan.nav._moving import (
     MovingObstacles, concat_obstacles, discs_at, moving_obstacles, no_obstacles, obstacle_state, pad_obstacles,
@@ -21,6 +22,7 @@ from jaxplan.nav._moving import (
 )
 from jaxplan.nav._pipelines import PIPELINES, Pipeline, get_pipeline, pipelines
 from jaxplan.nav._results import Episode, EpisodeBatch
+from jaxplan.nav._state import REASONS, EpisodeInputs, EpisodeOutput
 from jaxplan.nav._traffic import crossing_traffic, head_on, random_obstacles
 
 __all__ = [

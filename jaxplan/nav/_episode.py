@@ -44,105 +44,13 @@ from jaxplan.dwa import Disc, advance, footprint_offsets, footprint_radius
 from jaxplan.metrics import point_polyline_distance
 from jaxplan.nav._config import NavConfig
 from jaxplan.nav._moving import MovingObstacles, obstacle_state
-from jaxplan.nav._replan import descend, disc_cells, distance_field, path_blocked, turn_vertices
+from jaxplan.nav._replan import path_blocked, replan_slots
+from jaxplan.nav._state import COLLISION, GOAL, RUNNING, TIMEOUT, Carry, EpisodeInputs, EpisodeOutput
 from jaxplan.nav._tracking import corner_cap, follow, lookahead_point, rewatch, subgoal_index, threatened
 
-__all__ = ["RUNNING", "GOAL", "COLLISION", "TIMEOUT", "REASONS", "EpisodeInputs", "EpisodeOutput", "run_episodes"]
-
-RUNNING, GOAL, COLLISION, TIMEOUT = 0, 1, 2, 3
-REASONS = ("running", "goal", "collision", "time limit")
-"""Why a robot stopped, indexed by the codes above."""
+__all__ = ["run_episodes"]
 
 _FAR = 1e6  # metres: where a disc that must not matter is put (finite: keeps gradients finite)
-
-
-class EpisodeInputs(NamedTuple):
-    """One call's episodes (a pytree; leading axes ``[B, N]`` = episodes, robots).
-
-    Attributes:
-      start: ``f32[B, N, 5]`` initial states (x, y, theta, v, omega).
-      goal: ``f32[B, N, 2]`` goal positions (m).
-      goal_cell: ``i32[B, N, 2]`` goal cells (for re-planning).
-      waypoints: ``f32[B, N, K, 2]`` waypoint polylines (m), ending at the goal; slots after
-        ``n_waypoints`` repeat the last.
-      n_waypoints: ``i32[B, N]`` (>= 1).
-      time_limit: ``f32[B, N]`` seconds (<= `NavConfig.max_time`).
-      obstacles: `MovingObstacles` with leaves ``[B, M, …]`` (``M`` may be 0).
-      active: ``bool[B, N]`` robots that run; the others stand still at their start from step 0
-        (an infeasible scenario), still present as discs for the rest.
-    """
-
-    start: jnp.ndarray
-    goal: jnp.ndarray
-    goal_cell: jnp.ndarray
-    waypoints: jnp.ndarray
-    n_waypoints: jnp.ndarray
-    time_limit: jnp.ndarray
-    obstacles: MovingObstacles
-    active: jnp.ndarray
-
-
-class EpisodeOutput(NamedTuple):
-    """What `run_episodes` returns (numpy after transfer). ``S`` = `NavConfig.steps`.
-
-    Attributes:
-      states: ``f32[B, S + 1, N, 5]`` state after each step (row 0 = start); rows after a
-        robot is done repeat its final state.
-      controls: ``f32[B, S, N, 2]`` the (v, omega) applied at each step (zero once done).
-      recovery: ``bool[B, S, N]`` the DWA found no feasible sample (recovery manoeuvre).
-      steps: ``i32[B, N]`` control steps the robot took (its episode time = steps · period).
-      reason: ``i32[B, N]`` `REASONS` code.
-      collisions: ``i32[B, N]`` contacts (runs of colliding steps) with map, discs or robots.
-      pair_collisions: ``i32[B, N, N]`` contacts between robots i and j (symmetric).
-      replans: ``i32[B, N]`` successful re-plans.
-      rmse: ``f32[B, N]`` RMS distance (m) of the positions after each step to the polyline
-        the robot was tracking at that step (from where it adopted it — the start or the
-        position of a re-plan — through its waypoints); NaN for a robot that did not move.
-      waypoints: ``f32[B, N, K, 2]`` and ``n_waypoints [B, N]``: the final waypoint lists.
-      executed: ``i32[B]`` control steps the loop ran (a multiple of the chunk; the loop stops
-        once every robot of the batch — on a mesh, of the device's share — is done).
-    """
-
-    states: jnp.ndarray
-    controls: jnp.ndarray
-    recovery: jnp.ndarray
-    steps: jnp.ndarray
-    reason: jnp.ndarray
-    collisions: jnp.ndarray
-    pair_collisions: jnp.ndarray
-    replans: jnp.ndarray
-    rmse: jnp.ndarray
-    waypoints: jnp.ndarray
-    n_waypoints: jnp.ndarray
-    executed: jnp.ndarray
-
-
-class _Carry(NamedTuple):
-    state: jnp.ndarray  # [B, N, 5]
-    waypoints: jnp.ndarray  # [B, N, K, 2]
-    n_wp: jnp.ndarray  # [B, N]
-    index: jnp.ndarray  # [B, N] current waypoint
-    done: jnp.ndarray  # [B, N]
-    reason: jnp.ndarray  # [B, N]
-    steps: jnp.ndarray  # [B, N]
-    hit: jnp.ndarray  # [B, N] in contact after the last step
-    pair_hit: jnp.ndarray  # [B, N, N]
-    collisions: jnp.ndarray  # [B, N]
-    pair_collisions: jnp.ndarray  # [B, N, N]
-    replans: jnp.ndarray  # [B, N]
-    last_replan: jnp.ndarray  # [B, N] step of the last re-plan attempt
-    origin: jnp.ndarray  # [B, N, 2] where the tracked polyline begins (start, or the position at a re-plan)
-    sq_error: jnp.ndarray  # [B, N] sum of squared distances to the tracked polyline
-    error: jnp.ndarray  # [B, N] distance to the tracked polyline after the last step
-    watch: jnp.ndarray  # [B, N, 2] the waypoint whose approach is being watched (m)
-    closest: jnp.ndarray  # [B, N] closest approach to that waypoint so far (m)
-    progress_t: jnp.ndarray  # [B, N] step of the last approach by NavConfig.stall_progress
-    creep: jnp.ndarray  # [B, N] stalled: top speed stall_speed until the waypoint is passed
-    spin: jnp.ndarray  # [B, N] net heading change (rad) since the last approach to the goal, a crowd or an orbit
-    goal_best: jnp.ndarray  # [B, N] that approach: closest distance to the goal so far (m)
-    stall_replan: jnp.ndarray  # [B, N] started creeping, its re-plan not attempted yet (no free slot)
-    detour: jnp.ndarray  # [B, N] tracking a path planned around discs: re-checked every NavConfig.recheck_period
-    t: jnp.ndarray  # scalar step counter
 
 
 def _robot_discs(state: jnp.ndarray, robot) -> tuple[jnp.ndarray, jnp.ndarray]:
@@ -157,13 +65,13 @@ def _robot_discs(state: jnp.ndarray, robot) -> tuple[jnp.ndarray, jnp.ndarray]:
 
 
 
-def _current_waypoint(c: _Carry) -> jnp.ndarray:
+def _current_waypoint(c: Carry) -> jnp.ndarray:
     """``[B, N, 2]`` the waypoint each robot is tracking (m)."""
     return jnp.take_along_axis(c.waypoints, c.index[..., None, None], axis=2)[:, :, 0]
 
 
-def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp.ndarray,
-                    goal: jnp.ndarray) -> _Carry:
+def _watch_progress(config: NavConfig, c: Carry, pos: jnp.ndarray, crowded: jnp.ndarray,
+                    goal: jnp.ndarray) -> Carry:
     """Updates the stall and orbit watches (see `NavConfig.stall_time`, `NavConfig.orbit_angle`):
     ``pos, goal [B, N, 2]``; ``crowded [B, N]``: a disc is near.
 
@@ -196,86 +104,6 @@ def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp
     stall_replan = creep & (c.stall_replan | ~c.creep | again)
     return c._replace(watch=target, closest=closest, progress_t=progress_t, creep=creep, stall_replan=stall_replan,
                       spin=spin, goal_best=goal_best)
-
-
-
-def _replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: _Carry, inputs: EpisodeInputs,
-                  need: jnp.ndarray, centres: jnp.ndarray,
-                  reach: jnp.ndarray) -> tuple[_Carry, jnp.ndarray, jnp.ndarray]:
-    """Re-plans up to `NavConfig.replan_slots` of the robots with ``need [B, N] > 0`` per group
-    of `NavConfig.replan_group` episodes (0: the whole batch is one group).
-
-    ``need`` is 2 for a robot that must re-plan (path blocked, drifted off, stalled) and 1 for
-    a detour re-check (`NavConfig.recheck_period`); the 2s take the slots first, and a
-    re-check's path replaces the robot's only if it is `NavConfig.recheck_gain` shorter than
-    what is left of the current one.
-
-    ``centres [B, N, D, 2]`` / ``reach [B, N, D]``: the discs whose nearby cells are closed.
-    Only the chosen robots' fields are computed (a gather into fixed slots), so the cost
-    grows with the number of groups, not with the batch; robots left over try again on the
-    next step. Groups are consecutive episodes, so a device holding whole groups computes
-    exactly what one device computes for them. The slots of all groups are planned one after
-    another (`lax.map`), not vectorised: an unused slot then costs nothing, where under
-    ``vmap`` every slot ran the relaxation sweeps of the longest one (measured on brc202d,
-    50 episodes among walkers, identical trajectories: the episode call took 8.3 s vectorised,
-    5.1 s sequentially and 2.3 s without re-planning). Returns the carry, ``bool[B, N]``: the robots that were attempted,
-    and ``bool[B, N]``: those whose path was replaced.
-    """
-    B, N, K = c.waypoints.shape[:3]
-    H, W = free.shape
-    G = min(config.replan_group or B, B)
-    Bp = -(-B // G) * G
-    Q = min(config.replan_slots, G * N)
-    # A partial last group is padded with robots that need nothing: only these gathers grow.
-    pad = lambda x: jnp.concatenate([x, jnp.zeros((Bp - B,) + x.shape[1:], x.dtype)]) if Bp > B else x  # noqa: E731
-    flat_need = pad(need).reshape(Bp // G, G * N).astype(jnp.int32)
-    # The first Q, must-re-plans first.
-    _, slot = jax.vmap(lambda n: lax.top_k(n * (G * N) - jnp.arange(G * N), Q))(flat_need)
-    slot = (slot + (jnp.arange(Bp // G) * (G * N))[:, None]).reshape(-1)  # [S] robots (flat over [Bp, N])
-    take = lambda x: pad(x).reshape((Bp * N,) + x.shape[2:])[slot]  # noqa: E731
-    kind = take(need)
-    use, check = kind > 0, kind == 1
-    state, wp, n_wp, index = take(c.state), take(c.waypoints), take(c.n_wp), take(c.index)
-
-    def one(args):
-        need1, check1, state1, wp1, n1, index1, goal_cell1, cen, rch = args
-        closed = disc_cells((H, W), cen, jnp.where(need1, rch, 0.0), resolution, _SPAN)
-        cell = jnp.clip(jnp.floor(state1[:2] / resolution).astype(jnp.int32), 0, jnp.asarray([W - 1, H - 1]))
-        plan_free = free & ~closed
-        plan_free = plan_free.at[cell[1], cell[0]].set(free[cell[1], cell[0]])  # the robot's own cell stays open
-        field = distance_field(plan_free, goal_cell1, need1, config.replan_sweeps, until=cell)
-        cells, n = descend(field, plan_free, cell, config.replan_cells)
-        pts, m = turn_vertices(cells, jnp.maximum(n, 1), K)
-        # A re-check keeps the current path unless the new one is clearly shorter: the field's
-        # length (the same octile grid metric as the turn-vertex polylines) against what is left.
-        new_len = field[cell[1], cell[0]] * resolution
-        legs = jnp.sqrt(jnp.sum((wp1[1:] - wp1[:-1]) ** 2, axis=-1))
-        j = jnp.arange(1, K)
-        left = (jnp.sqrt(jnp.sum((wp1[index1] - state1[:2]) ** 2))
-                + jnp.sum(jnp.where((j > index1) & (j < n1), legs, 0.0)))
-        better = new_len + config.recheck_gain < left
-        return (pts + 0.5) * resolution, m, need1 & (n > 1) & (~check1 | better)
-
-    pts, m, ok = lax.map(one, (use, check, state, wp, n_wp, index, take(inputs.goal_cell), take(centres), take(reach)))
-    g = take(inputs.goal)
-    # The last waypoint is the goal itself.
-    pts = jnp.where(jnp.arange(K)[None, :, None] >= m[:, None, None] - 1, g[:, None, :], pts)
-
-    def put(x, new, mask):
-        flat = pad(x).reshape((Bp * N,) + x.shape[2:])
-        upd = jnp.where(mask.reshape(mask.shape + (1,) * (flat.ndim - 1)), new, flat[slot])
-        return flat.at[slot].set(upd).reshape((Bp,) + x.shape[1:])[:B]
-
-    attempted = put(jnp.zeros((B, N), bool), use, use)
-    replaced = put(jnp.zeros((B, N), bool), ok, ok)
-    c = c._replace(waypoints=put(c.waypoints, pts, ok), n_wp=put(c.n_wp, m, ok),
-                   index=put(c.index, jnp.zeros_like(m), ok), replans=put(c.replans, take(c.replans) + 1, ok),
-                   origin=put(c.origin, state[:, :2], ok), error=put(c.error, jnp.zeros_like(m, c.error.dtype), ok))
-    return c, attempted, replaced
-
-
-_SPAN = 3
-"""Cells around a blocking disc's cell that re-planning examines (reach up to 3.5 cells)."""
 
 
 def _centres_at(obs: MovingObstacles, times: jnp.ndarray) -> jnp.ndarray:
@@ -337,12 +165,11 @@ def _seen_discs(robot, obs: MovingObstacles, state: jnp.ndarray, t: jnp.ndarray)
     return _Discs(pos_all, vel_all, rad_all, rc, rr)
 
 
-def _next_waypoints(config: NavConfig, table: ClearanceTable, c: _Carry, pos: jnp.ndarray) -> _Carry:
+def _next_waypoints(config: NavConfig, table: ClearanceTable, c: Carry, pos: jnp.ndarray) -> Carry:
     """Stage 2: each robot's current waypoint (`subgoal_index`); ``pos [B, N, 2]`` (m)."""
     B, N = pos.shape[:2]
     # Only a creeping robot holds a waypoint whose way on is not clear: applied to every robot, the
-    # rule sharpened turns at corners (warehouse, mean max curvature 1.20 -> 1.94 1/m) and cost
-    # evasions among walkers (random-64-64-20 with 5 walkers, 5 seeds: success 94.4 -> 90.0 %).
+    # rule sharpened turns at corners and cost evasions among walkers.
     near = jnp.where(c.creep, config.switch_min, config.switch_radius).reshape(-1)
     index = jax.vmap(subgoal_index, in_axes=(0, 0, 0, 0, None, 0, None, None))(
         pos.reshape(B * N, 2), c.waypoints.reshape((B * N,) + c.waypoints.shape[2:]), c.n_wp.reshape(-1),
@@ -357,10 +184,10 @@ def _crowded(config: NavConfig, discs: _Discs, pos: jnp.ndarray) -> jnp.ndarray:
     return jnp.any(gap < 0.5 * config.block_distance, axis=-1)
 
 
-def _replanning(config: NavConfig, free: jnp.ndarray, resolution, inputs: EpisodeInputs, c: _Carry,
-                pos: jnp.ndarray, discs: _Discs, crowded: jnp.ndarray) -> _Carry:
+def _replanning(config: NavConfig, free: jnp.ndarray, resolution, inputs: EpisodeInputs, c: Carry,
+                pos: jnp.ndarray, discs: _Discs, crowded: jnp.ndarray) -> Carry:
     """Stage 4: the robots that must re-plan (path blocked, drifted off, stalled) or may re-check a detour,
-    and their re-plans (`_replan_slots`, in a `lax.cond` taken only on steps where some robot needs one)."""
+    and their re-plans (`replan_slots`, in a `lax.cond` taken only on steps where some robot needs one)."""
     B, N = pos.shape[:2]
     M = inputs.obstacles.radii.shape[-1]
     C = discs.robots.shape[2]
@@ -406,14 +233,14 @@ def _replanning(config: NavConfig, free: jnp.ndarray, resolution, inputs: Episod
     check = c.detour & (since >= config.recheck_period - 1e-6) & due & ~c.done & ~must
     need = jnp.where(must, 2, jnp.where(check, 1, 0))
     # Nor is the way closed around a walker moving away from the robot: a re-plan would go round
-    # it, and the next re-check (or block) back (measured: a robot following a walker up a
-    # warehouse aisle re-planned 66 times in 180 s).
+    # it, and the next re-check (or block) back (a robot following a walker up a warehouse aisle
+    # re-planned over and over).
     rel = pos_all - pos[:, :, None, :]
     away = jnp.sum(vel_all * rel, axis=-1) / jnp.maximum(jnp.sqrt(jnp.sum(rel * rel, axis=-1)), 1e-6)
     away = (away >= recede) if (M > 0 or N > 1) else jnp.zeros_like(reach, bool)
     closing = future.reshape(B, N, -1, 2), jnp.repeat(jnp.where(away, 0.0, reach), P, axis=-1)
     c, tried, replaced = lax.cond(jnp.any(need > 0),
-                                  lambda cc: _replan_slots(config, free, resolution, cc, inputs, need, *closing),
+                                  lambda cc: replan_slots(config, free, resolution, cc, inputs, need, *closing),
                                   lambda cc: (cc, jnp.zeros_like(must), jnp.zeros_like(must)), c)
     c = c._replace(last_replan=jnp.where(tried, c.t, c.last_replan))
     if M > 0 or N > 1:  # with no disc at all nothing is closed, and no path goes round anything
@@ -425,7 +252,7 @@ def _replanning(config: NavConfig, free: jnp.ndarray, resolution, inputs: Episod
     return c._replace(watch=watch, closest=closest, progress_t=progress_t, stall_replan=c.stall_replan & ~tried)
 
 
-def _subgoal(config: NavConfig, c: _Carry, pos: jnp.ndarray) -> tuple[jnp.ndarray, _Carry]:
+def _subgoal(config: NavConfig, c: Carry, pos: jnp.ndarray) -> tuple[jnp.ndarray, Carry]:
     """Stage 5: ``[B, N, 2]`` the point each robot steers for: its current waypoint, or the look-ahead point
     (whose segment becomes the current waypoint)."""
     if config.subgoal == "key_nodes":
@@ -435,7 +262,7 @@ def _subgoal(config: NavConfig, c: _Carry, pos: jnp.ndarray) -> tuple[jnp.ndarra
     return sub, c._replace(index=seg)
 
 
-def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams, inputs: EpisodeInputs, c: _Carry,
+def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams, inputs: EpisodeInputs, c: Carry,
                    pos: jnp.ndarray, sub: jnp.ndarray, discs: _Discs, t: jnp.ndarray) -> tuple:
     """Stage 6: the local planner's control ``u [B, N, 2]`` (zero once done) and ``recovery bool[B, N]``, its
     top speed capped near corners (and while creeping) unless a walker closes in."""
@@ -478,7 +305,7 @@ def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams, 
     return u, recovery & ~c.done
 
 
-def _move_and_contacts(config: NavConfig, table: ClearanceTable, obs: MovingObstacles, c: _Carry, u: jnp.ndarray,
+def _move_and_contacts(config: NavConfig, table: ClearanceTable, obs: MovingObstacles, c: Carry, u: jnp.ndarray,
                        t: jnp.ndarray, radius: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray, jnp.ndarray]:
     """Stage 7: the new states ``[B, N, 5]`` (a done robot stays, at rest), and the contacts during the move:
     ``hit bool[B, N]`` (map, moving disc or robot) and ``pair bool[B, N, N]`` (robot i with robot j)."""
@@ -514,8 +341,8 @@ def _move_and_contacts(config: NavConfig, table: ClearanceTable, obs: MovingObst
     return new, hit, pair
 
 
-def _bookkeeping(config: NavConfig, inputs: EpisodeInputs, c: _Carry, new: jnp.ndarray, hit: jnp.ndarray,
-                 pair: jnp.ndarray) -> _Carry:
+def _bookkeeping(config: NavConfig, inputs: EpisodeInputs, c: Carry, new: jnp.ndarray, hit: jnp.ndarray,
+                 pair: jnp.ndarray) -> Carry:
     """Stage 8: contact counts (onsets of contact), steps, tracking error, and why a robot is done (goal,
     collision when the config stops on one, time limit); a done robot stays done."""
     period = config.dwa.period
@@ -543,7 +370,7 @@ def _bookkeeping(config: NavConfig, inputs: EpisodeInputs, c: _Carry, new: jnp.n
 
 
 def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: DWAParams,
-          inputs: EpisodeInputs, c: _Carry):
+          inputs: EpisodeInputs, c: Carry):
     """One control period of every robot: the stages in the order of the module docstring."""
     t = c.t.astype(jnp.float32) * config.dwa.period
     discs = _seen_discs(config.dwa.robot, inputs.obstacles, c.state, t)
@@ -575,7 +402,7 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
     B, N = inputs.start.shape[:2]
     chunk = config.chunk
     zeros = jnp.zeros((B, N), jnp.int32)
-    carry = _Carry(
+    carry = Carry(
         state=inputs.start, waypoints=inputs.waypoints, n_wp=inputs.n_waypoints, index=zeros, done=~inputs.active,
         reason=zeros, steps=zeros, hit=jnp.zeros((B, N), bool), pair_hit=jnp.zeros((B, N, N), bool),
         collisions=zeros, pair_collisions=jnp.zeros((B, N, N), jnp.int32), replans=zeros,

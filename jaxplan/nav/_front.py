@@ -42,10 +42,11 @@ from jaxplan.grid import GridMap, clearance_field, shortest_lengths
 from jaxplan.metrics import EnergyModel, energy
 from jaxplan.nav._checks import check_obstacle_starts, checked_run, obstacle_sets, resolve_config
 from jaxplan.nav._config import NavConfig
-from jaxplan.nav._episode import GOAL, REASONS, EpisodeInputs, run_episodes
+from jaxplan.nav._episode import run_episodes
 from jaxplan.nav._moving import MovingObstacles, obstacle_state, stack_obstacles
 from jaxplan.nav._pipelines import Pipeline
 from jaxplan.nav._results import Episode, EpisodeBatch
+from jaxplan.nav._state import GOAL, REASONS, EpisodeInputs
 from jaxplan.scale import BATCH_AXIS, auto_mesh, pad_leading
 
 __all__ = ["navigate", "navigate_batch", "navigate_multi", "planning_grid", "CURVATURE_MIN_SPEED", "INFEASIBLE_START",
