@@ -1,6 +1,6 @@
 """The XLA FFI handlers of the native walk and update: XLA calls them with its own buffers, so nothing is
-copied or allocated per call and no Python runs (`jax.pure_callback` costs 0.2–2 ms per call on this 2-core
-CPU, more than the whole walk of a small colony). The call frame is read with the offsets of XLA's FFI C API
+copied or allocated per call and no Python runs (a `jax.pure_callback` would cost more than the whole walk
+of a small colony). The call frame is read with the offsets of XLA's FFI C API
 (``xla/ffi/api/c_api.h``, API version 0.x, x86-64/aarch64 layout).
 
 The handlers are numba `cfunc`s, compiled once per process or loaded from numba's on-disk cache. They are
@@ -209,8 +209,8 @@ def _stats_call(frame):
 def _deposit_call(frame):
     """The handler of `jaxplan.aco._walk_numba.deposit`: tau ``f32[T]`` (aliased to the result), then for the
     ants and for the best-so-far paths each: cells ``i32[P, L + 1]``, moves ``i8[P, L]``, n ``i32[P]``, amounts
-    ``f32[2, P]``, colonies ``i32[2, P]``; then ``i32[2]`` (C·K, K), the retreat counts ``f32[T]`` (or ``[1]``: none) and
-    ``f32[1]`` the factor an edge keeps per retreat."""
+    ``f32[2, P]``, colonies ``i32[2, P]``; then ``i32[2]`` (C·K, K), the retreat counts ``f32[T]`` (or ``[1]``:
+    none) and ``f32[1]`` the factor an edge keeps per retreat."""
     base = _address(frame)
     if _not_execute(base):
         return _null()

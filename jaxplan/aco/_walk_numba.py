@@ -1,8 +1,8 @@
 """The ants' walk as one native call per iteration (numba), for the CPU backend.
 
 `jaxplan.aco._walk.walk` advances all ants together, one `lax.while_loop` step per
-move; on a CPU each step is ~15 small XLA kernels (gathers, scatters) of 1.5–20 µs,
-so the loop costs far more than the arithmetic it does. Here the whole walk of one
+move; on a CPU each step is about fifteen small XLA kernels (gathers, scatters), so the
+loop costs far more than the arithmetic it does. Here the whole walk of one
 iteration (every run, colony and ant, from the start until goal, dead end or step
 limit) is one compiled call: each ant walks to the end on its own, the ants are shared
 out over the cores with `prange`. The JAX program calls it as an XLA FFI custom call (a
@@ -85,10 +85,9 @@ _SHARERS = contextvars.ContextVar("jaxplan_walk_sharers", default=1)
 @contextlib.contextmanager
 def sharing_cores(devices: int):
     """While tracing a program that runs on ``devices`` host devices at once (a sharded batch),
-    each device's walk takes only its share of the cores: measured on 2 cores, two devices
-    whose walks each launched 2 threads were no faster than one device (4 threads on 2
-    cores), with 1 thread each 1.2-1.3x faster. The chunk count is a trace-time constant and
-    does not change any result (chunks walk independent ants)."""
+    each device's walk takes only its share of the cores: walks that each launch a thread
+    per core oversubscribe the cores and are no faster than one device. The chunk count is a
+    trace-time constant and does not change any result (chunks walk independent ants)."""
     token = _SHARERS.set(max(1, int(devices)))
     try:
         yield

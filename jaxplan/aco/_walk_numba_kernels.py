@@ -44,7 +44,7 @@ def _finish_ant(a, n, t, status, cells, moves, n_out, status_out, steps_out, mov
 
 def _walk_ant_for(moves_per_cell: int):
     """`walk_ant` compiled for ``moves_per_cell`` moves per cell (0: any, read from ``nbr``). With K a
-    compile-time constant the move loops unroll, which makes the 8-connected step ~1.2-1.4x faster."""
+    compile-time constant the move loops unroll, which makes the 8-connected step faster."""
 
     @njit(nogil=True)
     def walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
@@ -168,7 +168,7 @@ def _walk_ant_for(moves_per_cell: int):
 
 
 # 8-connected grids (every preset but opt_ant) get the unrolled copy; 4- and 16-connected ones the
-# general walk (a third copy would add ~13 s to the one-off numba compile of a fresh install).
+# general walk (a third copy would lengthen the one-off numba compile of a fresh install).
 _walk_ant, _walk_ant_8 = _walk_ant_for(0), _walk_ant_for(8)
 
 
@@ -215,19 +215,18 @@ def _walk_pair8(c, n_chunks, table, vbits, start, goal, row0, seed, local, max_s
     """`walk_ant` for the common case (8 moves, no hook, ``die`` or ``retreat``), two ants at a time.
 
     Ants c, c + n_chunks, ... walk in two interleaved lanes: the step of one ant is a chain of
-    dependent loads and float adds (~40 ns on this 2-core CPU whatever its instruction count), so a
-    second, independent ant in the same loop body fills the waiting core (measured: 1.35-1.4x the
-    single-ant walk). The step is also shorter than `walk_ant`'s: each lane's tabu is a grid padded
-    by one cell, whose 3x3 block around the ant is read as three vector compares (`visited3x3`);
-    ``vbits`` holds each cell's allowed moves as bits; the weights, their running sums and the
-    inverse-CDF draw are one vector sequence (`draw8`). Same draws, same bits as `walk_ant`.
+    dependent loads and float adds (its latency, not its instruction count, sets its time), so a
+    second, independent ant in the same loop body fills the waiting core. The step is also shorter than
+    `walk_ant`'s: each lane's tabu is a grid padded by one cell, whose 3x3 block around the ant is read as
+    three vector compares (`visited3x3`); ``vbits`` holds each cell's allowed moves as bits; the weights,
+    their running sums and the inverse-CDF draw are one vector sequence (`draw8`). Same draws, same bits as `walk_ant`.
 
     Moves come from ``lut`` and ``width`` (``nbr`` is not read): the neighbour table must be the
     grid's own, where a valid move k from cell c leads to ``c + off[k]`` (`neighbour_table`'s).
 
     The two lanes' steps are written out twice on purpose: a shared step function inlined by numba
-    keeps reference counting of its array arguments inside the loop (calls on every step, measured
-    1.6x slower than the single-ant walk), and a non-inlined one costs a call per step.
+    keeps reference counting of its array arguments inside the loop (calls on every step, slower
+    than the single-ant walk), and a non-inlined one costs a call per step.
     """
     A = start.shape[0]
     wp = width + 2

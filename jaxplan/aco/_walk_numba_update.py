@@ -101,8 +101,8 @@ def penalise(tau, counts, keep):
     """yu2020's dead-corner penalty: ``tau[e] *= keep ** counts[e]`` where an edge was retreated over.
 
     A pass over the counts, with a power only where one is non-zero (XLA's `jnp.power` over every
-    edge cost praco ~1.7 ms per iteration on a 100x100 map with 5 colonies; libm's powf may differ
-    from XLA's in the last bit).
+    edge was a noticeable share of praco's iteration; libm's powf may differ from XLA's in the last
+    bit).
     """
     for e in range(counts.shape[0]):
         c = counts[e]

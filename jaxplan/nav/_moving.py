@@ -185,7 +185,7 @@ def trajectories(obs: MovingObstacles, times: ArrayLike) -> jnp.ndarray:
     """``f32[T, ..., M, 2]``: positions (m) at each of ``times f32[T]`` (s), for metrics and plots.
 
     One compiled call per shape (op by op, the model would compile each of its ~50
-    operations on first use: about 10 s of a cold run).
+    operations on first use, seconds of a cold run).
     """
     return _TRAJECTORIES(obs, jnp.asarray(times, jnp.float32))
 

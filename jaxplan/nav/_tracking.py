@@ -27,9 +27,9 @@ def subgoal_index(pos: jnp.ndarray, wp: jnp.ndarray, n: jnp.ndarray, index: jnp.
     none) — unless the straight way to it from ``pos [2]`` comes closer than ``d_safe`` to the map
     (``clearance(x, y)``, m) within 3.2 m; then the one before it, until that is within ``near``.
 
-    Passing a waypoint a metre early cuts the corner it marks: measured on random-64-64-20 (row
-    347), a robot 0.94 m below a corner waypoint took the next one, whose straight way grazed the
-    corner's blocked cell, and sat still facing it until the time limit.
+    Passing a waypoint a metre early cuts the corner it marks: a robot just short of a corner
+    waypoint would take the next one, whose straight way grazes the corner's blocked cell, and
+    sit still facing it until the time limit.
     """
     K = wp.shape[0]
     j = jnp.arange(K)
