@@ -46,6 +46,8 @@ def _walk_ant_for(moves_per_cell: int):
     """`walk_ant` compiled for ``moves_per_cell`` moves per cell (0: any, read from ``nbr``). With K a
     compile-time constant the move loops unroll, which makes the 8-connected step faster."""
 
+    # One function of ~110 lines on purpose: the step loop is the hot path, and numba keeps the reference
+    # counting of array arguments inside a loop that calls a helper (inlined or not) on every step.
     @njit(nogil=True)
     def walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
                  max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,

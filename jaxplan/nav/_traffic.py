@@ -129,6 +129,73 @@ def _pruned_route(blocked: _Blocked, cells: np.ndarray, r_cells: float) -> np.nd
     return route if ok else None
 
 
+def _start_pool(i: int, ok: np.ndarray, centres: np.ndarray, av: np.ndarray, avoid_radius: float, r: float,
+                placed: list) -> np.ndarray:
+    """``int[P, 2]`` cells ``(x, y)`` where obstacle ``i`` (radius ``r`` m) may start: free for the disc
+    (``ok [H, W]``), ``avoid_radius + r`` from every ``avoid`` point, and clear of the discs placed
+    before it (``placed``: (point, radius) pairs) when the map has room for that."""
+    start_ok = ok.copy()
+    for p in av:
+        start_ok &= np.hypot(*(centres - p).transpose(2, 0, 1)) >= avoid_radius + r
+    if not start_ok.any():
+        raise ValueError(
+            f"obstacle {i}: the map has no free cell where a disc of radius {r} m can start "
+            f"{avoid_radius} m from the avoid points" if len(av) else
+            f"obstacle {i}: the map has no free cell with {r} m of clearance for a disc of that radius")
+    preferred = start_ok.copy()
+    for q, rq in placed:
+        preferred &= np.hypot(*(centres - q).transpose(2, 0, 1)) >= r + rq
+    return np.argwhere(preferred if preferred.any() else start_ok)[:, ::-1]  # (x, y)
+
+
+def _random_route(rng: np.random.Generator, pool: np.ndarray, labels: np.ndarray, inflated: GridMap,
+                  blocked: _Blocked, waypoints: int, loop: bool, r: float, res: float,
+                  tries: int) -> np.ndarray | None:
+    """A route ``f64[k, 2]`` (m) through ``waypoints`` random cells of one connected region of the inflated
+    map, its first drawn from ``pool``, joined by LOS-pruned A* legs; None if ``tries`` draws all failed
+    the exact check."""
+    for _ in range(tries):
+        first = pool[rng.integers(len(pool))]
+        region = np.argwhere(labels == labels[first[1], first[0]])[:, ::-1]
+        stops = [first] + [region[rng.integers(len(region))] for _ in range(waypoints - 1)]
+        if loop and waypoints > 1:
+            stops.append(first)
+        # Each leg is pruned on its own, so the random stops stay vertices: pruning a
+        # whole loop would cut from the first cell straight back to itself.
+        pieces, ok_route = [first[None].astype(np.float64)], True
+        for a, b in zip(stops[:-1], stops[1:]):
+            if np.array_equal(a, b):
+                continue
+            leg = _pruned_route(blocked, np.asarray(astar(inflated, a, b).path, np.int64), r / res)
+            if leg is None:
+                ok_route = False
+                break
+            pieces.append(leg[1:])
+        if ok_route:
+            return (_dedupe(np.concatenate(pieces)) + 0.5) * res
+    return None
+
+
+def _phase(rng: np.random.Generator, route: np.ndarray, loop: bool, av: np.ndarray, avoid_radius: float,
+           r: float, placed: list) -> float:
+    """The offset (m of arc length) of a route's disc at ``t = 0``: random phases first; offset 0 (the first
+    vertex, drawn among the allowed starts) always honours ``avoid``. Clear of the earlier discs if
+    possible, else just ``avoid``."""
+    seg = np.hypot(*np.diff(route, axis=0).T).sum()
+    period = seg if loop else 2.0 * seg
+    candidates = list(rng.uniform(0.0, period, size=16)) if period > 0 else []
+    candidates.append(0.0)
+    for strict in (True, False):
+        for c in candidates:
+            p = _np_position(route, c, loop)
+            if len(av) and np.hypot(*(av - p).T).min() < avoid_radius + r + 1e-5:  # float32 slack
+                continue
+            if strict and any(np.hypot(*(q - p)) < r + rq for q, rq in placed):
+                continue
+            return float(c)
+    return 0.0
+
+
 def random_obstacles(grid: Any, n: int = 5, speed: Any = 1.0, radius: Any = 0.25, seed: int = 0, *,
                      waypoints: int = 4, avoid: ArrayLike | None = None, avoid_radius: float = 1.0,
                      loop: bool = False, tries: int = 20) -> MovingObstacles:
@@ -196,61 +263,11 @@ def random_obstacles(grid: Any, n: int = 5, speed: Any = 1.0, radius: Any = 0.25
             labels, _ = ndimage.label(ok)  # 4-connected = reachable without corner cutting
             regions[r] = (ok, labels, grid_from_array(ok, resolution=res))
         ok, labels, inflated = regions[r]
-        start_ok = ok.copy()
-        for p in av:
-            start_ok &= np.hypot(*(centres - p).transpose(2, 0, 1)) >= avoid_radius + r
-        if not start_ok.any():
-            raise ValueError(
-                f"obstacle {i}: the map has no free cell where a disc of radius {r} m can start "
-                f"{avoid_radius} m from the avoid points" if len(av) else
-                f"obstacle {i}: the map has no free cell with {r} m of clearance for a disc of that radius")
-        preferred = start_ok.copy()
-        for q, rq in placed:
-            preferred &= np.hypot(*(centres - q).transpose(2, 0, 1)) >= r + rq
-        pool = np.argwhere(preferred if preferred.any() else start_ok)[:, ::-1]  # (x, y)
-        route = None
-        for _ in range(tries):
-            first = pool[rng.integers(len(pool))]
-            region = np.argwhere(labels == labels[first[1], first[0]])[:, ::-1]
-            stops = [first] + [region[rng.integers(len(region))] for _ in range(waypoints - 1)]
-            if loop and waypoints > 1:
-                stops.append(first)
-            # Each leg is pruned on its own, so the random stops stay vertices: pruning a
-            # whole loop would cut from the first cell straight back to itself.
-            pieces, ok_route = [first[None].astype(np.float64)], True
-            for a, b in zip(stops[:-1], stops[1:]):
-                if np.array_equal(a, b):
-                    continue
-                leg = _pruned_route(blocked, np.asarray(astar(inflated, a, b).path, np.int64), r / res)
-                if leg is None:
-                    ok_route = False
-                    break
-                pieces.append(leg[1:])
-            if ok_route:
-                route = (_dedupe(np.concatenate(pieces)) + 0.5) * res
-                break
+        pool = _start_pool(i, ok, centres, av, avoid_radius, r, placed)
+        route = _random_route(rng, pool, labels, inflated, blocked, waypoints, loop, r, res, tries)
         if route is None:
             raise ValueError(f"obstacle {i}: no collision-free route found in {tries} tries")
-        seg = np.hypot(*np.diff(route, axis=0).T).sum()
-        period = seg if loop else 2.0 * seg
-        # Random phases first; offset 0 (the first vertex, drawn among the allowed starts)
-        # always honours `avoid`. Clear of the earlier discs if possible, else just `avoid`.
-        candidates = list(rng.uniform(0.0, period, size=16)) if period > 0 else []
-        candidates.append(0.0)
-        offset = None
-        for strict in (True, False):
-            for c in candidates:
-                p = _np_position(route, c, loop)
-                if len(av) and np.hypot(*(av - p).T).min() < avoid_radius + r + 1e-5:  # float32 slack
-                    continue
-                if strict and any(np.hypot(*(q - p)) < r + rq for q, rq in placed):
-                    continue
-                offset = float(c)
-                break
-            if offset is not None:
-                break
-        if offset is None:
-            offset = 0.0
+        offset = _phase(rng, route, loop, av, avoid_radius, r, placed)
         routes.append(route)
         offsets.append(offset)
         placed.append((_np_position(route, offset, loop), r))
