@@ -11,9 +11,10 @@ import pytest
 
 import jaxplan as jp
 from jaxplan.nav import NavConfig
-from jaxplan.nav._episode import _corner_cap, _lookahead_point, _oracle_track, _rewatch
+from jaxplan.nav._episode import _oracle_track
 from jaxplan.nav._front import INFEASIBLE_START, UNREACHABLE
 from jaxplan.nav._replan import descend, distance_field, path_blocked, turn_vertices
+from jaxplan.nav._tracking import corner_cap, lookahead_point, rewatch
 
 _field = jax.jit(distance_field, static_argnums=3)
 _descend = jax.jit(descend, static_argnums=3)
@@ -267,7 +268,7 @@ def test_a_creeping_robot_measures_progress_to_its_new_waypoint_after_a_replan()
     watch = jnp.array([[[1.0, 0.0], [1.0, 0.0], [1.0, 0.0], [1.0, 0.0]]])
     pos = jnp.zeros((1, 4, 2))
     closest, progress_t = jnp.full((1, 4), 1.0), jnp.full((1, 4), 3, jnp.int32)
-    w, c, p = _rewatch(replanned, target, pos, watch, closest, progress_t, jnp.int32(40))
+    w, c, p = rewatch(replanned, target, pos, watch, closest, progress_t, jnp.int32(40))
     np.testing.assert_array_equal(w[0, :, 0], [6.0, 1.0, 1.0, 1.0])  # watches the new waypoint: still creeping
     np.testing.assert_allclose(c[0], [6.0, 1.0, 1.0, 1.0])  # progress counts from 6 m, not against 1 m
     np.testing.assert_array_equal(p[0], [40, 3, 3, 3])  # and its stall clock restarts now
@@ -295,8 +296,8 @@ def test_corner_speed_grows_as_the_turn_gets_gentler():
         a = math.radians(degrees)
         after = [3.0 + 20.0 * math.cos(a), 20.0 * math.sin(a)]  # the goal 20 m on: its own cap is far above
         wp = jnp.asarray([[3.0, 0.0], after, after])
-        return float(_corner_cap(cfg.replace(**kw), jnp.asarray(at), wp, jnp.asarray(3), jnp.asarray(0),
-                                 cfg.dwa.robot.decel))
+        return float(corner_cap(cfg.replace(**kw), jnp.asarray(at), wp, jnp.asarray(3), jnp.asarray(0),
+                                cfg.dwa.robot.decel))
 
     v_c = cfg.corner_speed
     assert cap(90) == pytest.approx(v_c, abs=1e-5) and cap(135) == pytest.approx(v_c, abs=1e-5)
@@ -395,13 +396,13 @@ def test_a_robot_behind_a_walker_does_not_replan_round_it_again_and_again(moving
 def test_a_waypoint_is_passed_early_only_if_the_way_on_is_clear():
     from jaxplan.dwa import clearance_table, static_clearance
     from jaxplan.grid._collision import collision_map
-    from jaxplan.nav._episode import _subgoal_index
+    from jaxplan.nav._tracking import subgoal_index
 
     free = np.ones((5, 5), bool)
     free[2, 1] = False  # cell (1, 2): its corner (2, 2) m is beside the robot
     table = clearance_table(collision_map(jp.grid_from_array(free, resolution=1.0)))
-    index = jax.jit(lambda pos, wp: _subgoal_index(pos, wp, jnp.asarray(3), jnp.asarray(0), 1.0, 0.25, 0.3,
-                                                   lambda x, y: static_clearance(table, x, y, "hybrid")))
+    index = jax.jit(lambda pos, wp: subgoal_index(pos, wp, jnp.asarray(3), jnp.asarray(0), 1.0, 0.25, 0.3,
+                                                  lambda x, y: static_clearance(table, x, y, "hybrid")))
     corner = [2.5, 1.5]
     # 0.95 m from the corner waypoint: the straight way to the next grazes the blocked cell (0.22 m) -> hold.
     assert int(index(jnp.asarray([2.4, 2.45]), jnp.asarray([corner, [0.5, 1.5], [0.5, 0.5]]))) == 0
@@ -427,14 +428,14 @@ def test_a_goal_at_the_end_of_a_dead_end_is_reached():
 
 
 def test_threatened_sees_discs_closing_in():
-    from jaxplan.nav._episode import _threatened
+    from jaxplan.nav._tracking import threatened
 
     cfg = NavConfig(threat_distance=3.0, threat_speed=0.2)
     pos = jnp.asarray([0.0, 0.0])
     r = jnp.asarray([0.25])
 
     def threat(centre, velocity, config=cfg):
-        return bool(_threatened(config, pos, jnp.asarray([centre]), jnp.asarray([velocity]), r))
+        return bool(threatened(config, pos, jnp.asarray([centre]), jnp.asarray([velocity]), r))
 
     assert threat([-2.0, 0.0], [1.0, 0.0])  # from behind (or anywhere), 1.75 m away, at 1 m/s
     assert threat([0.0, 3.0], [0.0, -0.5])  # from the side, 2.75 m to its edge
@@ -447,9 +448,9 @@ def test_threatened_sees_discs_closing_in():
     # Batched [B, N, D] with far, motionless padding discs and no disc at all.
     centres = jnp.asarray([[[[-2.0, 0.0], [1e6, 0.0]]], [[[1e6, 0.0], [2e6, 0.0]]]])  # [2, 1, 2, 2]
     velocities = jnp.asarray([[[[1.0, 0.0], [0.0, 0.0]]], [[[0.0, 0.0], [0.0, 0.0]]]])
-    got = _threatened(cfg, jnp.zeros((2, 1, 2)), centres, velocities, jnp.full((2, 1, 2), 0.25))
+    got = threatened(cfg, jnp.zeros((2, 1, 2)), centres, velocities, jnp.full((2, 1, 2), 0.25))
     np.testing.assert_array_equal(got, [[True], [False]])
-    none = _threatened(cfg, jnp.zeros((2, 1, 2)), jnp.zeros((2, 1, 0, 2)), jnp.zeros((2, 1, 0, 2)), jnp.zeros((2, 1, 0)))
+    none = threatened(cfg, jnp.zeros((2, 1, 2)), jnp.zeros((2, 1, 0, 2)), jnp.zeros((2, 1, 0, 2)), jnp.zeros((2, 1, 0)))
     assert none.shape == (2, 1) and not none.any()
 
 
@@ -546,7 +547,7 @@ def test_the_lookahead_point_starts_on_the_leg_from_the_start():
     # Start (0.5, 8.5), a corner at (0.5, 0.5), then east to (8.5, 0.5).
     wp = jnp.asarray([[0.5, 0.5], [8.5, 0.5], [8.5, 0.5], [8.5, 0.5]], jnp.float32)
     origin = jnp.asarray([0.5, 8.5], jnp.float32)
-    look = lambda pos: _lookahead_point(jnp.asarray(pos, jnp.float32), wp, jnp.int32(2), jnp.int32(0), 1.5, origin)
+    look = lambda pos: lookahead_point(jnp.asarray(pos, jnp.float32), wp, jnp.int32(2), jnp.int32(0), 1.5, origin)
     p, k = look([0.5, 8.5])
     np.testing.assert_allclose(p, [0.5, 7.0], atol=1e-6)  # 1.5 m down the first leg, not past the corner
     assert int(k) == 0

@@ -1,4 +1,4 @@
-"""Moving obstacles (`jaxplan.nav._obstacles`): the arc-length model, padding, generators."""
+"""Moving obstacles: the arc-length model and padding (`jaxplan.nav._moving`), the generators (`_traffic`)."""
 
 from __future__ import annotations
 
@@ -12,10 +12,11 @@ from hypothesis import strategies as st
 import jaxplan as jp
 from jaxplan.dwa._clearance import DiscObstacles, disc_clearance
 from jaxplan.grid._collision import cached_collision_map, segment_free
-from jaxplan.nav._obstacles import (
-    FAR, MovingObstacles, concat_obstacles, crossing_traffic, discs_at, head_on, moving_obstacles, no_obstacles,
-    obstacle_state, pad_obstacles, random_obstacles, route_lengths, stack_obstacles, trajectories,
+from jaxplan.nav._moving import (
+    FAR, MovingObstacles, concat_obstacles, discs_at, moving_obstacles, no_obstacles, obstacle_state, pad_obstacles,
+    route_lengths, stack_obstacles, trajectories,
 )
+from jaxplan.nav._traffic import crossing_traffic, head_on, random_obstacles
 
 # A bounce, zero-length segments, a single vertex, a loop with a closing segment, a zero-length loop.
 ROUTES = [

@@ -13,7 +13,9 @@ from numba import njit
 import jaxplan as jp
 from jaxplan.aco import COLONIES, hash_uniform
 from jaxplan.aco import _rules as R
+from jaxplan.aco import _walk_ffi
 from jaxplan.aco import _walk_numba as WN
+from jaxplan.aco import _walk_numba_intrinsics as WI
 from jaxplan.aco._colony import RunConfig, run_batch
 from jaxplan.aco._context import goal_tables, map_tables
 from jaxplan.aco._planners import seed_keys, split_params
@@ -53,7 +55,7 @@ def _assert_same_walk(ref, out, fields):
 @njit
 def _exp_many(x, out):
     for i in range(x.size):
-        out[i] = WN._exp_xla(x[i])
+        out[i] = WI.exp_xla(x[i])
 
 
 def test_exp_is_xlas_bit_for_bit():
@@ -72,7 +74,7 @@ def test_exp_is_xlas_bit_for_bit():
 @njit
 def _uniforms(seed, t, ant, out):
     for i in range(out.size):
-        out[i] = WN._uniform(seed[i], t[i], ant[i])
+        out[i] = WI.uniform(seed[i], t[i], ant[i])
 
 
 def test_uniforms_are_hash_uniform():
@@ -406,3 +408,17 @@ def test_native_dead_corner_penalty_matches_power():
     out = jax.jit(WN.deposit, static_argnums=(3, 4))(tau, empty, empty, T // K, K, counts, keep)
     np.testing.assert_allclose(np.asarray(out), np.asarray(tau * jnp.power(keep, counts)), rtol=2e-6)
     np.testing.assert_array_equal(np.asarray(out)[np.asarray(counts) == 0], np.asarray(tau)[np.asarray(counts) == 0])
+
+
+def test_cached_handlers_are_keyed_on_every_native_source():
+    """numba's on-disk cache checks only a function's own file, yet a cached handler holds the code of every
+    kernel it calls; so the handlers close over a hash of all native modules (a closure is in numba's key)."""
+    from pathlib import Path
+
+    package = Path(_walk_ffi.__file__).parent
+    native = {p.name for p in package.glob("_walk_numba_*.py")} | {"_walk.py", "_walk_ffi.py"}
+    assert native == set(_walk_ffi._NATIVE_MODULES)
+    fp = _walk_ffi.source_fingerprint()
+    assert 0 <= fp < 2**63 and fp == _walk_ffi.source_fingerprint()
+    for handler in _walk_ffi._handlers(fp).values():
+        assert [c.cell_contents for c in handler.__closure__] == [fp]

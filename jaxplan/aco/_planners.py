@@ -4,7 +4,7 @@ Defaults are the papers' values (DESIGN §4). Where a paper is silent jaxplan ch
 and says so here:
   * ``dead_end``: ``"die"`` for plain ``aco`` (Ant System), ``"retreat"`` for ``iaco``
     and ``risk_aco`` (cui2025/chen2023 do not say; with dying ants rooms and mazes fail
-    4–24 % of scenarios, DESIGN §4), ``"alert"`` for ``opt_ant`` (chu2024; the ant steps
+    a share of scenarios, DESIGN §4), ``"alert"`` for ``opt_ant`` (chu2024; the ant steps
     back and the dead end becomes a pseudo-obstacle of the run),
     ``"retreat"`` with the edge penalty for ``praco`` (yu2020).
   * τ0 = 1 where a paper gives no initial pheromone (``aco``, ``iaco``, ``praco``);
@@ -20,9 +20,9 @@ and says so here:
   * ``update_backend`` (every ACO planner; not a paper parameter): where each iteration's path
     statistics and deposits are computed, ``"auto"`` (numba on the CPU), ``"jax"`` or
     ``"numba"``; the two may differ in the last bits of summed statistics (summation order).
-    ``walk_backend="jax", update_backend="jax"`` needs no numba compilation at all (about
-    50 s once per install for the walk, statistics and deposit kernels), which pays for
-    small colonies run once (the demo does this).
+    ``walk_backend="jax", update_backend="jax"`` needs no numba compilation at all (once per
+    install, for the walk, statistics and deposit kernels), which pays for small colonies run
+    once (the demo does this).
 """
 
 from __future__ import annotations

@@ -235,8 +235,8 @@ def hook_opt_ant(tables: MapTables, params, h_flat, pos, prev, nb, ok, logits, g
     ``l`` distance factor ("modified Euclidean distance"): the normalised progress of the
     move towards the goal, (1 + (d_i − d_j)/|move|)/2 in [0, 1] (1 when heading straight
     at it). jaxplan's reading: a literal 1/d_j barely differs between neighbours far from
-    the goal, so once summed with r and h it stops steering the ants (measured: 84 % mean
-    length gap on room-64). ``r`` straightness: μ when the move keeps the previous heading;
+    the goal, so once summed with r and h it stops steering the ants (paths far longer than the
+    optimum on room maps). ``r`` straightness: μ when the move keeps the previous heading;
     ``h`` flatness: 1/(1 + |Δheight|). Adds β·log η to the logits.
     On a right-turn cell the ant must take the move a quarter turn to the right of its
     heading when that move is allowed. An adjacent goal has absolute priority (on every

@@ -21,9 +21,9 @@ inverse CDF with one uniform per ant and step (`hash_uniform`, seeded per iterat
 the run's key with `jax.random.bits`, as in the grid engine). Optional
 ``local_search="2opt"`` improves every ant's tour with best-improvement 2-opt before the
 update (an addition: the paper does not use local search). It is off by default because the
-colonies do not need it: over 10 seeds with the defaults (``benchmarks/bench_tsp.py``) praco's
-mean gap to the optimum is 0.75 % on eil51 and 0.01 % on berlin52 without it; with it every
-run found the optimum, at about 20x the run time.
+colonies do not need it: without it praco's tours are already close to the optimum on the
+TSPLIB instances (``benchmarks/bench_tsp.py``); with it the runs reach the optimum at many
+times the run time.
 
 Example::
 

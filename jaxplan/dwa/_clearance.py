@@ -16,8 +16,8 @@ map on the host (`clearance_table`). Three lookups, selected by name:
   flagged ones is the true clearance whenever it is below 1.5 cells. Beyond, the value
   is the bilinear interpolation of the four centres' exact clearances (the
   ``CollisionMap.field``), clipped to [1.5, that minimum]: an interpolation of a
-  1-Lipschitz field, which measured on random maps over-estimates by at most 0.083
-  cells and under-estimates near ridges of the field (up to 0.55 cells). Feasibility
+  1-Lipschitz field, which may over-estimate by a small fraction of a cell and
+  under-estimates near ridges of the field. Feasibility
   at d_safe is therefore decided exactly whenever d_safe < 1.5 cells (every map
   coarser than 0.2 m per cell for the default 0.3 m).
 * ``"bilinear"`` — the plain bilinear interpolation of the cell-centre clearance field

@@ -228,7 +228,7 @@ def grouped_distances(index, valid, step, width, hkind, sources, target_ptr, tar
 
     Sources are split into ``n_chunks`` contiguous chunks, run on `n_threads` Python threads
     (the compiled chunk releases the GIL). Threads rather than a numba ``prange``: the same
-    speed, and a parallel loop would add about 4 s to the first compilation.
+    speed, and a parallel loop would lengthen the first compilation.
 
     Returns ``f64[len(targets)]`` distances in cells (inf where unreachable).
     """

@@ -36,8 +36,7 @@ def vertex_clearance(cmap: CollisionMap, path: jnp.ndarray, n: jnp.ndarray) -> j
       cmap: the map's `CollisionMap` (its resolution converts cells to metres).
       path: ``[..., L, 2]`` points (cells). An integer path is read from ``cmap.field``, the
         exact clearance of cell centres, which is what `point_clearance` returns there
-        (one gather per point instead of its 5x5 window: 0.01 s instead of 3 s for
-        10,000 x 256 points on two cores).
+        (one gather per point instead of its 5x5 window).
       n: ``int[...]`` valid points.
 
     A vertex outside the map gets 0 (it is in the blocked outside). Float vertices more

@@ -2,9 +2,8 @@
 
 They evaluate the very definitions of `jaxplan.metrics._path` (written once over an
 array module) with numpy instead of JAX: a planner fills `PlanResult.turns` once per path,
-and there a compiled JAX call would cost more than the metric (measured: 0.13–0.23 ms
-per call plus about 0.7 s to compile each padded length, against tens of microseconds
-here). Batches belong to the JAX functions and `path_metrics`.
+and there a compiled JAX call (its dispatch, and a compilation per padded length) would
+cost more than the metric. Batches belong to the JAX functions and `path_metrics`.
 """
 
 from __future__ import annotations

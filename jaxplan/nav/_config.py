@@ -34,23 +34,20 @@ own choices)."""
 class NavConfig:
     """A navigation episode's settings. Distances in metres, times in seconds.
 
+    The measurements behind the defaults below are in docs/decisions.md.
+
     Attributes:
       dwa: the local planner's `DWAConfig` (robot, control period, d_safe, samples). Its
         rollouts are never kept in an episode, and its evaluator is set from ``evaluator``.
         Its recovery defaults to ``"flee"`` here (see `DWAConfig.recovery`), and its clearance
         critic saturates at ``d_clip = 0.5`` m: a robot centred in a 1 m aisle (the MovingAI
         maps at 1 m per cell) has 0.5 m, and with the DWA's own 1.0 m the fuzzy evaluator rates
-        every aisle "close" and cuts it — measured: robots circled in front of aisle entrances
-        (5 % of the warehouse's first 100 short rows timed out). Opt-in:
+        every aisle "close" and cuts it, so robots circled in front of aisle entrances. Opt-in:
         ``dwa=NavConfig().dwa.replace(straighten=(0.25, 0.5))`` also samples rollouts that turn
         for the first 0.5 s or 1 s and then drive straight on (2 × 20 × 20 more samples):
         side-steps round a walker in a corridor, where a constant arc long enough to pass ends
-        at a wall. Measured among 5 walkers (50 rows x 2 seeds): success maze-32-32-2 74 -> 80 %
-        (seeds 2-4: 68.0 -> 73.3 %), random-32-32-20 92 -> 95 %, room-64-64-8 92 -> 95 %,
-        random-64-64-20 99 -> 97 %, warehouse-10-20-10-2-1 99 % both — but a lone robot's
-        control step costs 2.5x as long or more (`bench_nav.py --sections speed`: one static
-        warehouse episode at 375-632x real time instead of 1,586x, under the 1,000x target; see
-        the README), so it is not the default.
+        at a wall. It helps among walkers on most maps, but a lone robot's control step costs
+        several times as long, so it is not the default.
       local: ``"dwa"``, ``"follow"`` (static; see `LOCAL_PLANNERS`), or None: the pipeline's.
       evaluator: the DWA evaluator (``"weighted"``, ``"fuzzy"``, ``"classic"``; static), or
         None: the pipeline's (fuzzy for ``iaco_dwa``, weighted for the others).
@@ -77,9 +74,9 @@ class NavConfig:
         off it (static; see `jaxplan.nav._replan`).
       replan_deviation: drifting farther than this from the tracked path triggers a re-plan
         from where the robot is. A DWA robot that misses an aisle entrance is carried past
-        the cross aisles it would need (it cannot turn into a 1 m aisle at speed); measured
-        on the warehouse, one of 50 short rows then drove to the map's far end. Not while a
-        disc is within half of ``block_distance``: then the drift is an evasion.
+        the cross aisles it would need (it cannot turn into a 1 m aisle at speed) and, without
+        a re-plan, may drive to the map's far end. Not while a disc is within half of
+        ``block_distance``: then the drift is an evasion.
       replan_period: at most one re-plan per robot per this many seconds (cui2025: 0.2 s).
       block_distance: how far along the remaining path a disc is looked for (6 m: a walker
         closing head-on in a 1 m aisle must be seen while the robot can still turn round).
@@ -100,10 +97,8 @@ class NavConfig:
         whole groups per device with episodes that do not run; without a mesh, a partial
         last group is simply a smaller group. The default, 25, also keeps results from
         depending on the batch's size: with one budget for the whole batch, robots waited
-        for a slot when many needed one (measured, room-64-64-8 among 5 walkers, 50 rows:
-        83.2 % success in one batch of 5 seeds against 88 and 95 % for batches of 2 seeds;
-        with groups of 25, 92.8 % for the 5 seeds) — at 2.5 % more time per episode on the
-        1,000 static warehouse episodes of `bench_nav.py --sections speed`.
+        for a slot when many needed one, and a large batch succeeded less often than small
+        ones — for a few per cent more time per episode.
       replan_cells: longest re-planned path in moves (static).
       path_critic: pass the waypoint polyline to the DWA path critic (static; its weight is
         `DWAParams.path`).
@@ -119,12 +114,11 @@ class NavConfig:
         A corner's speed grows as the turn φ gets gentler: corner_speed / (1 − cos φ) **
         ``corner_exponent``, never below corner_speed — so corner_speed at 90° and sharper,
         0.55 m/s at 45° and 0.85 m/s at 29° with the defaults (0 gives corner_speed at every
-        corner). Measured with iaco_dwa, 50 rows × 2 seeds per map: static episodes took
-        24–25 % less time on random-32-32-20 and random-64-64-20, 17 % less on room-64-64-8 and
-        10 % less on maze-32-32-2 (the warehouse's corners are right angles: no change); among
-        5 walkers at 1.0 m/s room-64-64-8's time limits fell from 22 to 11 of 100. The exponent is half that of a
-        constant-radius turn's bound (lateral overshoot ∝ v · (1 − cos φ)), which would let
-        a 29° turn be taken at full speed — and that overshot.
+        corner). Faster gentle corners shorten episodes on maps with many of them (not on the
+        warehouse, whose corners are right angles) and leave fewer robots out of time among
+        walkers. The exponent is half that of a constant-radius turn's bound (lateral
+        overshoot ∝ v · (1 − cos φ)), which would let a 29° turn be taken at full speed — and
+        that overshot.
       corner_exponent: see ``corner_speed``.
       corner_angle: the smallest turn (rad) that makes a waypoint a corner (15°: entering a 1 m
         aisle at 29° and 1.2 m/s overshot it).
@@ -134,38 +128,32 @@ class NavConfig:
         a re-planned path) or a disc comes that near, and it re-plans from where it stalled
         (with ``replan``). DWA's scores can make a robot circle at full speed: its 2 s
         rollouts through a near waypoint overshoot it and end facing away, and between close
-        obstacles only hard turns stay feasible at speed. Measured on random-32-32-20
-        (scenario row 158): a robot circled about a metre across, 5 m short of its waypoint,
-        until the time limit; creeping, it arrived (in 52 s). Creeping costs time when a robot
-        stalls far from its waypoint, but arrives. A creeping robot that stalls again re-plans
-        again, once per ``stall_time`` (random-32-32-20 row 375: the robot crept off the cell
-        its path began at into one from which the straight way to its waypoint crosses a
-        blocked cell, and stood facing it until the time limit). ``inf`` disables it.
+        obstacles only hard turns stay feasible at speed; such a robot circles until the time
+        limit, and creeping, it arrives. Creeping costs time when a robot stalls far from its
+        waypoint, but arrives. A creeping robot that stalls again re-plans again, once per
+        ``stall_time`` (a robot can creep off the cell its path began at into one from which
+        the straight way to its waypoint crosses a blocked cell). ``inf`` disables it.
       stall_progress: metres of approach that count as progress (see ``stall_time``).
       stall_speed: top speed (m/s) while creeping.
       threat_distance: a moving obstacle whose edge is within this distance of the robot's
         centre, and whose own speed component towards that centre exceeds ``threat_speed``
         (m/s), lifts the corner speed cap of a DWA robot: it may then drive at full speed, to
         get out of the way. The walkers do not avoid the robot, and a robot held at corner
-        speed cannot outrun one. Measured on maze-32-32-2 with 5 walkers at 1.0 m/s (50 rows,
-        2 seeds): with the cap kept, the robot drove at a median 0.3 m/s at contact and half
-        of the walkers hit it from behind; with it lifted none did, and success rose from 45
-        to 63 % (random-32-32-20 81 → 93 %, room-64-64-8 58 → 71 %, random-64-64-20 96 → 99 %,
-        the warehouse unchanged at 98 %). The DWA still keeps d_safe from the map. The disc's
-        own speed, not the closing speed, decides: the latter would fall as the robot speeds
-        away and put the cap back. Other robots do not count (they avoid each other, and two
-        meeting at a corner should slow down), nor does the ``follow`` planner, which avoids
-        nothing. A creeping robot stops creeping anyway when a disc comes within half of
-        ``block_distance``. Without moving obstacles nothing changes; 0 disables it.
+        speed cannot outrun one: with the cap kept, walkers hit slow robots from behind. The
+        DWA still keeps d_safe from the map. The disc's own speed, not the closing speed,
+        decides: the latter would fall as the robot speeds away and put the cap back. Other
+        robots do not count (they avoid each other, and two meeting at a corner should slow
+        down), nor does the ``follow`` planner, which avoids nothing. A creeping robot stops
+        creeping anyway when a disc comes within half of ``block_distance``. Without moving
+        obstacles nothing changes; 0 disables it.
       threat_speed: see ``threat_distance``.
       orbit_angle: a DWA robot can circle at full speed where its 2 s rollouts overshoot its
         next waypoint; if it also drifts off its path, each re-plan gives it a new waypoint and
         restarts the stall watch (``stall_time``). So the heading change is summed too, until
         the robot comes ``switch_radius`` closer to its goal than ever before (or a disc comes
         within half of ``block_distance``): a net turn of this many radians creeps the robot as
-        a stall does. Measured on random-64-64-20 (scenario row 163) with faster gentle
-        corners (``corner_exponent``): the robot circled 1.5 m across for 120 s through 82
-        re-plans until the time limit; with this watch it arrived. ``inf`` disables it.
+        a stall does (a robot circling through re-plans otherwise runs out of time). ``inf``
+        disables it.
       recheck_period: a robot whose path was re-planned around discs (a walker in a door, say)
         re-plans again every this many seconds while it follows that path, and takes the new
         path only if it is ``recheck_gain`` metres shorter than what is left of the current one:
@@ -176,19 +164,12 @@ class NavConfig:
       recede_speed: a walker moving along the robot's path, the robot's way, at least this fast
         (m/s) does not block that path, and a walker moving away from the robot that fast is not
         closed off when re-planning: the robot follows it (the DWA keeps its distance) instead of
-        going round it — and, going round, turning back at the next re-check and round again
-        (measured on warehouse-10-20-10-2-1, scenario row 418: 66 re-plans and the time limit).
-        With this rule and ``recheck_period`` (`bench_nav.py --sections maps`: 5 walkers at
-        1.0 m/s, 50 rows x 5 seeds in one batch, ``replan_group`` 25): room-64-64-8 82.0 ->
-        92.8 % success (time limits 30 -> 2 of 250), maze-32-32-2 68.0 -> 71.2 %,
-        random-64-64-20 97.2 -> 97.6 %, random-32-32-20 88.8 % both, warehouse-10-20-10-2-1
-        98.8 -> 98.0 %. ``inf`` disables it.
+        going round it — and, going round, turning back at the next re-check and round again,
+        re-planning over and over until the time limit. ``inf`` disables it.
       prediction: how the DWA predicts the moving obstacles (static; see `PREDICTIONS`):
         ``"constant_velocity"`` (default) or ``"oracle"``, their true routes — an ablation that
         separates prediction error from what the local planner can do at all. Re-planning and
-        the threat rule keep the constant-velocity view. Measured (`bench_nav.py --sections maps
-        --oracle`, iaco_dwa, 5 walkers at 1.0 m/s, 50 rows x 5 seeds): success maze-32-32-2
-        71.2 -> 83.2 %, random-32-32-20 88.8 -> 93.6 %, room-64-64-8 92.8 -> 93.6 %.
+        the threat rule keep the constant-velocity view.
     """
 
     dwa: DWAConfig = DWAConfig(keep_rollouts=False, recovery="flee", d_clip=0.5)

@@ -2,21 +2,27 @@
 
 `run_episodes` advances ``B`` independent episodes of ``N`` robots each (``N = 1`` for
 single-robot navigation; in multi-robot mode every robot treats the others as moving
-discs) by one control period per step:
+discs) by one control period per step (`_step`), in these stages:
 
-1. moving obstacles are placed on their routes at time ``t`` (`obstacle_state`);
-2. each robot's sub-goal is its current waypoint (switching to the next within the switch
-   radius) or a look-ahead point on its waypoint polyline;
-3. with re-planning on, a robot whose next metres of path are blocked by a disc, or which
-   has drifted more than `NavConfig.replan_deviation` off its path, re-plans from where it
-   is on the planning map with the cells around the discs closed (`jaxplan.nav._replan`);
-4. the local planner picks the control: the DWA step (`dwa_control`, obstacles = moving
-   discs predicted at constant velocity + the other robots) or pure path following;
-5. the robot moves along the exact arc (`advance`), and is checked for contact with the
-   map (clearance below its radius), a moving disc or another robot at
+1. `_seen_discs`: moving obstacles are placed on their routes at time ``t`` (`obstacle_state`),
+   and the robots become covering discs for each other;
+2. `_next_waypoints`: each robot's current waypoint (switching to the next within the switch
+   radius, `jaxplan.nav._tracking.subgoal_index`);
+3. `_watch_progress`: the stall and orbit watches (`NavConfig.stall_time`, `NavConfig.orbit_angle`);
+4. `_replanning` (with re-planning on): a robot whose next metres of path are blocked by a disc,
+   which has drifted more than `NavConfig.replan_deviation` off its path, or which stalled,
+   re-plans from where it is on the planning map with the cells around the discs closed
+   (`jaxplan.nav._replan`); detours round discs are re-checked;
+5. `_subgoal`: the point to steer for, the current waypoint or a look-ahead point on the
+   waypoint polyline;
+6. `_local_control`: the local planner picks the control: the DWA step (`dwa_control`, obstacles =
+   moving discs predicted at constant velocity + the other robots) or pure path following, its
+   top speed capped near corners;
+7. `_move_and_contacts`: the robot moves along the exact arc (`advance`), and is checked for contact
+   with the map (clearance below its radius), a moving disc or another robot at
    `NavConfig.contact_checks` evenly spaced times of the period;
-6. a robot is done at the goal (within the tolerance), at its time limit, or — when the
-   config says so — at its first collision; a done robot stays where it is.
+8. `_bookkeeping`: a robot is done at the goal (within the tolerance), at its time limit, or — when
+   the config says so — at its first collision; a done robot stays where it is.
 
 Everything is explicitly batched over ``[B, N]`` (no ``vmap`` around the step), so the
 re-planning branch is a real `lax.cond` taken only on steps where some robot needs it.
@@ -34,108 +40,17 @@ import jax.numpy as jnp
 from jax import lax
 
 from jaxplan.dwa import ClearanceTable, DWAParams, DiscObstacles, dwa_control, static_clearance
-from jaxplan.dwa import Disc, advance, dynamic_window, footprint_offsets, footprint_radius
+from jaxplan.dwa import Disc, advance, footprint_offsets, footprint_radius
 from jaxplan.metrics import point_polyline_distance
 from jaxplan.nav._config import NavConfig
-from jaxplan.nav._obstacles import MovingObstacles, obstacle_state
-from jaxplan.nav._replan import descend, disc_cells, distance_field, path_blocked, turn_vertices
+from jaxplan.nav._moving import MovingObstacles, obstacle_state
+from jaxplan.nav._replan import path_blocked, replan_slots
+from jaxplan.nav._state import COLLISION, GOAL, RUNNING, TIMEOUT, Carry, EpisodeInputs, EpisodeOutput
+from jaxplan.nav._tracking import corner_cap, follow, lookahead_point, rewatch, subgoal_index, threatened
 
-__all__ = ["RUNNING", "GOAL", "COLLISION", "TIMEOUT", "REASONS", "EpisodeInputs", "EpisodeOutput", "run_episodes"]
-
-RUNNING, GOAL, COLLISION, TIMEOUT = 0, 1, 2, 3
-REASONS = ("running", "goal", "collision", "time limit")
-"""Why a robot stopped, indexed by the codes above."""
+__all__ = ["run_episodes"]
 
 _FAR = 1e6  # metres: where a disc that must not matter is put (finite: keeps gradients finite)
-
-
-class EpisodeInputs(NamedTuple):
-    """One call's episodes (a pytree; leading axes ``[B, N]`` = episodes, robots).
-
-    Attributes:
-      start: ``f32[B, N, 5]`` initial states (x, y, theta, v, omega).
-      goal: ``f32[B, N, 2]`` goal positions (m).
-      goal_cell: ``i32[B, N, 2]`` goal cells (for re-planning).
-      waypoints: ``f32[B, N, K, 2]`` waypoint polylines (m), ending at the goal; slots after
-        ``n_waypoints`` repeat the last.
-      n_waypoints: ``i32[B, N]`` (>= 1).
-      time_limit: ``f32[B, N]`` seconds (<= `NavConfig.max_time`).
-      obstacles: `MovingObstacles` with leaves ``[B, M, …]`` (``M`` may be 0).
-      active: ``bool[B, N]`` robots that run; the others stand still at their start from step 0
-        (an infeasible scenario), still present as discs for the rest.
-    """
-
-    start: jnp.ndarray
-    goal: jnp.ndarray
-    goal_cell: jnp.ndarray
-    waypoints: jnp.ndarray
-    n_waypoints: jnp.ndarray
-    time_limit: jnp.ndarray
-    obstacles: MovingObstacles
-    active: jnp.ndarray
-
-
-class EpisodeOutput(NamedTuple):
-    """What `run_episodes` returns (numpy after transfer). ``S`` = `NavConfig.steps`.
-
-    Attributes:
-      states: ``f32[B, S + 1, N, 5]`` state after each step (row 0 = start); rows after a
-        robot is done repeat its final state.
-      controls: ``f32[B, S, N, 2]`` the (v, omega) applied at each step (zero once done).
-      recovery: ``bool[B, S, N]`` the DWA found no feasible sample (recovery manoeuvre).
-      steps: ``i32[B, N]`` control steps the robot took (its episode time = steps · period).
-      reason: ``i32[B, N]`` `REASONS` code.
-      collisions: ``i32[B, N]`` contacts (runs of colliding steps) with map, discs or robots.
-      pair_collisions: ``i32[B, N, N]`` contacts between robots i and j (symmetric).
-      replans: ``i32[B, N]`` successful re-plans.
-      rmse: ``f32[B, N]`` RMS distance (m) of the positions after each step to the polyline
-        the robot was tracking at that step (from where it adopted it — the start or the
-        position of a re-plan — through its waypoints); NaN for a robot that did not move.
-      waypoints: ``f32[B, N, K, 2]`` and ``n_waypoints [B, N]``: the final waypoint lists.
-      executed: ``i32[B]`` control steps the loop ran (a multiple of the chunk; the loop stops
-        once every robot of the batch — on a mesh, of the device's share — is done).
-    """
-
-    states: jnp.ndarray
-    controls: jnp.ndarray
-    recovery: jnp.ndarray
-    steps: jnp.ndarray
-    reason: jnp.ndarray
-    collisions: jnp.ndarray
-    pair_collisions: jnp.ndarray
-    replans: jnp.ndarray
-    rmse: jnp.ndarray
-    waypoints: jnp.ndarray
-    n_waypoints: jnp.ndarray
-    executed: jnp.ndarray
-
-
-class _Carry(NamedTuple):
-    state: jnp.ndarray  # [B, N, 5]
-    waypoints: jnp.ndarray  # [B, N, K, 2]
-    n_wp: jnp.ndarray  # [B, N]
-    index: jnp.ndarray  # [B, N] current waypoint
-    done: jnp.ndarray  # [B, N]
-    reason: jnp.ndarray  # [B, N]
-    steps: jnp.ndarray  # [B, N]
-    hit: jnp.ndarray  # [B, N] in contact after the last step
-    pair_hit: jnp.ndarray  # [B, N, N]
-    collisions: jnp.ndarray  # [B, N]
-    pair_collisions: jnp.ndarray  # [B, N, N]
-    replans: jnp.ndarray  # [B, N]
-    last_replan: jnp.ndarray  # [B, N] step of the last re-plan attempt
-    origin: jnp.ndarray  # [B, N, 2] where the tracked polyline begins (start, or the position at a re-plan)
-    sq_error: jnp.ndarray  # [B, N] sum of squared distances to the tracked polyline
-    error: jnp.ndarray  # [B, N] distance to the tracked polyline after the last step
-    watch: jnp.ndarray  # [B, N, 2] the waypoint whose approach is being watched (m)
-    closest: jnp.ndarray  # [B, N] closest approach to that waypoint so far (m)
-    progress_t: jnp.ndarray  # [B, N] step of the last approach by NavConfig.stall_progress
-    creep: jnp.ndarray  # [B, N] stalled: top speed stall_speed until the waypoint is passed
-    spin: jnp.ndarray  # [B, N] net heading change (rad) since the last approach to the goal, a crowd or an orbit
-    goal_best: jnp.ndarray  # [B, N] that approach: closest distance to the goal so far (m)
-    stall_replan: jnp.ndarray  # [B, N] started creeping, its re-plan not attempted yet (no free slot)
-    detour: jnp.ndarray  # [B, N] tracking a path planned around discs: re-checked every NavConfig.recheck_period
-    t: jnp.ndarray  # scalar step counter
 
 
 def _robot_discs(state: jnp.ndarray, robot) -> tuple[jnp.ndarray, jnp.ndarray]:
@@ -149,102 +64,14 @@ def _robot_discs(state: jnp.ndarray, robot) -> tuple[jnp.ndarray, jnp.ndarray]:
     return jnp.stack([state[..., 0:1] + off * c, state[..., 1:2] + off * s], axis=-1), r
 
 
-_SIGHT_POINTS = 32
-_SIGHT_STEP = 0.1
-"""The straight way to a waypoint is checked at this many points this far apart (m): corners within 3.2 m."""
 
-
-def _subgoal_index(pos: jnp.ndarray, wp: jnp.ndarray, n: jnp.ndarray, index: jnp.ndarray, radius, near, d_safe,
-                   clearance) -> jnp.ndarray:
-    """The current waypoint: the first from ``index`` on that is farther than ``radius`` (the last if
-    none) — unless the straight way to it from ``pos [2]`` comes closer than ``d_safe`` to the map
-    (``clearance(x, y)``, m) within 3.2 m; then the one before it, until that is within ``near``.
-
-    Passing a waypoint a metre early cuts the corner it marks: measured on random-64-64-20 (row
-    347), a robot 0.94 m below a corner waypoint took the next one, whose straight way grazed the
-    corner's blocked cell, and sat still facing it until the time limit.
-    """
-    K = wp.shape[0]
-    j = jnp.arange(K)
-    dist = jnp.sqrt(jnp.sum((wp - pos) ** 2, axis=-1))
-    cand = (j >= index) & (j < n) & (dist >= radius)
-    nxt = jnp.where(jnp.any(cand), jnp.argmax(cand), n - 1).astype(jnp.int32)
-    prev = jnp.maximum(nxt - 1, index)
-    gap = wp[nxt] - pos
-    length = jnp.sqrt(jnp.sum(gap * gap))
-    s = jnp.minimum(jnp.arange(1, _SIGHT_POINTS + 1, dtype=pos.dtype) * _SIGHT_STEP, length)
-    pts = pos + s[:, None] * (gap / jnp.maximum(length, 1e-6))
-    blocked = jnp.any(clearance(pts[:, 0], pts[:, 1]) < d_safe)
-    hold = (nxt > index) & blocked & (dist[prev] >= near)
-    return jnp.where(hold, prev, nxt)
-
-
-def _lookahead_point(pos: jnp.ndarray, wp: jnp.ndarray, n: jnp.ndarray, index: jnp.ndarray, ahead,
-                     origin: jnp.ndarray) -> tuple:
-    """``(point [2], segment index)``: ``ahead`` m past the projection of ``pos`` on segments from ``index`` on.
-
-    Segment ``j`` runs from waypoint ``j − 1`` to ``j``; segment 0 from ``origin`` (where the robot
-    started or last re-planned) to ``wp[0]``.
-    """
-    K = wp.shape[0]
-    j = jnp.arange(K)
-    a = jnp.concatenate([origin[None], wp[:-1]])
-    ab = wp - a
-    seg = jnp.sqrt(jnp.sum(ab * ab, axis=-1))
-    valid = (j < n)
-    seg = jnp.where(valid, seg, 0.0)
-    cum = jnp.cumsum(seg)  # arc length at the end of segment j
-    u = jnp.clip(jnp.sum((pos - a) * ab, axis=-1) / jnp.maximum(seg * seg, 1e-12), 0.0, 1.0)
-    d = jnp.sqrt(jnp.sum((a + u[:, None] * ab - pos) ** 2, axis=-1))
-    d = jnp.where(valid & (j >= index), d, jnp.inf)
-    k = jnp.argmin(d).astype(jnp.int32)
-    s = cum[k] - seg[k] * (1.0 - u[k]) + ahead
-    m = jnp.clip(jnp.searchsorted(cum, s), 0, jnp.maximum(n - 1, 0))
-    frac = jnp.clip((s - (cum[m] - seg[m])) / jnp.maximum(seg[m], 1e-12), 0.0, 1.0)
-    point = jnp.where(s >= cum[jnp.maximum(n - 1, 0)], wp[jnp.maximum(n - 1, 0)], a[m] + frac * ab[m])
-    return point, k
-
-
-def _corner_cap(config: NavConfig, pos: jnp.ndarray, wp: jnp.ndarray, n: jnp.ndarray, index: jnp.ndarray,
-                decel) -> jnp.ndarray:
-    """Top speed (m/s) near corners (see `NavConfig.corner_speed`): ``pos [2]``, ``wp [K, 2]``."""
-    K = wp.shape[0]
-    v_c = config.corner_speed
-
-    def turn(i):  # turn angle at waypoint i: (i-1 or the robot) -> i -> i+1
-        prev = jnp.where(i > 0, wp[jnp.maximum(i - 1, 0)], pos)
-        a, b = wp[i] - prev, wp[jnp.minimum(i + 1, K - 1)] - wp[i]
-        # No gradient through the angle: with a zero-length leg the sqrt's would be 0 * inf.
-        cos = lax.stop_gradient(jnp.sum(a * b) / jnp.maximum(jnp.sqrt(jnp.sum(a * a) * jnp.sum(b * b)), 1e-9))
-        real = (i + 1 < n) & (jnp.sum(a * a) > 1e-12) & (jnp.sum(b * b) > 1e-12)
-        return real & (cos < jnp.cos(config.corner_angle)), cos
-
-    def speed(cos):  # corner_speed at 90 degrees and sharper, faster through gentler turns
-        return jnp.maximum(v_c, v_c / jnp.maximum(1.0 - cos, 1e-6) ** config.corner_exponent)
-
-    d_next = jnp.sqrt(jnp.sum((wp[index] - pos) ** 2))
-    is_next, cos_next = turn(index)
-    v_n = speed(cos_next)
-    ahead = jnp.sqrt(v_n ** 2 + 2.0 * decel * jnp.maximum(d_next - config.switch_radius, 0.0))
-    prev = jnp.maximum(index - 1, 0)
-    d_prev = jnp.sqrt(jnp.sum((wp[prev] - pos) ** 2))
-    is_prev, cos_prev = turn(prev)
-    v_p = speed(cos_prev)
-    behind = jnp.sqrt(v_p ** 2 + 2.0 * decel * jnp.maximum(d_prev - config.switch_radius, 0.0))
-    cap = jnp.where(is_next, ahead, jnp.inf)
-    # The goal is a corner too: arrive slowly enough to stop within the tolerance instead of orbiting it.
-    d_goal = jnp.sqrt(jnp.sum((wp[jnp.maximum(n - 1, 0)] - pos) ** 2))
-    cap = jnp.minimum(cap, jnp.sqrt(v_c ** 2 + 2.0 * decel * jnp.maximum(d_goal - config.goal_tolerance, 0.0)))
-    return jnp.minimum(cap, jnp.where((index > 0) & is_prev, behind, jnp.inf))
-
-
-def _current_waypoint(c: _Carry) -> jnp.ndarray:
+def _current_waypoint(c: Carry) -> jnp.ndarray:
     """``[B, N, 2]`` the waypoint each robot is tracking (m)."""
     return jnp.take_along_axis(c.waypoints, c.index[..., None, None], axis=2)[:, :, 0]
 
 
-def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp.ndarray,
-                    goal: jnp.ndarray) -> _Carry:
+def _watch_progress(config: NavConfig, c: Carry, pos: jnp.ndarray, crowded: jnp.ndarray,
+                    goal: jnp.ndarray) -> Carry:
     """Updates the stall and orbit watches (see `NavConfig.stall_time`, `NavConfig.orbit_angle`):
     ``pos, goal [B, N, 2]``; ``crowded [B, N]``: a disc is near.
 
@@ -279,118 +106,6 @@ def _watch_progress(config: NavConfig, c: _Carry, pos: jnp.ndarray, crowded: jnp
                       spin=spin, goal_best=goal_best)
 
 
-def _rewatch(replanned: jnp.ndarray, target: jnp.ndarray, pos: jnp.ndarray, watch: jnp.ndarray,
-             closest: jnp.ndarray, progress_t: jnp.ndarray, t: jnp.ndarray):
-    """The stall watch of creeping robots that just re-planned (``replanned [B, N]``): it follows the
-    new current waypoint ``target [B, N, 2]`` (m) without restarting the creep, and, where that
-    waypoint changed, measures progress towards it from ``pos [B, N, 2]`` and from step ``t`` on —
-    against the old waypoint's closest approach a robot whose new waypoint is farther would count
-    as stalled at once and re-plan again. Returns ``(watch, closest, progress_t)``."""
-    moved = replanned & jnp.any(target != watch, axis=-1)
-    d = jnp.sqrt(jnp.sum(lax.stop_gradient(target - pos) ** 2, axis=-1))
-    return (jnp.where(replanned[..., None], target, watch), jnp.where(moved, d, closest),
-            jnp.where(moved, t, progress_t))
-
-
-def _threatened(config: NavConfig, pos: jnp.ndarray, centres: jnp.ndarray, velocities: jnp.ndarray,
-                radii: jnp.ndarray) -> jnp.ndarray:
-    """``bool[...]``: a disc whose edge is within `NavConfig.threat_distance` of the robot's centre
-    ``pos [..., 2]`` moves towards that centre faster than ``threat_speed`` (``centres``,
-    ``velocities [..., D, 2]``, ``radii [..., D]``; D may be 0)."""
-    rel = centres - pos[..., None, :]
-    dist = jnp.sqrt(jnp.maximum(jnp.sum(rel * rel, axis=-1), 1e-12))
-    toward = -jnp.sum(velocities * rel, axis=-1) / dist  # the disc's own speed towards the robot
-    close = (dist - radii < config.threat_distance) & (config.threat_distance > 0)  # 0 disables, even inside a disc
-    return jnp.any(close & (toward > config.threat_speed), axis=-1)
-
-
-def _follow(config: NavConfig, robot, state: jnp.ndarray, subgoal: jnp.ndarray) -> jnp.ndarray:
-    """Pure path following ``[2]``: turn towards the sub-goal, slow with the heading error, inside the window."""
-    win = dynamic_window(robot, state, config.dwa.period)
-    err = jnp.arctan2(subgoal[1] - state[1], subgoal[0] - state[0]) - state[2]
-    err = jnp.arctan2(jnp.sin(err), jnp.cos(err))
-    w = jnp.clip(config.follow_gain * err, win.w_lo, win.w_hi)
-    v = jnp.clip(robot.v_max * jnp.maximum(jnp.cos(err), 0.0) ** 2, win.v_lo, win.v_hi)
-    return jnp.stack([v, w])
-
-
-def _replan(config: NavConfig, free: jnp.ndarray, resolution, c: _Carry, inputs: EpisodeInputs,
-            need: jnp.ndarray, centres: jnp.ndarray, reach: jnp.ndarray) -> tuple[_Carry, jnp.ndarray, jnp.ndarray]:
-    """Re-plans up to `NavConfig.replan_slots` of the robots with ``need [B, N] > 0`` per group
-    of `NavConfig.replan_group` episodes (0: the whole batch is one group).
-
-    ``need`` is 2 for a robot that must re-plan (path blocked, drifted off, stalled) and 1 for
-    a detour re-check (`NavConfig.recheck_period`); the 2s take the slots first, and a
-    re-check's path replaces the robot's only if it is `NavConfig.recheck_gain` shorter than
-    what is left of the current one.
-
-    ``centres [B, N, D, 2]`` / ``reach [B, N, D]``: the discs whose nearby cells are closed.
-    Only the chosen robots' fields are computed (a gather into fixed slots), so the cost
-    grows with the number of groups, not with the batch; robots left over try again on the
-    next step. Groups are consecutive episodes, so a device holding whole groups computes
-    exactly what one device computes for them. The slots of all groups are planned one after
-    another (`lax.map`), not vectorised: an unused slot then costs nothing, where under
-    ``vmap`` every slot ran the relaxation sweeps of the longest one (measured on brc202d,
-    50 episodes among walkers, identical trajectories: the episode call took 8.3 s vectorised,
-    5.1 s sequentially and 2.3 s without re-planning). Returns the carry, ``bool[B, N]``: the robots that were attempted,
-    and ``bool[B, N]``: those whose path was replaced.
-    """
-    B, N, K = c.waypoints.shape[:3]
-    H, W = free.shape
-    G = min(config.replan_group or B, B)
-    Bp = -(-B // G) * G
-    Q = min(config.replan_slots, G * N)
-    # A partial last group is padded with robots that need nothing: only these gathers grow.
-    pad = lambda x: jnp.concatenate([x, jnp.zeros((Bp - B,) + x.shape[1:], x.dtype)]) if Bp > B else x  # noqa: E731
-    flat_need = pad(need).reshape(Bp // G, G * N).astype(jnp.int32)
-    _, slot = jax.vmap(lambda n: lax.top_k(n * (G * N) - jnp.arange(G * N), Q))(flat_need)  # the first Q, must-re-plans first
-    slot = (slot + (jnp.arange(Bp // G) * (G * N))[:, None]).reshape(-1)  # [S] robots (flat over [Bp, N])
-    take = lambda x: pad(x).reshape((Bp * N,) + x.shape[2:])[slot]  # noqa: E731
-    kind = take(need)
-    use, check = kind > 0, kind == 1
-    state, wp, n_wp, index = take(c.state), take(c.waypoints), take(c.n_wp), take(c.index)
-
-    def one(args):
-        need1, check1, state1, wp1, n1, index1, goal_cell1, cen, rch = args
-        closed = disc_cells((H, W), cen, jnp.where(need1, rch, 0.0), resolution, _SPAN)
-        cell = jnp.clip(jnp.floor(state1[:2] / resolution).astype(jnp.int32), 0, jnp.asarray([W - 1, H - 1]))
-        plan_free = free & ~closed
-        plan_free = plan_free.at[cell[1], cell[0]].set(free[cell[1], cell[0]])  # the robot's own cell stays open
-        field = distance_field(plan_free, goal_cell1, need1, config.replan_sweeps, until=cell)
-        cells, n = descend(field, plan_free, cell, config.replan_cells)
-        pts, m = turn_vertices(cells, jnp.maximum(n, 1), K)
-        # A re-check keeps the current path unless the new one is clearly shorter: the field's
-        # length (the same octile grid metric as the turn-vertex polylines) against what is left.
-        new_len = field[cell[1], cell[0]] * resolution
-        legs = jnp.sqrt(jnp.sum((wp1[1:] - wp1[:-1]) ** 2, axis=-1))
-        j = jnp.arange(1, K)
-        left = (jnp.sqrt(jnp.sum((wp1[index1] - state1[:2]) ** 2))
-                + jnp.sum(jnp.where((j > index1) & (j < n1), legs, 0.0)))
-        better = new_len + config.recheck_gain < left
-        return (pts + 0.5) * resolution, m, need1 & (n > 1) & (~check1 | better)
-
-    pts, m, ok = lax.map(one, (use, check, state, wp, n_wp, index, take(inputs.goal_cell), take(centres), take(reach)))
-    g = take(inputs.goal)
-    # The last waypoint is the goal itself.
-    pts = jnp.where(jnp.arange(K)[None, :, None] >= m[:, None, None] - 1, g[:, None, :], pts)
-
-    def put(x, new, mask):
-        flat = pad(x).reshape((Bp * N,) + x.shape[2:])
-        upd = jnp.where(mask.reshape(mask.shape + (1,) * (flat.ndim - 1)), new, flat[slot])
-        return flat.at[slot].set(upd).reshape((Bp,) + x.shape[1:])[:B]
-
-    attempted = put(jnp.zeros((B, N), bool), use, use)
-    replaced = put(jnp.zeros((B, N), bool), ok, ok)
-    c = c._replace(waypoints=put(c.waypoints, pts, ok), n_wp=put(c.n_wp, m, ok), index=put(c.index, jnp.zeros_like(m), ok),
-                   replans=put(c.replans, take(c.replans) + 1, ok), origin=put(c.origin, state[:, :2], ok),
-                   error=put(c.error, jnp.zeros_like(m, c.error.dtype), ok))
-    return c, attempted, replaced
-
-
-_SPAN = 3
-"""Cells around a blocking disc's cell that re-planning examines (reach up to 3.5 cells)."""
-
-
 def _centres_at(obs: MovingObstacles, times: jnp.ndarray) -> jnp.ndarray:
     """``[K, B, M, 2]`` centres of every episode's obstacles along their routes at ``times [K]`` (s)."""
     return jax.vmap(lambda tk: jax.vmap(obstacle_state, in_axes=(0, None))(obs, tk)[0])(times)
@@ -408,23 +123,31 @@ def _oracle_track(obs: MovingObstacles, t: jnp.ndarray, steps: int, dt: float, p
     linear = pos_all[..., None, :] + vel_all[..., None, :] * taus[:, None]  # [B, N, D, K, 2]
     return jnp.concatenate([fut, linear[:, :, M:]], axis=2) if D > M else fut
 
+class _Discs(NamedTuple):
+    """The discs each robot sees at time ``t``: ``D = M`` moving obstacles, then (with ``N > 1``) every
+    robot's ``C`` covering discs, its own parked far away.
 
-def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: DWAParams,
-          inputs: EpisodeInputs, c: _Carry):
-    dwa = config.dwa
-    robot = dwa.robot
-    period = dwa.period
-    res = table.resolution
-    B, N = c.state.shape[:2]
-    t = c.t.astype(jnp.float32) * period
+    Attributes:
+      pos, vel: ``f32[B, N, D, 2]`` centres (m) and velocities (m/s); rad: ``f32[B, N, D]`` radii (m).
+      robots: ``f32[B, N, C, 2]`` the robots' covering discs; radius: their radius (m).
+    """
 
-    # Moving obstacles now, and the robots as discs for each other.
-    obs = inputs.obstacles
+    pos: jnp.ndarray
+    vel: jnp.ndarray
+    rad: jnp.ndarray
+    robots: jnp.ndarray
+    radius: jnp.ndarray
+
+
+def _seen_discs(robot, obs: MovingObstacles, state: jnp.ndarray, t: jnp.ndarray) -> _Discs:
+    """Stage 1: the moving obstacles at time ``t`` (s), and the robots (``state [B, N, 5]``) as discs for each
+    other."""
+    B, N = state.shape[:2]
     M = obs.radii.shape[-1]
     opos, ovel = jax.vmap(obstacle_state, in_axes=(0, None))(obs, t)  # [B, M, 2]
-    rc, rr = _robot_discs(c.state, robot)  # [B, N, C, 2]
+    rc, rr = _robot_discs(state, robot)  # [B, N, C, 2]
     C = rc.shape[2]
-    rvel = c.state[..., 3:4] * jnp.stack([jnp.cos(c.state[..., 2]), jnp.sin(c.state[..., 2])], axis=-1)  # [B, N, 2]
+    rvel = state[..., 3:4] * jnp.stack([jnp.cos(state[..., 2]), jnp.sin(state[..., 2])], axis=-1)  # [B, N, 2]
     # Discs seen by robot i: the M obstacles, then (with N > 1) every robot's C covering discs, its own
     # moved far away. A lone robot sees only the obstacles (no disc at all on a static map).
     pos_all = jnp.broadcast_to(opos[:, None], (B, N, M, 2))  # [B, N, D, 2]
@@ -439,104 +162,129 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
         pos_all = jnp.concatenate([pos_all, others], axis=2)
         vel_all = jnp.concatenate([vel_all, ovel_r], axis=2)
         rad_all = jnp.concatenate([rad_all, jnp.where(own[..., 0], 0.0, rr) * jnp.ones((B, N, N * C))], axis=2)
+    return _Discs(pos_all, vel_all, rad_all, rc, rr)
 
-    # Sub-goals.
-    pos = c.state[..., :2]
+
+def _next_waypoints(config: NavConfig, table: ClearanceTable, c: Carry, pos: jnp.ndarray) -> Carry:
+    """Stage 2: each robot's current waypoint (`subgoal_index`); ``pos [B, N, 2]`` (m)."""
+    B, N = pos.shape[:2]
     # Only a creeping robot holds a waypoint whose way on is not clear: applied to every robot, the
-    # rule sharpened turns at corners (warehouse, mean max curvature 1.20 -> 1.94 1/m) and cost
-    # evasions among walkers (random-64-64-20 with 5 walkers, 5 seeds: success 94.4 -> 90.0 %).
+    # rule sharpened turns at corners and cost evasions among walkers.
     near = jnp.where(c.creep, config.switch_min, config.switch_radius).reshape(-1)
-    index = jax.vmap(_subgoal_index, in_axes=(0, 0, 0, 0, None, 0, None, None))(
+    index = jax.vmap(subgoal_index, in_axes=(0, 0, 0, 0, None, 0, None, None))(
         pos.reshape(B * N, 2), c.waypoints.reshape((B * N,) + c.waypoints.shape[2:]), c.n_wp.reshape(-1),
-        c.index.reshape(-1), config.switch_radius, near, dwa.d_safe,
+        c.index.reshape(-1), config.switch_radius, near, config.dwa.d_safe,
         lambda x, y: static_clearance(table, x, y, "hybrid")).reshape(B, N)
-    c = c._replace(index=index)
+    return c._replace(index=index)
 
-    # A disc within half the look-ahead: slow progress or drift is then an evasion.
-    gap = jnp.sqrt(jnp.sum((pos_all - pos[:, :, None, :]) ** 2, axis=-1)) - rad_all  # [B, N, D]
-    crowded = jnp.any(gap < 0.5 * config.block_distance, axis=-1)
-    c = _watch_progress(config, c, pos, crowded, inputs.goal)
 
-    if config.replan:
-        reach = rad_all + rr + config.block_margin
-        if N > 1:
-            # Another robot blocks a path only while it stands (parked at its goal, or waiting): a moving
-            # one is left to the DWA — measured: two robots re-planning around each other's predicted
-            # tracks kept swerving into each other.
-            moving = (jnp.abs(c.state[..., 3]) >= 0.1) & ~c.done  # [B, N]
-            robot_reach = jnp.where(jnp.repeat(moving, C, axis=1)[:, None, :], 0.0, reach[:, :, M:])
-            reach = jnp.concatenate([reach[:, :, :M], robot_reach], axis=2)
-        # Drifted off the path (e.g. overshot an aisle) — unless a disc is within half the look-ahead:
-        # then the drift is an evasion, and a fresh path through the disc undoes it (measured: two
-        # robots crossing re-planned back into each other).
-        lost = (c.error > config.replan_deviation) & ~crowded
-        if M > 0 or N > 1:
-            # Each disc at its predicted positions over the next block_horizon seconds.
-            ts = jnp.arange(int(config.block_horizon / 0.5) + 1, dtype=jnp.float32) * 0.5  # [P]
-            future = pos_all[:, :, :, None, :] + vel_all[:, :, :, None, :] * ts[:, None]  # [B, N, D, P, 2]
-            P = ts.shape[0]
-            # A walker going the robot's way along its path is followed, not gone round (room-64-64-8:
-            # robots went round walkers walking ahead of them through other rooms, 1.5-2x the way).
-            going = jnp.broadcast_to(vel_all[:, :, :, None, :], future.shape).reshape(B, N, -1, 2)
-            recede = jnp.where(jnp.arange(pos_all.shape[2]) < M, config.recede_speed, jnp.inf)  # walkers only
-            blocked = jax.vmap(jax.vmap(path_blocked, in_axes=(0, 0, 0, 0, 0, 0, None, 0, None)),
-                               in_axes=(0, 0, 0, 0, 0, 0, None, 0, None))(
-                pos, c.waypoints, c.n_wp, c.index, future.reshape(B, N, -1, 2), jnp.repeat(reach, P, axis=-1),
-                config.block_distance, going, jnp.repeat(recede, P))
-        else:
-            blocked = jnp.zeros((B, N), bool)
-            future, P = pos_all[:, :, :, None, :], 1
-        due = (c.t - c.last_replan).astype(jnp.float32) * period >= config.replan_period - 1e-6
-        # A robot that starts creeping also re-plans from where it stalled (once, when a slot is
-        # free): momentum may have carried it into a pocket the old path's next waypoint cannot be
-        # reached from in a line.
-        must = (blocked | lost | c.stall_replan) & due & ~c.done
-        # A path planned around discs may have been a long way round a walker that has since moved
-        # on: it is re-checked, and replaced by a clearly shorter one (room-64-64-8 among walkers:
-        # robots went on through other rooms, 1.5-2x the way, until the time limit).
-        since = (c.t - c.last_replan).astype(jnp.float32) * period
-        check = c.detour & (since >= config.recheck_period - 1e-6) & due & ~c.done & ~must
-        need = jnp.where(must, 2, jnp.where(check, 1, 0))
-        # Nor is the way closed around a walker moving away from the robot: a re-plan would go round
-        # it, and the next re-check (or block) back (measured: a robot following a walker up a
-        # warehouse aisle re-planned 66 times in 180 s).
-        rel = pos_all - pos[:, :, None, :]
-        away = jnp.sum(vel_all * rel, axis=-1) / jnp.maximum(jnp.sqrt(jnp.sum(rel * rel, axis=-1)), 1e-6)
-        away = (away >= recede) if (M > 0 or N > 1) else jnp.zeros_like(reach, bool)
-        closing = future.reshape(B, N, -1, 2), jnp.repeat(jnp.where(away, 0.0, reach), P, axis=-1)
-        c, tried, replaced = lax.cond(jnp.any(need > 0),
-                                      lambda cc: _replan(config, free, res, cc, inputs, need, *closing),
-                                      lambda cc: (cc, jnp.zeros_like(must), jnp.zeros_like(must)), c)
-        c = c._replace(last_replan=jnp.where(tried, c.t, c.last_replan))
-        if M > 0 or N > 1:  # with no disc at all nothing is closed, and no path goes round anything
-            c = c._replace(detour=c.detour | (replaced & must))
-        # A creeping robot keeps creeping along its new path, to that path's first waypoint: released
-        # by the re-plan, the robot that orbited went back to full speed and orbited again (measured).
-        watch, closest, progress_t = _rewatch(c.creep & tried, _current_waypoint(c), pos, c.watch, c.closest,
-                                              c.progress_t, c.t)
-        c = c._replace(watch=watch, closest=closest, progress_t=progress_t, stall_replan=c.stall_replan & ~tried)
+def _crowded(config: NavConfig, discs: _Discs, pos: jnp.ndarray) -> jnp.ndarray:
+    """``bool[B, N]``: a disc within half the look-ahead (slow progress or drift is then an evasion)."""
+    gap = jnp.sqrt(jnp.sum((discs.pos - pos[:, :, None, :]) ** 2, axis=-1)) - discs.rad  # [B, N, D]
+    return jnp.any(gap < 0.5 * config.block_distance, axis=-1)
 
-    if config.subgoal == "key_nodes":
-        sub = _current_waypoint(c)
+
+def _replanning(config: NavConfig, free: jnp.ndarray, resolution, inputs: EpisodeInputs, c: Carry,
+                pos: jnp.ndarray, discs: _Discs, crowded: jnp.ndarray) -> Carry:
+    """Stage 4: the robots that must re-plan (path blocked, drifted off, stalled) or may re-check a detour,
+    and their re-plans (`replan_slots`, in a `lax.cond` taken only on steps where some robot needs one)."""
+    B, N = pos.shape[:2]
+    M = inputs.obstacles.radii.shape[-1]
+    C = discs.robots.shape[2]
+    period = config.dwa.period
+    pos_all, vel_all = discs.pos, discs.vel
+    reach = discs.rad + discs.radius + config.block_margin
+    if N > 1:
+        # Another robot blocks a path only while it stands (parked at its goal, or waiting): a moving
+        # one is left to the DWA — measured: two robots re-planning around each other's predicted
+        # tracks kept swerving into each other.
+        moving = (jnp.abs(c.state[..., 3]) >= 0.1) & ~c.done  # [B, N]
+        robot_reach = jnp.where(jnp.repeat(moving, C, axis=1)[:, None, :], 0.0, reach[:, :, M:])
+        reach = jnp.concatenate([reach[:, :, :M], robot_reach], axis=2)
+    # Drifted off the path (e.g. overshot an aisle) — unless a disc is within half the look-ahead:
+    # then the drift is an evasion, and a fresh path through the disc undoes it (measured: two
+    # robots crossing re-planned back into each other).
+    lost = (c.error > config.replan_deviation) & ~crowded
+    if M > 0 or N > 1:
+        # Each disc at its predicted positions over the next block_horizon seconds.
+        ts = jnp.arange(int(config.block_horizon / 0.5) + 1, dtype=jnp.float32) * 0.5  # [P]
+        future = pos_all[:, :, :, None, :] + vel_all[:, :, :, None, :] * ts[:, None]  # [B, N, D, P, 2]
+        P = ts.shape[0]
+        # A walker going the robot's way along its path is followed, not gone round (room-64-64-8:
+        # robots went round walkers walking ahead of them through other rooms, 1.5-2x the way).
+        going = jnp.broadcast_to(vel_all[:, :, :, None, :], future.shape).reshape(B, N, -1, 2)
+        recede = jnp.where(jnp.arange(pos_all.shape[2]) < M, config.recede_speed, jnp.inf)  # walkers only
+        blocked = jax.vmap(jax.vmap(path_blocked, in_axes=(0, 0, 0, 0, 0, 0, None, 0, None)),
+                           in_axes=(0, 0, 0, 0, 0, 0, None, 0, None))(
+            pos, c.waypoints, c.n_wp, c.index, future.reshape(B, N, -1, 2), jnp.repeat(reach, P, axis=-1),
+            config.block_distance, going, jnp.repeat(recede, P))
     else:
-        sub, seg = jax.vmap(jax.vmap(_lookahead_point, in_axes=(0, 0, 0, 0, None, 0)), in_axes=(0, 0, 0, 0, None, 0))(
-            pos, c.waypoints, c.n_wp, c.index, config.lookahead, c.origin)
-        c = c._replace(index=seg)
+        blocked = jnp.zeros((B, N), bool)
+        future, P = pos_all[:, :, :, None, :], 1
+    due = (c.t - c.last_replan).astype(jnp.float32) * period >= config.replan_period - 1e-6
+    # A robot that starts creeping also re-plans from where it stalled (once, when a slot is
+    # free): momentum may have carried it into a pocket the old path's next waypoint cannot be
+    # reached from in a line.
+    must = (blocked | lost | c.stall_replan) & due & ~c.done
+    # A path planned around discs may have been a long way round a walker that has since moved
+    # on: it is re-checked, and replaced by a clearly shorter one (room-64-64-8 among walkers:
+    # robots went on through other rooms, 1.5-2x the way, until the time limit).
+    since = (c.t - c.last_replan).astype(jnp.float32) * period
+    check = c.detour & (since >= config.recheck_period - 1e-6) & due & ~c.done & ~must
+    need = jnp.where(must, 2, jnp.where(check, 1, 0))
+    # Nor is the way closed around a walker moving away from the robot: a re-plan would go round
+    # it, and the next re-check (or block) back (a robot following a walker up a warehouse aisle
+    # re-planned over and over).
+    rel = pos_all - pos[:, :, None, :]
+    away = jnp.sum(vel_all * rel, axis=-1) / jnp.maximum(jnp.sqrt(jnp.sum(rel * rel, axis=-1)), 1e-6)
+    away = (away >= recede) if (M > 0 or N > 1) else jnp.zeros_like(reach, bool)
+    closing = future.reshape(B, N, -1, 2), jnp.repeat(jnp.where(away, 0.0, reach), P, axis=-1)
+    c, tried, replaced = lax.cond(jnp.any(need > 0),
+                                  lambda cc: replan_slots(config, free, resolution, cc, inputs, need, *closing),
+                                  lambda cc: (cc, jnp.zeros_like(must), jnp.zeros_like(must)), c)
+    c = c._replace(last_replan=jnp.where(tried, c.t, c.last_replan))
+    if M > 0 or N > 1:  # with no disc at all nothing is closed, and no path goes round anything
+        c = c._replace(detour=c.detour | (replaced & must))
+    # A creeping robot keeps creeping along its new path, to that path's first waypoint: released
+    # by the re-plan, the robot that orbited went back to full speed and orbited again (measured).
+    watch, closest, progress_t = rewatch(c.creep & tried, _current_waypoint(c), pos, c.watch, c.closest,
+                                         c.progress_t, c.t)
+    return c._replace(watch=watch, closest=closest, progress_t=progress_t, stall_replan=c.stall_replan & ~tried)
 
-    # Local planner, its top speed capped near corners (and while creeping) unless a walker closes in.
+
+def _subgoal(config: NavConfig, c: Carry, pos: jnp.ndarray) -> tuple[jnp.ndarray, Carry]:
+    """Stage 5: ``[B, N, 2]`` the point each robot steers for: its current waypoint, or the look-ahead point
+    (whose segment becomes the current waypoint)."""
+    if config.subgoal == "key_nodes":
+        return _current_waypoint(c), c
+    sub, seg = jax.vmap(jax.vmap(lookahead_point, in_axes=(0, 0, 0, 0, None, 0)), in_axes=(0, 0, 0, 0, None, 0))(
+        pos, c.waypoints, c.n_wp, c.index, config.lookahead, c.origin)
+    return sub, c._replace(index=seg)
+
+
+def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams, inputs: EpisodeInputs, c: Carry,
+                   pos: jnp.ndarray, sub: jnp.ndarray, discs: _Discs, t: jnp.ndarray) -> tuple:
+    """Stage 6: the local planner's control ``u [B, N, 2]`` (zero once done) and ``recovery bool[B, N]``, its
+    top speed capped near corners (and while creeping) unless a walker closes in."""
+    dwa = config.dwa
+    robot = dwa.robot
+    obs = inputs.obstacles
+    B, N = pos.shape[:2]
+    M = obs.radii.shape[-1]
+    pos_all, vel_all, rad_all = discs.pos, discs.vel, discs.rad
     flat = lambda x: x.reshape((B * N,) + x.shape[2:])  # noqa: E731
-    cap = jax.vmap(lambda p_, w_, n_, i_: _corner_cap(config, p_, w_, n_, i_, robot.decel))(
+    cap = jax.vmap(lambda p_, w_, n_, i_: corner_cap(config, p_, w_, n_, i_, robot.decel))(
         flat(pos), flat(c.waypoints), flat(c.n_wp), flat(c.index))
     v_top = jnp.minimum(robot.v_max, jnp.maximum(cap, config.corner_speed))
     v_top = jnp.where(flat(c.creep), jnp.minimum(v_top, config.stall_speed), v_top)
     if config.local == "dwa":  # `follow` does not avoid anything: lifting its caps only sends it into walls
         # Walkers only: robots avoid each other, and two robots meeting at a corner should slow down.
-        threat = _threatened(config, pos, pos_all[:, :, :M], vel_all[:, :, :M], rad_all[:, :, :M])
+        threat = threatened(config, pos, pos_all[:, :, :M], vel_all[:, :, :M], rad_all[:, :, :M])
         v_top = jnp.where(flat(threat), robot.v_max, v_top)
         track = None
         if config.prediction == "oracle" and M > 0:
             track = _oracle_track(obs, t, dwa.steps, dwa.dt, pos_all, vel_all)
-        discs = DiscObstacles(flat(pos_all), flat(vel_all), flat(rad_all), None if track is None else flat(track))
+        obstacles = DiscObstacles(flat(pos_all), flat(vel_all), flat(rad_all), None if track is None else flat(track))
 
         def control(state, subgoal, d, wp, vmax, finish):
             cfg = dataclasses.replace(dwa, robot=dataclasses.replace(robot, v_max=vmax))
@@ -546,16 +294,25 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
         # the end of a dead end is otherwise reached only by rollouts that run on into its end wall).
         finish = jnp.concatenate([flat(inputs.goal), jnp.full((B * N, 1), config.goal_tolerance, inputs.goal.dtype)],
                                  axis=-1)
-        u, info = jax.vmap(control)(flat(c.state), flat(sub), discs, flat(c.waypoints), v_top, finish)
+        u, info = jax.vmap(control)(flat(c.state), flat(sub), obstacles, flat(c.waypoints), v_top, finish)
         recovery = info.recovery.reshape(B, N)
     else:
-        u = jax.vmap(lambda s, g, vmax: _follow(config, dataclasses.replace(robot, v_max=vmax), s, g))(
+        u = jax.vmap(lambda s, g, vmax: follow(config, dataclasses.replace(robot, v_max=vmax), s, g))(
             flat(c.state), flat(sub), v_top)
         recovery = jnp.zeros((B, N), bool)
     u = u.reshape(B, N, 2)
     u = jnp.where(c.done[..., None], 0.0, u)
-    recovery = recovery & ~c.done
+    return u, recovery & ~c.done
 
+
+def _move_and_contacts(config: NavConfig, table: ClearanceTable, obs: MovingObstacles, c: Carry, u: jnp.ndarray,
+                       t: jnp.ndarray, radius: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray, jnp.ndarray]:
+    """Stage 7: the new states ``[B, N, 5]`` (a done robot stays, at rest), and the contacts during the move:
+    ``hit bool[B, N]`` (map, moving disc or robot) and ``pair bool[B, N, N]`` (robot i with robot j)."""
+    B, N = c.state.shape[:2]
+    M = obs.radii.shape[-1]
+    period = config.dwa.period
+    robot = config.dwa.robot
     new = advance(c.state, u, period)
     new = jnp.where(c.done[..., None], c.state.at[..., 3:].set(0.0), new)
 
@@ -569,18 +326,26 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
     ocs = _centres_at(obs, t + frac * period)  # [K, B, M, 2]
     nc, _ = _robot_discs(pose, robot)  # [K, B, N, C, 2]
     clear = static_clearance(table, nc[..., 0], nc[..., 1], "hybrid")  # [K, B, N, C]
-    hit_map = jnp.any(clear < rr, axis=(0, 3))
+    hit_map = jnp.any(clear < radius, axis=(0, 3))
     if M > 0:
         gap = jnp.sqrt(jnp.sum((nc[..., None, :] - ocs[:, :, None, None, :, :]) ** 2, axis=-1))  # [K, B, N, C, M]
-        hit_obs = jnp.any(gap < rr + obs.radii[None, :, None, None, :], axis=(0, 3, 4))
+        hit_obs = jnp.any(gap < radius + obs.radii[None, :, None, None, :], axis=(0, 3, 4))
     else:
         hit_obs = jnp.zeros((B, N), bool)
     if N > 1:
         d = jnp.sqrt(jnp.sum((nc[:, :, :, None, :, None, :] - nc[:, :, None, :, None, :, :]) ** 2, axis=-1))
-        pair = jnp.any(d < 2 * rr, axis=(0, 4, 5)) & ~jnp.eye(N, dtype=bool)  # [B, N, N]
+        pair = jnp.any(d < 2 * radius, axis=(0, 4, 5)) & ~jnp.eye(N, dtype=bool)  # [B, N, N]
     else:
         pair = jnp.zeros((B, N, N), bool)
     hit = hit_map | hit_obs | jnp.any(pair, axis=-1)
+    return new, hit, pair
+
+
+def _bookkeeping(config: NavConfig, inputs: EpisodeInputs, c: Carry, new: jnp.ndarray, hit: jnp.ndarray,
+                 pair: jnp.ndarray) -> Carry:
+    """Stage 8: contact counts (onsets of contact), steps, tracking error, and why a robot is done (goal,
+    collision when the config stops on one, time limit); a done robot stays done."""
+    period = config.dwa.period
     active = ~c.done
     onset = hit & ~c.hit & active
     pair_onset = pair & ~c.pair_hit & (active[:, :, None] | active[:, None, :])
@@ -596,12 +361,29 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
     reason = jnp.where(at_goal, GOAL, jnp.where(crash, COLLISION, jnp.where(timeout, TIMEOUT, RUNNING)))
     reason = jnp.where(c.done, c.reason, reason)
     done = c.done | (reason != RUNNING)
-    c = c._replace(
+    return c._replace(
         state=new, done=done, reason=reason, steps=steps, hit=hit, pair_hit=pair,
         collisions=c.collisions + onset.astype(jnp.int32),
         pair_collisions=c.pair_collisions + pair_onset.astype(jnp.int32), sq_error=sq_error, error=err,
         t=c.t + 1,
     )
+
+
+def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: DWAParams,
+          inputs: EpisodeInputs, c: Carry):
+    """One control period of every robot: the stages in the order of the module docstring."""
+    t = c.t.astype(jnp.float32) * config.dwa.period
+    discs = _seen_discs(config.dwa.robot, inputs.obstacles, c.state, t)
+    pos = c.state[..., :2]
+    c = _next_waypoints(config, table, c, pos)
+    crowded = _crowded(config, discs, pos)
+    c = _watch_progress(config, c, pos, crowded, inputs.goal)  # stage 3
+    if config.replan:
+        c = _replanning(config, free, table.resolution, inputs, c, pos, discs, crowded)
+    sub, c = _subgoal(config, c, pos)
+    u, recovery = _local_control(config, table, params, inputs, c, pos, sub, discs, t)
+    new, hit, pair = _move_and_contacts(config, table, inputs.obstacles, c, u, t, discs.radius)
+    c = _bookkeeping(config, inputs, c, new, hit, pair)
     return c, (new, u, recovery)
 
 
@@ -620,7 +402,7 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
     B, N = inputs.start.shape[:2]
     chunk = config.chunk
     zeros = jnp.zeros((B, N), jnp.int32)
-    carry = _Carry(
+    carry = Carry(
         state=inputs.start, waypoints=inputs.waypoints, n_wp=inputs.n_waypoints, index=zeros, done=~inputs.active,
         reason=zeros, steps=zeros, hit=jnp.zeros((B, N), bool), pair_hit=jnp.zeros((B, N, N), bool),
         collisions=zeros, pair_collisions=jnp.zeros((B, N, N), jnp.int32), replans=zeros,

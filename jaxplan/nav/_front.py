@@ -26,9 +26,8 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import math
 import time
-from typing import Any, Mapping, NamedTuple, Sequence
+from typing import Any, Mapping, Sequence
 
 import jax
 import jax.numpy as jnp
@@ -38,17 +37,20 @@ from jax.sharding import PartitionSpec as P
 from numpy.typing import ArrayLike
 
 from jaxplan.core.cache import Built, memoize
-from jaxplan.dwa import DWAParams, table_of, validate_config, validate_params
+from jaxplan.dwa import DWAParams, table_of
 from jaxplan.grid import GridMap, clearance_field, shortest_lengths
 from jaxplan.metrics import EnergyModel, energy
-from jaxplan.nav._config import LOCAL_PLANNERS, PREDICTIONS, SUBGOAL_MODES, NavConfig
-from jaxplan.nav._episode import GOAL, REASONS, EpisodeInputs, run_episodes
-from jaxplan.nav._obstacles import MovingObstacles, no_obstacles, obstacle_state, stack_obstacles, trajectories
-from jaxplan.nav._pipelines import Pipeline, get_pipeline
+from jaxplan.nav._checks import check_obstacle_starts, checked_run, obstacle_sets, resolve_config
+from jaxplan.nav._config import NavConfig
+from jaxplan.nav._episode import run_episodes
+from jaxplan.nav._moving import MovingObstacles, obstacle_state, stack_obstacles
+from jaxplan.nav._pipelines import Pipeline
+from jaxplan.nav._results import Episode, EpisodeBatch
+from jaxplan.nav._state import GOAL, REASONS, EpisodeInputs
 from jaxplan.scale import BATCH_AXIS, auto_mesh, pad_leading
 
-__all__ = ["Episode", "EpisodeBatch", "navigate", "navigate_batch", "navigate_multi", "planning_grid", "resolve_config",
-           "CURVATURE_MIN_SPEED", "INFEASIBLE_START", "INFEASIBLE_GOAL", "UNREACHABLE", "PLAN_FAILED"]
+__all__ = ["navigate", "navigate_batch", "navigate_multi", "planning_grid", "CURVATURE_MIN_SPEED", "INFEASIBLE_START",
+           "INFEASIBLE_GOAL", "UNREACHABLE", "PLAN_FAILED"]
 
 CURVATURE_MIN_SPEED = 0.1
 """m/s: steps slower than this do not enter the executed max curvature (|ω|/v blows up at v → 0)."""
@@ -58,6 +60,7 @@ INFEASIBLE_GOAL = "infeasible: goal closer than d_safe to an obstacle"
 UNREACHABLE = "infeasible: goal not reachable for the inflated footprint"
 PLAN_FAILED = "global planner found no path"
 _NOT_RUN = (INFEASIBLE_START, INFEASIBLE_GOAL, UNREACHABLE, PLAN_FAILED)
+
 
 def _compiled_episodes(cfg: NavConfig, steps: int, mesh: Mesh | None, args: tuple) -> tuple[Any, float]:
     """The compiled episode program for ``args = (table, free, params, inputs)``'s shapes, and the
@@ -96,235 +99,11 @@ def planning_grid(grid: GridMap, d_safe: float) -> GridMap:
     return dataclasses.replace(grid, free=free) if dataclasses.is_dataclass(grid) else grid._replace(free=free)
 
 
-class Episode(NamedTuple):
-    """One robot's navigation episode (numpy; DESIGN §3).
-
-    Attributes:
-      trajectory: ``f32[T + 1, 3]`` poses (x, y, theta) in m, rad, from the start; ``T``
-        control steps were taken.
-      controls: ``f32[T, 2]`` (v, omega) applied at each step (chu2024's velocity traces).
-      times: ``f32[T + 1]`` seconds of the trajectory samples.
-      success: goal reached within tolerance, without collision, within the time limit.
-      reason: ``"goal"``, ``"collision"``, ``"time limit"`` or why it was not run (infeasible).
-      collisions: contacts with the map, moving discs or other robots.
-      time_s: simulated time until the robot stopped (s).
-      metrics: the DESIGN §6 episode metrics (see `EpisodeBatch.METRICS`).
-      plan: global path ``f64[L, 2]`` in cell coordinates (empty if the planner failed).
-      waypoints: ``f32[K, 2]`` the waypoints tracked at first (m); ``final_waypoints`` after re-plans.
-      obstacles: the `MovingObstacles` of the episode; ``obstacle_positions f32[T + 1, M, 2]``.
-    """
-
-    trajectory: np.ndarray
-    controls: np.ndarray
-    times: np.ndarray
-    success: bool
-    reason: str
-    collisions: int
-    time_s: float
-    metrics: dict
-    plan: np.ndarray
-    waypoints: np.ndarray
-    final_waypoints: np.ndarray
-    obstacles: MovingObstacles
-    obstacle_positions: np.ndarray
-
-
-class EpisodeBatch(NamedTuple):
-    """Episodes of a batched call, leading axes ``[E scenarios, R seeds, N robots]`` (numpy).
-
-    Attributes:
-      states: ``f32[E, R, N, S + 1, 5]``; ``steps [E, R, N]`` valid control steps each.
-      controls: ``f32[E, R, N, S, 2]``; ``recovery bool[E, R, N, S]``.
-      reason: ``object[E, R, N]`` strings; ``feasible bool[E, R, N]`` (infeasible episodes
-        were not run); ``success``, ``collisions``, ``pair_collisions [E, R, N, N]``,
-        ``time_s`` (simulated), ``rmse``, ``max_curvature``, ``energy``, ``path_length``
-        (executed, m), ``recoveries``, ``replans``: ``[E, R, N]``.
-      plans: ``f64[E, R, N, P, 2]`` global paths in cell coordinates (grid paths, or a sampling
-        planner's any-angle polyline), −1 padded, with ``n_plan``.
-      waypoints: ``f32[E, R, N, K, 2]`` (m) with ``n_waypoints``; ``final_waypoints`` /
-        ``n_final_waypoints`` after re-plans.
-      obstacles: `MovingObstacles` with leaves ``[E, R, M, …]``.
-      plan_time_s: global planning wall time per episode (s, compilation excluded).
-      step_time_s: wall time per control step of one robot (s): the episode call's time
-        over the robot-steps it ran (compilation excluded).
-      run_time_s, compile_s: the episode call's wall time and its compile time.
-      period: control period (s); pipeline: the pipeline's name; resolution: m per cell.
-    """
-
-    states: np.ndarray
-    steps: np.ndarray
-    controls: np.ndarray
-    recovery: np.ndarray
-    reason: np.ndarray
-    feasible: np.ndarray
-    success: np.ndarray
-    collisions: np.ndarray
-    pair_collisions: np.ndarray
-    time_s: np.ndarray
-    rmse: np.ndarray
-    max_curvature: np.ndarray
-    energy: np.ndarray
-    path_length: np.ndarray
-    recoveries: np.ndarray
-    replans: np.ndarray
-    plans: np.ndarray
-    n_plan: np.ndarray
-    waypoints: np.ndarray
-    n_waypoints: np.ndarray
-    final_waypoints: np.ndarray
-    n_final_waypoints: np.ndarray
-    obstacles: MovingObstacles
-    plan_time_s: float
-    step_time_s: float
-    run_time_s: float
-    compile_s: float
-    period: float
-    pipeline: str
-    resolution: float
-
-    METRICS = ("success", "collisions", "time_s", "rmse", "max_curvature", "energy", "path_length", "recoveries",
-               "replans")
-
-    def episode(self, e: int = 0, r: int = 0, i: int = 0) -> Episode:
-        """Scenario ``e``, seed ``r``, robot ``i`` as an `Episode`."""
-        T = int(self.steps[e, r, i])
-        st = self.states[e, r, i, : T + 1]
-        times = np.arange(T + 1, dtype=np.float32) * self.period
-        obs = jax.tree_util.tree_map(lambda x: np.asarray(x[e, r]), self.obstacles)
-        # Over the batch's full step range, so every episode of a batch shares one compiled shape.
-        every = np.arange(self.states.shape[3], dtype=np.float32) * self.period
-        opos = np.asarray(trajectories(obs, every))[: T + 1] if obs.radii.shape[-1] else \
-            np.zeros((T + 1, 0, 2), np.float32)
-        m = {k: getattr(self, k)[e, r, i].item() for k in self.METRICS}
-        m["plan_time_s"], m["step_time_s"] = self.plan_time_s, self.step_time_s
-        return Episode(
-            trajectory=st[:, :3], controls=self.controls[e, r, i, :T], times=times,
-            success=bool(self.success[e, r, i]), reason=str(self.reason[e, r, i]),
-            collisions=int(self.collisions[e, r, i]), time_s=float(self.time_s[e, r, i]), metrics=m,
-            plan=self.plans[e, r, i, : self.n_plan[e, r, i]],
-            waypoints=self.waypoints[e, r, i, : self.n_waypoints[e, r, i]],
-            final_waypoints=self.final_waypoints[e, r, i, : self.n_final_waypoints[e, r, i]],
-            obstacles=obs, obstacle_positions=opos,
-        )
-
-    def summary(self, where: np.ndarray | None = None) -> dict[str, tuple[float, float]]:
-        """Mean and sd over seeds of each metric's per-seed mean over the feasible episodes (and ``where``).
-
-        Success is a rate in [0, 1]; every other metric is averaged over the episodes it
-        applies to (time over successful ones, the rest over all run ones).
-        """
-        mask = self.feasible if where is None else self.feasible & where
-        out = {"episodes": (float(mask.sum()), 0.0), "infeasible": (float((~self.feasible).sum()), 0.0)}
-        for k in self.METRICS:
-            v = getattr(self, k).astype(float)
-            m = mask & self.success if k == "time_s" else mask
-            # Episodes that did not run (the global planner failed) have no executed metrics.
-            per_seed = [np.nanmean(v[:, r][m[:, r]]) if np.isfinite(v[:, r][m[:, r]]).any() else np.nan
-                        for r in range(v.shape[1])]
-            per_seed = np.asarray(per_seed)
-            ok = np.isfinite(per_seed)
-            out[k] = (float(np.mean(per_seed[ok])) if ok.any() else math.nan,
-                      float(np.std(per_seed[ok])) if ok.any() else math.nan)
-        return out
-
-
-# ---------------------------------------------------------------------------------------------
-# Validation
-
-
-def _cells(name: str, a: ArrayLike, grid: GridMap, shape: tuple) -> np.ndarray:
-    arr = np.asarray(a)
-    if arr.shape != shape:
-        raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
-    if not np.all(np.isfinite(arr.astype(float))) or not np.all(arr.astype(float) == np.round(arr.astype(float))):
-        raise ValueError(f"{name} must be integer cells (x, y), got {arr.tolist()!r}")
-    arr = arr.astype(np.int64)
-    H, W = grid.shape
-    out = (arr[..., 0] < 0) | (arr[..., 0] >= W) | (arr[..., 1] < 0) | (arr[..., 1] >= H)
-    if np.any(out):
-        bad = arr[out][0]
-        raise ValueError(f"{name} cell {tuple(bad.tolist())} is outside the {W}x{H} map")
-    free = np.asarray(grid.free)
-    blocked = ~free[arr[..., 1], arr[..., 0]]
-    if np.any(blocked):
-        bad = arr[blocked][0]
-        raise ValueError(f"{name} cell {tuple(bad.tolist())} is on a blocked cell")
-    return arr
-
-
-def resolve_config(config: NavConfig | None, pipeline: Pipeline, local_planner: str | None) -> NavConfig:
-    """The `NavConfig` an episode runs with: ``config`` (default `NavConfig()`) with the local planner and DWA
-    evaluator of ``local_planner`` / the config / ``pipeline`` (in that order), every field checked (``ValueError``)."""
-    cfg = NavConfig() if config is None else config
-    if not isinstance(cfg, NavConfig):
-        raise ValueError(f"config must be a NavConfig, got {type(cfg).__name__}")
-    local = local_planner or cfg.local or pipeline.local
-    if local not in LOCAL_PLANNERS:
-        raise ValueError(f"unknown local planner {local!r}; choose from {LOCAL_PLANNERS}")
-    if cfg.subgoal not in SUBGOAL_MODES:
-        raise ValueError(f"unknown sub-goal mode {cfg.subgoal!r}; choose from {SUBGOAL_MODES}")
-    if cfg.prediction not in PREDICTIONS:
-        raise ValueError(f"unknown prediction {cfg.prediction!r}; choose from {PREDICTIONS}")
-    evaluator = cfg.evaluator or pipeline.evaluator
-    dwa = cfg.dwa.replace(evaluator=evaluator)
-    dwa = validate_config(dwa.replace(keep_rollouts=False))
-    for f in ("switch_radius", "switch_min", "lookahead", "goal_tolerance", "max_time", "replan_period", "replan_deviation",
-              "block_distance",
-              "block_margin", "follow_gain", "threat_distance", "threat_speed", "corner_exponent", "recheck_gain"):
-        v = getattr(cfg, f)
-        if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
-            raise ValueError(f"NavConfig.{f} must be a finite number >= 0, got {v!r}")
-    if cfg.goal_tolerance <= 0 or cfg.max_time <= 0:
-        raise ValueError("NavConfig.goal_tolerance and max_time must be > 0")
-    for f, what in (("stall_time", "creeping"), ("orbit_angle", "the orbit watch"),
-                    ("recheck_period", "detour re-checks"), ("recede_speed", "the rule")):
-        v = getattr(cfg, f)
-        if not (isinstance(v, (int, float)) and not math.isnan(v) and v > 0):
-            raise ValueError(f"NavConfig.{f} must be a number > 0 (inf disables {what}), got {v!r}")
-    for f in ("stall_progress", "stall_speed"):
-        v = getattr(cfg, f)
-        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-            raise ValueError(f"NavConfig.{f} must be a finite number > 0, got {v!r}")
-    for f in ("chunk", "replan_sweeps", "replan_cells", "replan_slots", "contact_checks"):
-        if not isinstance(getattr(cfg, f), int) or getattr(cfg, f) < 1:
-            raise ValueError(f"NavConfig.{f} must be a positive integer, got {getattr(cfg, f)!r}")
-    if not isinstance(cfg.replan_group, int) or cfg.replan_group < 0:
-        raise ValueError(f"NavConfig.replan_group must be an integer >= 0 (0: the whole batch), got {cfg.replan_group!r}")
-    return cfg.replace(dwa=dwa, local=local, evaluator=evaluator)
-
-
 _config = resolve_config  # the previous private name, still imported by jaxplan.experiments.config
-
-
-def _obstacle_sets(obstacles: Any, E: int, R: int, seeds: list[int]) -> list[list[MovingObstacles]]:
-    """``[E][R]`` obstacle sets from None, one set, an ``[E][R]`` nested list, or ``f(e, seed)``."""
-    if obstacles is None:
-        return [[no_obstacles(0) for _ in range(R)] for _ in range(E)]
-    if isinstance(obstacles, MovingObstacles):
-        return [[obstacles for _ in range(R)] for _ in range(E)]
-    if callable(obstacles):
-        return [[obstacles(e, s) for s in seeds] for e in range(E)]
-    sets = list(obstacles)
-    if len(sets) != E or any(len(list(row)) != R for row in sets):
-        raise ValueError(f"obstacles must be one MovingObstacles, a callable f(scenario, seed), or an [{E}][{R}] "
-                         "nested list")
-    return [list(row) for row in sets]
-
 
 # One compiled call per shape, not an op-by-op dispatch (each eager op compiles on its first shape).
 _STATE = jax.jit(obstacle_state)
 _ENERGY = jax.jit(lambda v, w, dt, n: energy(v, w, dt, EnergyModel(), n))
-
-
-def _check_obstacle_starts(pos: np.ndarray, rad: np.ndarray, start_xy: np.ndarray, radius: float, where: str) -> None:
-    """Raises if a disc (``pos [M, 2]`` at t = 0, ``rad [M]``) overlaps a robot at ``start_xy [N, 2]``."""
-    for i, p in enumerate(start_xy):
-        gap = np.hypot(*(pos - p).T) - rad - radius
-        if np.any(gap < 0):
-            j = int(np.argmin(gap))
-            raise ValueError(f"{where}: moving obstacle {j} starts inside robot {i} (centres "
-                             f"{np.round(pos[j], 3).tolist()} and {np.round(p, 3).tolist()} m, radii "
-                             f"{float(rad[j]):g} + {radius:g} m)")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -379,106 +158,71 @@ def _global_plans(plan_grid: GridMap, starts: np.ndarray, goals: np.ndarray, ok:
     return plans, n, elapsed
 
 
-
 def _bucket(n: int, lo: int = 8) -> int:
     return max(lo, 1 << max(0, int(n - 1).bit_length()))
 
 
-def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | None, global_planner: str | None,
-         local_planner: str | None, seeds: Sequence[int], obstacles: Any, config: NavConfig | None,
-         params: DWAParams | Mapping[str, float] | None, time_limit: float | None,
-         overrides: Mapping[str, Any], mesh: Mesh | str | None = "auto") -> EpisodeBatch:
-    from jaxplan.smooth import smooth
-
-    if not isinstance(grid, GridMap):
-        raise ValueError(f"grid must be a GridMap, got {type(grid).__name__}")
-    auto_mesh(mesh, 1)  # a bad mesh argument fails before any work
-    if pipeline is not None and global_planner is not None:
-        raise ValueError("give either a pipeline or a global_planner, not both")
-    if pipeline is not None:
-        pipe = get_pipeline(pipeline)
-    else:
-        gp = "iaco" if global_planner is None else global_planner
-        pipe = Pipeline(f"{gp}+{local_planner or 'dwa'}", gp, {}, ("key_nodes",), local_planner or "dwa",
-                        "weighted", "custom")
-    cfg = resolve_config(config, pipe, local_planner)
-    robot = cfg.dwa.robot
-    d_safe = float(cfg.dwa.d_safe)
-    seeds = [int(s) for s in seeds]
-    if not seeds or any(s < 0 for s in seeds):
-        raise ValueError(f"seeds must be a non-empty list of integers >= 0, got {seeds!r}")
-    E, N = starts.shape[:2]
-    R = len(seeds)
-    starts = _cells("start", starts, grid, (E, N, 2))
-    goals = _cells("goal", goals, grid, (E, N, 2))
-    if np.any(np.all(starts == goals, axis=-1)):
-        raise ValueError("a start equals its goal: there is nothing to navigate")
-    if time_limit is not None and not (math.isfinite(time_limit) and 0 < time_limit <= cfg.max_time):
-        raise ValueError(f"time_limit must be in (0, max_time = {cfg.max_time}] s, got {time_limit!r}")
-    p = validate_params(params, cfg.dwa.evaluator)
-    res = float(grid.resolution)
-    from jaxplan.dwa import footprint_radius
-
-    radius = float(footprint_radius(robot.footprint))
-    if N > 1:  # teammates may not overlap at the start, nor share a goal (one would park on it)
-        for what, cells in (("start", starts), ("goal", goals)):
-            xy = (cells + 0.5) * res  # [E, N, 2]
-            d = xy[:, :, None] - xy[:, None, :]  # [E, N, N, 2]
-            gap = np.where(np.eye(N, dtype=bool), np.inf, np.hypot(d[..., 0], d[..., 1]))
-            if np.any(gap < 2 * radius):
-                e, i, j = np.unravel_index(int(np.argmin(gap)), gap.shape)
-                raise ValueError(f"team {e}: robots {i} and {j} have {what} cells {cells[e, i].tolist()} and "
-                                 f"{cells[e, j].tolist()}, {gap[e, i, j]:.3g} m apart: closer than two footprint "
-                                 f"radii ({2 * radius:g} m)")
-
-    # 1. Planning map and feasibility.
-    plan_grid = planning_grid(grid, d_safe)
-    pf = np.asarray(plan_grid.free)
-    s_flat, g_flat = starts.reshape(-1, 2), goals.reshape(-1, 2)
-    reason0 = np.full(E * N, "", object)
-    reason0[~pf[s_flat[:, 1], s_flat[:, 0]]] = INFEASIBLE_START
-    reason0[(reason0 == "") & ~pf[g_flat[:, 1], g_flat[:, 0]]] = INFEASIBLE_GOAL
+def _feasibility(plan_free: np.ndarray, plan_grid: GridMap, s_flat: np.ndarray, g_flat: np.ndarray) -> np.ndarray:
+    """Step 1: ``object[S]`` why each start/goal pair (``[S, 2]`` cells) is infeasible on the planning map, ``""``
+    where it is feasible."""
+    reason0 = np.full(len(s_flat), "", object)
+    reason0[~plan_free[s_flat[:, 1], s_flat[:, 0]]] = INFEASIBLE_START
+    reason0[(reason0 == "") & ~plan_free[g_flat[:, 1], g_flat[:, 0]]] = INFEASIBLE_GOAL
     ok = reason0 == ""
     if ok.any():
         lens = shortest_lengths(plan_grid, s_flat[ok], g_flat[ok])
         r = reason0[ok]
         r[~np.isfinite(lens)] = UNREACHABLE
         reason0[ok] = r
-    ok = reason0 == ""
+    return reason0
 
-    # 2. Global plans on the planning map, in cell coordinates.
-    plans, n_plan, plan_time = _global_plans(plan_grid, s_flat, g_flat, ok, pipe, seeds, overrides, mesh)
-    reason = np.repeat(reason0[:, None], R, axis=1)  # [E*N, R]
-    reason[(reason == "") & (n_plan < 2)] = PLAN_FAILED
-    run = reason == ""
 
-    # 3. Waypoints (m), the start dropped; a robot that does not run has its start as its only waypoint.
-    start_xy = ((s_flat + 0.5) * res).astype(np.float32)
-    goal_xy = ((g_flat + 0.5) * res).astype(np.float32)
+def _waypoints(grid: GridMap, pipe: Pipeline, plans: np.ndarray, n_plan: np.ndarray, run: np.ndarray,
+               start_xy: np.ndarray, d_safe: float) -> tuple[np.ndarray, np.ndarray]:
+    """Step 3: waypoints ``f32[S, R, K, 2]`` (m) and their counts ``[S, R]``, the start dropped; a robot that
+    does not run (``run [S, R]`` False) has its start (``start_xy [S, 2]``) as its only waypoint."""
+    from jaxplan.smooth import smooth
+
+    res = float(grid.resolution)
+    S, R = run.shape
     K = 1
-    wp_m = np.broadcast_to(start_xy[:, None, None, :], (E * N, R, K, 2)).copy()
-    n_wp = np.ones((E * N, R), np.int64)
+    wp_m = np.broadcast_to(start_xy[:, None, None, :], (S, R, K, 2)).copy()
+    n_wp = np.ones((S, R), np.int64)
     if run.any():
         sm = smooth(plans[run].astype(np.float32), grid, pipe.waypoints, n=n_plan[run], radius=d_safe)
         pts, n = np.asarray(sm.points, np.float64), np.asarray(sm.n)
         K = _bucket(int(n.max()) - 1)
         idx = np.minimum(np.arange(K)[None, :] + 1, (n - 1)[:, None])  # slots after the goal repeat it
         wp = np.take_along_axis(pts, idx[..., None], axis=1)
-        wp_m = np.broadcast_to(start_xy[:, None, None, :], (E * N, R, K, 2)).copy()
+        wp_m = np.broadcast_to(start_xy[:, None, None, :], (S, R, K, 2)).copy()
         wp_m[run] = ((wp + 0.5) * res).astype(np.float32)
         n_wp[run] = n - 1
-    first = wp_m[:, :, 0]  # [E*N, R, 2]
+    return wp_m, n_wp
+
+
+def _initial_states(cfg: NavConfig, start_xy: np.ndarray, wp_m: np.ndarray,
+                    time_limit: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """``(f32[S, R, 5] states at rest facing the first waypoint, time limits [S, R] in s)``: the default limit is
+    60 s + 3 × the waypoint polyline's length at v_max, capped at `NavConfig.max_time`."""
+    R = wp_m.shape[1]
+    first = wp_m[:, :, 0]  # [S, R, 2]
     heading = np.arctan2(first[..., 1] - start_xy[:, None, 1], first[..., 0] - start_xy[:, None, 0])
-    state0 = np.zeros((E * N, R, 5), np.float32)
+    state0 = np.zeros(first.shape[:2] + (5,), np.float32)
     state0[..., 0:2] = start_xy[:, None]
     state0[..., 2] = heading
     poly_len = np.sum(np.hypot(*np.diff(np.concatenate([start_xy[:, None, None, :].repeat(R, 1), wp_m], axis=2),
                                         axis=2).transpose(3, 0, 1, 2)), axis=-1)
-    limit = np.minimum(cfg.max_time, 60.0 + 3.0 * poly_len / float(robot.v_max)) if time_limit is None else \
-        np.full((E * N, R), time_limit)
+    limit = np.minimum(cfg.max_time, 60.0 + 3.0 * poly_len / float(cfg.dwa.robot.v_max)) if time_limit is None else \
+        np.full(first.shape[:2], time_limit)
+    return state0, limit
 
-    # 4. Obstacles per episode [E][R]; none may start inside a robot.
-    sets = _obstacle_sets(obstacles, E, R, seeds)
+
+def _episode_obstacles(obstacles: Any, E: int, N: int, seeds: list[int], start_xy: np.ndarray,
+                       radius: float) -> MovingObstacles:
+    """Step 4: the obstacle sets of the ``E × R`` episodes stacked (``[E*R, M, ...]``); none may start inside a
+    robot (``start_xy [E*N, 2]``)."""
+    R = len(seeds)
+    sets = obstacle_sets(obstacles, E, R, seeds)
     for e in range(E):
         for r in range(R):
             if not isinstance(sets[e][r], MovingObstacles):
@@ -489,25 +233,25 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
         pos0, rad0 = np.asarray(_STATE(obs, 0.0)[0]), np.asarray(obs.radii)
         for e in range(E):
             for r in range(R):
-                _check_obstacle_starts(pos0[e * R + r], rad0[e * R + r], start_xy.reshape(E, N, 2)[e], radius,
+                check_obstacle_starts(pos0[e * R + r], rad0[e * R + r], start_xy.reshape(E, N, 2)[e], radius,
                                        f"scenario {e}, seed {seeds[r]}")
+    return obs
 
-    # [E*N, R, ...] -> episodes B = E*R of N robots.
-    def to_b(x):
-        x = np.asarray(x)
-        return x.reshape((E, N, R) + x.shape[2:]).swapaxes(1, 2).reshape((E * R, N) + x.shape[2:])
 
-    active = to_b(run)
-    inputs = EpisodeInputs(
-        start=jnp.asarray(to_b(state0)), goal=jnp.asarray(to_b(np.broadcast_to(goal_xy[:, None], (E * N, R, 2)))),
-        goal_cell=jnp.asarray(to_b(np.broadcast_to(g_flat[:, None], (E * N, R, 2))).astype(np.int32)),
-        waypoints=jnp.asarray(to_b(wp_m)), n_waypoints=jnp.asarray(to_b(n_wp).astype(np.int32)),
-        time_limit=jnp.asarray(to_b(limit).astype(np.float32)), obstacles=obs, active=jnp.asarray(active),
-    )
+def _to_episodes(x: ArrayLike, E: int, N: int, R: int) -> np.ndarray:
+    """``[E*N, R, ...]`` -> episodes ``[E*R, N, ...]`` (B = E*R episodes of N robots)."""
+    x = np.asarray(x)
+    return x.reshape((E, N, R) + x.shape[2:]).swapaxes(1, 2).reshape((E * R, N) + x.shape[2:])
+
+
+def _execute(cfg: NavConfig, grid: GridMap, plan_free: np.ndarray, params: DWAParams, inputs: EpisodeInputs,
+             mesh: Mesh | str | None) -> tuple[Any, float, float]:
+    """Step 4: the episode program on the ``B`` episodes of ``inputs``, split over a mesh when results do not
+    depend on it; returns its outputs (numpy, ``[B, ...]``), compile and run seconds."""
     steps = cfg.steps
     table = table_of(grid)
-    free_j = jnp.asarray(pf)
-    B = E * R
+    free_j = jnp.asarray(plan_free)
+    B = inputs.start.shape[0]
     # Results are independent of the device count only when the re-planning budget is per group
     # of episodes (or there is no re-planning): only then does "auto" split the episodes.
     G = cfg.replan_group if cfg.replan else 1  # episodes per re-planning group (0: the whole batch)
@@ -520,17 +264,27 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
         if B_pad != B:
             inputs = pad_leading(inputs, B_pad)
             inputs = inputs._replace(active=inputs.active.at[B:].set(False))
-    compiled, compile_s = _compiled_episodes(cfg, steps, mesh_, (table, free_j, p, inputs))
+    compiled, compile_s = _compiled_episodes(cfg, steps, mesh_, (table, free_j, params, inputs))
     t0 = time.perf_counter()
-    out = jax.block_until_ready(compiled(table, free_j, p, inputs))
+    out = jax.block_until_ready(compiled(table, free_j, params, inputs))
     run_s = time.perf_counter() - t0
     out = jax.tree_util.tree_map(lambda a: np.asarray(a)[:B], out)
+    return out, compile_s, run_s
 
-    # 5. Metrics. Back to [E, R, N, ...].
+
+def _episode_batch(out: Any, E: int, R: int, N: int, active: np.ndarray, reason: np.ndarray, plans: np.ndarray,
+                   n_plan: np.ndarray, wp_m: np.ndarray, n_wp: np.ndarray, obs: MovingObstacles, period: float,
+                   timing: tuple[float, float, float], pipeline: str, res: float) -> EpisodeBatch:
+    """Step 5: the metrics of the episodes (``out``, ``[E*R, N, ...]``) and the `EpisodeBatch`, axes ``[E, R, N]``.
+    ``reason``, ``plans``, ``n_plan``, ``wp_m``, ``n_wp`` are per robot and seed (``[E*N, R, ...]``);
+    ``timing``: the seconds spent planning, compiling and running the episodes."""
+    plan_time, compile_s, run_s = timing
+
     def back(x):
         x = np.asarray(x)
         return x.reshape((E, R, N) + x.shape[2:])
 
+    to_b = functools.partial(_to_episodes, E=E, N=N, R=R)
     states = back(out.states.swapaxes(1, 2))  # [B, N, S+1, 5] -> [E, R, N, S+1, 5]
     controls = back(out.controls.swapaxes(1, 2))
     recovery = back(out.recovery.swapaxes(1, 2))
@@ -538,7 +292,6 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
     code = back(out.reason)
     active_e = back(active)
     reason_txt = np.where(active_e, np.asarray(REASONS, object)[code], back(to_b(reason)))
-    period = float(cfg.dwa.period)
     coll = back(out.collisions)
     success = active_e & (code == GOAL) & (coll == 0)
     t_s = n_steps * period
@@ -566,8 +319,58 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
         n_waypoints=back(to_b(n_wp)), final_waypoints=back(out.waypoints), n_final_waypoints=back(out.n_waypoints),
         obstacles=jax.tree_util.tree_map(lambda x: np.asarray(x).reshape((E, R) + x.shape[1:]), obs),
         plan_time_s=plan_time / max(E * R * N, 1), step_time_s=run_s / robot_steps, run_time_s=run_s,
-        compile_s=compile_s, period=period, pipeline=pipe.name, resolution=res,
+        compile_s=compile_s, period=period, pipeline=pipeline, resolution=res,
     )
+
+
+def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | None, global_planner: str | None,
+         local_planner: str | None, seeds: Sequence[int], obstacles: Any, config: NavConfig | None,
+         params: DWAParams | Mapping[str, float] | None, time_limit: float | None,
+         overrides: Mapping[str, Any], mesh: Mesh | str | None = "auto") -> EpisodeBatch:
+    """The steps of the module docstring for ``starts, goals [E, N, 2]`` (cells) × seeds: an `EpisodeBatch`
+    ``[E, R, N]``."""
+    run_args = checked_run(grid, starts, goals, pipeline, global_planner, local_planner, seeds, config, params,
+                            time_limit, mesh)
+    pipe, cfg, seeds, starts, goals = run_args.pipe, run_args.cfg, run_args.seeds, run_args.starts, run_args.goals
+    E, N = starts.shape[:2]
+    R = len(seeds)
+    res = float(grid.resolution)
+    d_safe = float(cfg.dwa.d_safe)
+
+    # 1. Planning map and feasibility.
+    plan_grid = planning_grid(grid, d_safe)
+    pf = np.asarray(plan_grid.free)
+    s_flat, g_flat = starts.reshape(-1, 2), goals.reshape(-1, 2)
+    reason0 = _feasibility(pf, plan_grid, s_flat, g_flat)
+    ok = reason0 == ""
+
+    # 2. Global plans on the planning map, in cell coordinates.
+    plans, n_plan, plan_time = _global_plans(plan_grid, s_flat, g_flat, ok, pipe, seeds, overrides, mesh)
+    reason = np.repeat(reason0[:, None], R, axis=1)  # [E*N, R]
+    reason[(reason == "") & (n_plan < 2)] = PLAN_FAILED
+    run = reason == ""
+
+    # 3. Waypoints (m) and the robots' initial states.
+    start_xy = ((s_flat + 0.5) * res).astype(np.float32)
+    goal_xy = ((g_flat + 0.5) * res).astype(np.float32)
+    wp_m, n_wp = _waypoints(grid, pipe, plans, n_plan, run, start_xy, d_safe)
+    state0, limit = _initial_states(cfg, start_xy, wp_m, time_limit)
+
+    # 4. Obstacles per episode [E][R] (none may start inside a robot), and the episodes.
+    obs = _episode_obstacles(obstacles, E, N, seeds, start_xy, run_args.radius)
+    to_b = functools.partial(_to_episodes, E=E, N=N, R=R)
+    active = to_b(run)
+    inputs = EpisodeInputs(
+        start=jnp.asarray(to_b(state0)), goal=jnp.asarray(to_b(np.broadcast_to(goal_xy[:, None], (E * N, R, 2)))),
+        goal_cell=jnp.asarray(to_b(np.broadcast_to(g_flat[:, None], (E * N, R, 2))).astype(np.int32)),
+        waypoints=jnp.asarray(to_b(wp_m)), n_waypoints=jnp.asarray(to_b(n_wp).astype(np.int32)),
+        time_limit=jnp.asarray(to_b(limit).astype(np.float32)), obstacles=obs, active=jnp.asarray(active),
+    )
+    out, compile_s, run_s = _execute(cfg, grid, pf, run_args.params, inputs, mesh)
+
+    # 5. Metrics, back to [E, R, N, ...].
+    return _episode_batch(out, E, R, N, active, reason, plans, n_plan, wp_m, n_wp, obs, float(cfg.dwa.period),
+                          (plan_time, compile_s, run_s), pipe.name, res)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -14,6 +14,9 @@ stops when nothing changes. A robot that does not re-plan this step never enters
 loop: under ``vmap`` the loop runs while *any* member needs it and costs nothing on
 steps where none does.
 
+`replan_slots` is the re-planning of one episode step: the robots that need a new path get
+one of a fixed number of slots per group of episodes, and only those fields are computed.
+
 All functions are pure and shape-static; cells are ``(x, y)``, arrays ``[H, W]`` are
 indexed ``[y, x]``.
 """
@@ -22,11 +25,15 @@ from __future__ import annotations
 
 import math
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
-__all__ = ["MOVES", "distance_field", "descend", "turn_vertices", "path_blocked", "disc_cells"]
+from jaxplan.nav._config import NavConfig
+from jaxplan.nav._state import Carry, EpisodeInputs
+
+__all__ = ["MOVES", "distance_field", "descend", "turn_vertices", "path_blocked", "disc_cells", "replan_slots"]
 
 MOVES = ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1))
 """The 8 grid moves ``(dx, dy)``: four straight, then four diagonal."""
@@ -222,3 +229,81 @@ def disc_cells(shape: tuple[int, int], centres: jnp.ndarray, reach: jnp.ndarray,
     flat = jnp.where(inside, cy * W + cx, H * W)  # misses go to a dump slot
     out = jnp.zeros(H * W + 1, bool).at[flat.reshape(-1)].set(True)
     return out[: H * W].reshape(H, W)
+
+
+_SPAN = 3
+"""Cells around a blocking disc's cell that re-planning examines (reach up to 3.5 cells)."""
+
+
+def replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: Carry, inputs: EpisodeInputs,
+                 need: jnp.ndarray, centres: jnp.ndarray,
+                 reach: jnp.ndarray) -> tuple[Carry, jnp.ndarray, jnp.ndarray]:
+    """Re-plans up to `NavConfig.replan_slots` of the robots with ``need [B, N] > 0`` per group
+    of `NavConfig.replan_group` episodes (0: the whole batch is one group).
+
+    ``need`` is 2 for a robot that must re-plan (path blocked, drifted off, stalled) and 1 for
+    a detour re-check (`NavConfig.recheck_period`); the 2s take the slots first, and a
+    re-check's path replaces the robot's only if it is `NavConfig.recheck_gain` shorter than
+    what is left of the current one.
+
+    ``centres [B, N, D, 2]`` / ``reach [B, N, D]``: the discs whose nearby cells are closed.
+    Only the chosen robots' fields are computed (a gather into fixed slots), so the cost
+    grows with the number of groups, not with the batch; robots left over try again on the
+    next step. Groups are consecutive episodes, so a device holding whole groups computes
+    exactly what one device computes for them. The slots of all groups are planned one after
+    another (`lax.map`), not vectorised: an unused slot then costs nothing, where under
+    ``vmap`` every slot ran the relaxation sweeps of the longest one (with identical
+    trajectories). Returns the carry, ``bool[B, N]``: the robots that were attempted, and
+    ``bool[B, N]``: those whose path was replaced.
+    """
+    B, N, K = c.waypoints.shape[:3]
+    H, W = free.shape
+    G = min(config.replan_group or B, B)
+    Bp = -(-B // G) * G
+    Q = min(config.replan_slots, G * N)
+    # A partial last group is padded with robots that need nothing: only these gathers grow.
+    pad = lambda x: jnp.concatenate([x, jnp.zeros((Bp - B,) + x.shape[1:], x.dtype)]) if Bp > B else x  # noqa: E731
+    flat_need = pad(need).reshape(Bp // G, G * N).astype(jnp.int32)
+    # The first Q, must-re-plans first.
+    _, slot = jax.vmap(lambda n: lax.top_k(n * (G * N) - jnp.arange(G * N), Q))(flat_need)
+    slot = (slot + (jnp.arange(Bp // G) * (G * N))[:, None]).reshape(-1)  # [S] robots (flat over [Bp, N])
+    take = lambda x: pad(x).reshape((Bp * N,) + x.shape[2:])[slot]  # noqa: E731
+    kind = take(need)
+    use, check = kind > 0, kind == 1
+    state, wp, n_wp, index = take(c.state), take(c.waypoints), take(c.n_wp), take(c.index)
+
+    def one(args):
+        need1, check1, state1, wp1, n1, index1, goal_cell1, cen, rch = args
+        closed = disc_cells((H, W), cen, jnp.where(need1, rch, 0.0), resolution, _SPAN)
+        cell = jnp.clip(jnp.floor(state1[:2] / resolution).astype(jnp.int32), 0, jnp.asarray([W - 1, H - 1]))
+        plan_free = free & ~closed
+        plan_free = plan_free.at[cell[1], cell[0]].set(free[cell[1], cell[0]])  # the robot's own cell stays open
+        field = distance_field(plan_free, goal_cell1, need1, config.replan_sweeps, until=cell)
+        cells, n = descend(field, plan_free, cell, config.replan_cells)
+        pts, m = turn_vertices(cells, jnp.maximum(n, 1), K)
+        # A re-check keeps the current path unless the new one is clearly shorter: the field's
+        # length (the same octile grid metric as the turn-vertex polylines) against what is left.
+        new_len = field[cell[1], cell[0]] * resolution
+        legs = jnp.sqrt(jnp.sum((wp1[1:] - wp1[:-1]) ** 2, axis=-1))
+        j = jnp.arange(1, K)
+        left = (jnp.sqrt(jnp.sum((wp1[index1] - state1[:2]) ** 2))
+                + jnp.sum(jnp.where((j > index1) & (j < n1), legs, 0.0)))
+        better = new_len + config.recheck_gain < left
+        return (pts + 0.5) * resolution, m, need1 & (n > 1) & (~check1 | better)
+
+    pts, m, ok = lax.map(one, (use, check, state, wp, n_wp, index, take(inputs.goal_cell), take(centres), take(reach)))
+    g = take(inputs.goal)
+    # The last waypoint is the goal itself.
+    pts = jnp.where(jnp.arange(K)[None, :, None] >= m[:, None, None] - 1, g[:, None, :], pts)
+
+    def put(x, new, mask):
+        flat = pad(x).reshape((Bp * N,) + x.shape[2:])
+        upd = jnp.where(mask.reshape(mask.shape + (1,) * (flat.ndim - 1)), new, flat[slot])
+        return flat.at[slot].set(upd).reshape((Bp,) + x.shape[1:])[:B]
+
+    attempted = put(jnp.zeros((B, N), bool), use, use)
+    replaced = put(jnp.zeros((B, N), bool), ok, ok)
+    c = c._replace(waypoints=put(c.waypoints, pts, ok), n_wp=put(c.n_wp, m, ok),
+                   index=put(c.index, jnp.zeros_like(m), ok), replans=put(c.replans, take(c.replans) + 1, ok),
+                   origin=put(c.origin, state[:, :2], ok), error=put(c.error, jnp.zeros_like(m, c.error.dtype), ok))
+    return c, attempted, replaced
