@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike
 from jaxplan.grid import GridMap
 from jaxplan.result import PlanResult
 
-__all__ = ["PlannerSpec", "register_planner", "registered", "resolve", "run_planner", "plan"]
+__all__ = ["PlannerSpec", "register_planner", "registered", "resolve", "run_planner"]
 
 
 @dataclass(frozen=True)
@@ -100,7 +100,3 @@ def run_planner(grid: GridMap, start: ArrayLike, goal: ArrayLike, planner: str =
         raise TypeError(f"grid must be a GridMap (see jp.load_map / jp.grid_from_array), got {type(grid).__name__}")
     spec, params = resolve(planner, overrides)
     return spec.fn(grid, start, goal, seed, **params)
-
-
-plan = run_planner
-"""The name `jaxplan.nav` imports; users and the layers above nav call `jaxplan.plan` (`jaxplan.planning`)."""

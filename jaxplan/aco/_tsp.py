@@ -323,7 +323,6 @@ def resolve_tsp(planner: str, overrides: dict[str, Any]) -> dict[str, Any]:
     return p
 
 
-_resolve = resolve_tsp  # the previous private name, still imported by jaxplan.experiments.config
 
 
 def solve_tsp(problem: TSPProblem, planner: str = "praco", seed: int = 0, **overrides: Any) -> TourResult:

@@ -99,8 +99,6 @@ def planning_grid(grid: GridMap, d_safe: float) -> GridMap:
     return dataclasses.replace(grid, free=free) if dataclasses.is_dataclass(grid) else grid._replace(free=free)
 
 
-_config = resolve_config  # the previous private name, still imported by jaxplan.experiments.config
-
 # One compiled call per shape, not an op-by-op dispatch (each eager op compiles on its first shape).
 _STATE = jax.jit(obstacle_state)
 _ENERGY = jax.jit(lambda v, w, dt, n: energy(v, w, dt, EnergyModel(), n))
@@ -122,8 +120,8 @@ def _global_plans(plan_grid: GridMap, starts: np.ndarray, goals: np.ndarray, ok:
     others are called per scenario (and per seed unless deterministic), and an any-angle
     planner's exact polyline (``info["points"]``) is used rather than its rasterised cells.
     """
-    from jaxplan.aco import COLONIES, plan_batch  # late: the ACO package imports the registry
-    from jaxplan.registry import plan
+    from jaxplan.aco import COLONIES, plan_batch
+    from jaxplan.planning import plan
 
     S, R = len(starts), len(seeds)
     params = {**pipe.planner_overrides, **overrides}
