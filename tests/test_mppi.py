@@ -219,3 +219,14 @@ def test_bad_parameters_are_refused():
         default_params(obstacle=float("nan"))
     with pytest.raises(ValueError, match="unknown MPPI parameter"):
         default_params(heading=1.0)
+
+
+def test_noise_is_standard_normal_and_keyed():
+    from jaxplan.mppi._noise import gaussian
+
+    z = np.asarray(gaussian(jax.random.key(3), (200_000,)), np.float64)
+    assert abs(z.mean()) < 0.01 and abs(z.std() - 1.0) < 0.01 and abs(np.mean(z ** 4) - 3.0) < 0.1
+    a = np.asarray(gaussian(jax.random.key(3), (4096,)))
+    b = np.asarray(gaussian(jax.random.key(4), (4096,)))
+    np.testing.assert_array_equal(a, np.asarray(gaussian(jax.random.key(3), (4096,))))
+    assert abs(np.corrcoef(a, b)[0, 1]) < 0.05 and len(set(a.tolist()) & set(b.tolist())) < 10

@@ -3,7 +3,7 @@
 `mppi_control` is what a navigation episode calls inside its `lax.scan` over control steps:
 
 1. K raw sequences = the warm-started mean sequence ``[T, 2]`` + Gaussian noise (σ_v, σ_ω per
-   control). Two rows are fixed candidates: row 0 is the mean itself, row 1 brakes to rest and
+   control; `jaxplan.mppi._noise`). Two rows are fixed candidates: row 0 is the mean itself, row 1 brakes to rest and
    straightens (so a stop is always on the table — the passive-safety fallback);
 2. every sequence is clamped to the robot's dynamic window period by period and rolled out
    (`jaxplan.mppi._rollout`), its critics summed (`jaxplan.mppi._critics`);
@@ -30,6 +30,7 @@ import jax.numpy as jnp
 from jaxplan.dwa import ClearanceTable, DiscObstacles, curvature_limit, disc_clearance, static_clearance
 from jaxplan.mppi import _critics as C
 from jaxplan.mppi._config import MPPIConfig, MPPIParams
+from jaxplan.mppi._noise import gaussian
 from jaxplan.mppi._rollout import Sequences, rollout
 
 __all__ = ["MPPIInfo", "mppi_control", "shift", "initial_sequence", "ESCAPE_SLACK", "MEAN_ROW", "BRAKE_ROW"]
@@ -83,7 +84,7 @@ def _raw(config: MPPIConfig, params: MPPIParams, mean: jnp.ndarray, key) -> tupl
     """``(raw [K, T, 2], noise [K, T, 2])``: the mean plus scaled noise, rows 0 and 1 the fixed candidates."""
     K, T = config.samples, config.steps
     sigma = jnp.stack([params.noise_v, params.noise_omega]).astype(mean.dtype)
-    noise = jax.random.normal(key, (K, T, 2), mean.dtype) * sigma
+    noise = gaussian(key, (K, T, 2)) * sigma
     noise = noise.at[MEAN_ROW].set(0.0)
     raw = mean[None] + noise
     raw = raw.at[BRAKE_ROW].set(0.0)  # v -> 0 and ω -> 0 as fast as the window allows
