@@ -31,11 +31,11 @@ from jaxplan.dwa._robot import (
     Ackermann, Disc, Rectangle, Robot, Unicycle, advance, curvature_limit, footprint_offsets, footprint_radius,
 )
 from jaxplan.dwa._rollout import Rollouts, rollout
-from jaxplan.dwa._step import dwa_step, table_of, validate_config, validate_params
+from jaxplan.dwa._step import as_obstacles, dwa_step, table_of, validate_config, validate_params
 from jaxplan.dwa._window import Window, dynamic_window, sample_controls
 
 __all__ = [
-    "Robot", "abs_angle", "curvature_limit", "rotor",
+    "Robot", "abs_angle", "as_obstacles", "curvature_limit", "rotor",
     "Ackermann", "CLEARANCE_MODES", "ClearanceTable", "Critics", "DWAConfig", "DWAInfo", "DWAParams", "Disc",
     "DiscObstacles", "EVALUATORS", "HYBRID_EXACT_CELLS", "Rectangle", "Rollouts", "SELECTIONS", "Unicycle", "Window",
     "advance", "clearance_table", "critics", "default_params", "disc_clearance", "dwa_control", "dwa_control_batch",

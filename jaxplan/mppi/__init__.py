@@ -6,6 +6,12 @@ scored by small critics (`jaxplan.mppi._critics`) and averaged with a softmax of
 one array program per step, batched over robots and episodes inside a navigation episode's
 `lax.scan` (``local_planner="mppi"``), and differentiable through its softmax.
 
+One robot from Python (the previous call's ``info.sequence`` warm-starts the next)::
+
+    import jaxplan as jp
+    u, info = jp.mppi_step(state, subgoal, grid, sequence=None, key=0)
+    u, info = jp.mppi_step(new_state, subgoal, grid, sequence=info.sequence, key=1)
+
 Pure core, for episodes::
 
     from jaxplan.dwa import clearance_table
@@ -21,8 +27,10 @@ from jaxplan.mppi._config import CRITICS, MPPIConfig, MPPIParams, default_params
 from jaxplan.mppi._core import BRAKE_ROW, MEAN_ROW, MPPIInfo, initial_sequence, mppi_control, shift
 from jaxplan.mppi._critics import Context, Terms
 from jaxplan.mppi._rollout import Sequences, braking_clearance, clamp_controls, rollout
+from jaxplan.mppi._step import mppi_step, validate_config, validate_params
 
 __all__ = [
     "BRAKE_ROW", "CRITICS", "Context", "MEAN_ROW", "MPPIConfig", "MPPIInfo", "MPPIParams", "Sequences", "Terms",
-    "braking_clearance", "clamp_controls", "default_params", "initial_sequence", "mppi_control", "rollout", "shift",
+    "braking_clearance", "clamp_controls", "default_params", "initial_sequence", "mppi_control", "mppi_step", "rollout",
+    "shift", "validate_config", "validate_params",
 ]

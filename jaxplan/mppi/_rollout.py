@@ -126,7 +126,7 @@ def braking_clearance(clearance: ClearanceFn, robot: Robot, x, y, h, v, w, t0, p
     for i in range(1, points + 1):
         tau = t_stop * (i / points)
         s = speed * tau - 0.5 * robot.decel * tau * tau  # arc length braked so far (m)
-        half = jnp.clip(kappa * s / 2, -math.pi / 2, math.pi / 2)  # the rotor's range; a tighter spiral is no braking run
+        half = jnp.clip(kappa * s / 2, -math.pi / 2, math.pi / 2)  # the rotor's range
         q = rotor(half)
         straight = jnp.abs(half) < _SMALL_ANGLE
         chord = jnp.where(straight, s, 2.0 * q.imag / jnp.where(straight, 1.0, kappa))

@@ -16,8 +16,9 @@ discs) by one control period per step (`_step`), in these stages:
 5. `_subgoal`: the point to steer for, the current waypoint or a look-ahead point on the
    waypoint polyline;
 6. `_local_control`: the local planner picks the control: the DWA step (`dwa_control`, obstacles =
-   moving discs predicted at constant velocity + the other robots) or pure path following, its
-   top speed capped near corners;
+   moving discs predicted at constant velocity + the other robots), the MPPI step (`mppi_control`,
+   the same discs, warm-started from the robot's last sequence, noise keyed by episode, robot and
+   step) or pure path following, its top speed capped near corners;
 7. `_move_and_contacts`: the robot moves along the exact arc (`advance`), and is checked for contact
    with the map (clearance below its radius), a moving disc or another robot at
    `NavConfig.contact_checks` evenly spaced times of the period;
@@ -40,6 +41,7 @@ import jax.numpy as jnp
 from jax import lax
 
 from jaxplan.dwa import ClearanceTable, DWAParams, DiscObstacles, dwa_control, static_clearance
+from jaxplan.mppi import MPPIParams, initial_sequence, mppi_control, shift
 from jaxplan.dwa import Disc, advance, footprint_offsets, footprint_radius
 from jaxplan.metrics import point_polyline_distance
 from jaxplan.nav._config import NavConfig
@@ -262,10 +264,24 @@ def _subgoal(config: NavConfig, c: Carry, pos: jnp.ndarray) -> tuple[jnp.ndarray
     return sub, c._replace(index=seg)
 
 
-def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams, inputs: EpisodeInputs, c: Carry,
-                   pos: jnp.ndarray, sub: jnp.ndarray, discs: _Discs, t: jnp.ndarray) -> tuple:
-    """Stage 6: the local planner's control ``u [B, N, 2]`` (zero once done) and ``recovery bool[B, N]``, its
-    top speed capped near corners (and while creeping) unless a walker closes in."""
+LOCAL_PATH_POINTS = 4
+"""Waypoints ahead (after the one before the current) that the MPPI path-align critic sees."""
+
+
+def _local_path(wp: jnp.ndarray, n: jnp.ndarray, index: jnp.ndarray, origin: jnp.ndarray):
+    """The stretch of one robot's waypoint polyline ``wp [K, 2]`` around its current waypoint: ``[W + 1, 2]`` points
+    (the waypoint before the current one — or the polyline's origin — then up to ``W`` from the current on, the
+    last repeated) and their valid count."""
+    ahead = wp[jnp.minimum(index + jnp.arange(LOCAL_PATH_POINTS), n - 1)]
+    prev = jnp.where(index > 0, wp[jnp.maximum(index - 1, 0)], origin)
+    return jnp.concatenate([prev[None], ahead]), 1 + jnp.minimum(n - index, LOCAL_PATH_POINTS)
+
+
+def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams | MPPIParams, inputs: EpisodeInputs,
+                   c: Carry, pos: jnp.ndarray, sub: jnp.ndarray, discs: _Discs, t: jnp.ndarray) -> tuple:
+    """Stage 6: the local planner's control ``u [B, N, 2]`` (zero once done), ``recovery bool[B, N]`` and the
+    MPPI warm starts ``[B, N, T, 2]``, its top speed capped near corners (and while creeping) unless a walker
+    closes in."""
     dwa = config.dwa
     robot = dwa.robot
     obs = inputs.obstacles
@@ -277,23 +293,44 @@ def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams, 
         flat(pos), flat(c.waypoints), flat(c.n_wp), flat(c.index))
     v_top = jnp.minimum(robot.v_max, jnp.maximum(cap, config.corner_speed))
     v_top = jnp.where(flat(c.creep), jnp.minimum(v_top, config.stall_speed), v_top)
-    if config.local == "dwa":  # `follow` does not avoid anything: lifting its caps only sends it into walls
+    plan = c.plan
+    if config.local in ("dwa", "mppi"):  # `follow` does not avoid anything: lifting its caps sends it into walls
         # Walkers only: robots avoid each other, and two robots meeting at a corner should slow down.
         threat = threatened(config, pos, pos_all[:, :, :M], vel_all[:, :, :M], rad_all[:, :, :M])
         v_top = jnp.where(flat(threat), robot.v_max, v_top)
         track = None
         if config.prediction == "oracle" and M > 0:
-            track = _oracle_track(obs, t, dwa.steps, dwa.dt, pos_all, vel_all)
+            if config.local == "dwa":
+                track = _oracle_track(obs, t, dwa.steps, dwa.dt, pos_all, vel_all)
+            else:
+                mc = config.local_mppi()
+                track = _oracle_track(obs, t, mc.points, mc.period / mc.substeps, pos_all, vel_all)
         obstacles = DiscObstacles(flat(pos_all), flat(vel_all), flat(rad_all), None if track is None else flat(track))
+        # The run ends in the goal disc: rollouts are checked only until they enter it (a goal at
+        # the end of a dead end is otherwise reached only by rollouts that run on into its end wall).
+        finish = jnp.concatenate([flat(inputs.goal), jnp.full((B * N, 1), config.goal_tolerance, inputs.goal.dtype)],
+                                 axis=-1)
+    if config.local == "mppi":
+        mcfg = config.local_mppi()
+        path, n_path = jax.vmap(_local_path)(flat(c.waypoints), flat(c.n_wp), flat(c.index), flat(c.origin))
+        robot_index = jnp.tile(jnp.arange(N, dtype=jnp.uint32), B)
+        keys = jax.vmap(lambda kd, r: jax.random.fold_in(jax.random.wrap_key_data(kd), c.t.astype(jnp.uint32) * N + r))(
+            jnp.repeat(inputs.key, N, axis=0), robot_index)
+
+        def mppi(state, mean, key, subgoal, goal, d, path_, n_path_, vmax, finish_):
+            cfg = mcfg.replace(robot=dataclasses.replace(mcfg.robot, v_max=vmax))
+            return mppi_control(table, cfg, params, state, mean, key, subgoal, goal, d, path_, n_path_, finish_)
+
+        u, info = jax.vmap(mppi)(flat(c.state), flat(c.plan), keys, flat(sub), flat(inputs.goal), obstacles, path,
+                                 n_path, v_top, finish)
+        recovery = info.recovery.reshape(B, N)
+        plan = jnp.where(c.done[..., None, None], c.plan, shift(info.sequence).reshape(c.plan.shape))
+    elif config.local == "dwa":
 
         def control(state, subgoal, d, wp, vmax, finish):
             cfg = dataclasses.replace(dwa, robot=dataclasses.replace(robot, v_max=vmax))
             return dwa_control(table, cfg, params, state, subgoal, d, wp if config.path_critic else None, finish)
 
-        # The run ends in the goal disc: rollouts are checked only until they enter it (a goal at
-        # the end of a dead end is otherwise reached only by rollouts that run on into its end wall).
-        finish = jnp.concatenate([flat(inputs.goal), jnp.full((B * N, 1), config.goal_tolerance, inputs.goal.dtype)],
-                                 axis=-1)
         u, info = jax.vmap(control)(flat(c.state), flat(sub), obstacles, flat(c.waypoints), v_top, finish)
         recovery = info.recovery.reshape(B, N)
     else:
@@ -302,7 +339,7 @@ def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams, 
         recovery = jnp.zeros((B, N), bool)
     u = u.reshape(B, N, 2)
     u = jnp.where(c.done[..., None], 0.0, u)
-    return u, recovery & ~c.done
+    return u, recovery & ~c.done, plan
 
 
 def _move_and_contacts(config: NavConfig, table: ClearanceTable, obs: MovingObstacles, c: Carry, u: jnp.ndarray,
@@ -369,7 +406,7 @@ def _bookkeeping(config: NavConfig, inputs: EpisodeInputs, c: Carry, new: jnp.nd
     )
 
 
-def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: DWAParams,
+def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: DWAParams | MPPIParams,
           inputs: EpisodeInputs, c: Carry):
     """One control period of every robot: the stages in the order of the module docstring."""
     t = c.t.astype(jnp.float32) * config.dwa.period
@@ -381,14 +418,23 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
     if config.replan:
         c = _replanning(config, free, table.resolution, inputs, c, pos, discs, crowded)
     sub, c = _subgoal(config, c, pos)
-    u, recovery = _local_control(config, table, params, inputs, c, pos, sub, discs, t)
+    u, recovery, plan = _local_control(config, table, params, inputs, c, pos, sub, discs, t)
+    c = c._replace(plan=plan)
     new, hit, pair = _move_and_contacts(config, table, inputs.obstacles, c, u, t, discs.radius)
     c = _bookkeeping(config, inputs, c, new, hit, pair)
     return c, (new, u, recovery)
 
 
-def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp.ndarray, params: DWAParams,
-                 inputs: EpisodeInputs) -> EpisodeOutput:
+def _initial_plans(config: NavConfig, start: jnp.ndarray) -> jnp.ndarray:
+    """``f32[B, N, T, 2]``: each robot's first MPPI warm start (its start velocity held); ``T = 0`` unless MPPI."""
+    if config.local != "mppi":
+        return jnp.zeros(start.shape[:2] + (0, 2), start.dtype)
+    mc = config.local_mppi()
+    return jax.vmap(jax.vmap(lambda s: initial_sequence(mc, s)))(start).astype(start.dtype)
+
+
+def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp.ndarray,
+                 params: DWAParams | MPPIParams, inputs: EpisodeInputs) -> EpisodeOutput:
     """Runs ``B`` episodes of ``N`` robots (pure; jit with ``config`` and ``steps`` static).
 
     Args:
@@ -396,7 +442,7 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
       steps: ``S``, the buffer length in control steps (static, a multiple of ``config.chunk``).
       table: the map's `ClearanceTable` (collision and DWA clearance).
       free: ``bool[H, W]`` the planning map (inflated) used when re-planning.
-      params: `DWAParams`.
+      params: `DWAParams` (`MPPIParams` when ``config.local == "mppi"``).
       inputs: `EpisodeInputs`.
     """
     B, N = inputs.start.shape[:2]
@@ -412,7 +458,7 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
         spin=jnp.zeros((B, N), inputs.start.dtype),
         goal_best=jnp.sqrt(jnp.sum(lax.stop_gradient(inputs.goal - inputs.start[..., :2]) ** 2, axis=-1)),
         stall_replan=jnp.zeros((B, N), bool), detour=jnp.zeros((B, N), bool),
-        t=jnp.asarray(0, jnp.int32),
+        plan=_initial_plans(config, inputs.start), t=jnp.asarray(0, jnp.int32),
     )
     states = jnp.broadcast_to(inputs.start[None], (steps + 1, B, N, 5))
     controls = jnp.zeros((steps, B, N, 2), inputs.start.dtype)

@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike
 
 from jaxplan.core.cache import Built, memoize
 from jaxplan.dwa import DWAParams, table_of
+from jaxplan.mppi import MPPIParams
 from jaxplan.grid import GridMap, clearance_field, shortest_lengths
 from jaxplan.metrics import EnergyModel, energy
 from jaxplan.nav._checks import check_obstacle_starts, checked_run, obstacle_sets, resolve_config
@@ -242,8 +243,8 @@ def _to_episodes(x: ArrayLike, E: int, N: int, R: int) -> np.ndarray:
     return x.reshape((E, N, R) + x.shape[2:]).swapaxes(1, 2).reshape((E * R, N) + x.shape[2:])
 
 
-def _execute(cfg: NavConfig, grid: GridMap, plan_free: np.ndarray, params: DWAParams, inputs: EpisodeInputs,
-             mesh: Mesh | str | None) -> tuple[Any, float, float]:
+def _execute(cfg: NavConfig, grid: GridMap, plan_free: np.ndarray, params: DWAParams | MPPIParams,
+             inputs: EpisodeInputs, mesh: Mesh | str | None) -> tuple[Any, float, float]:
     """Step 4: the episode program on the ``B`` episodes of ``inputs``, split over a mesh when results do not
     depend on it; returns its outputs (numpy, ``[B, ...]``), compile and run seconds."""
     steps = cfg.steps
@@ -323,7 +324,7 @@ def _episode_batch(out: Any, E: int, R: int, N: int, active: np.ndarray, reason:
 
 def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | None, global_planner: str | None,
          local_planner: str | None, seeds: Sequence[int], obstacles: Any, config: NavConfig | None,
-         params: DWAParams | Mapping[str, float] | None, time_limit: float | None,
+         params: DWAParams | MPPIParams | Mapping[str, float] | None, time_limit: float | None,
          overrides: Mapping[str, Any], mesh: Mesh | str | None = "auto") -> EpisodeBatch:
     """The steps of the module docstring for ``starts, goals [E, N, 2]`` (cells) × seeds: an `EpisodeBatch`
     ``[E, R, N]``."""
@@ -363,6 +364,8 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
         goal_cell=jnp.asarray(to_b(np.broadcast_to(g_flat[:, None], (E * N, R, 2))).astype(np.int32)),
         waypoints=jnp.asarray(to_b(wp_m)), n_waypoints=jnp.asarray(to_b(n_wp).astype(np.int32)),
         time_limit=jnp.asarray(to_b(limit).astype(np.float32)), obstacles=obs, active=jnp.asarray(active),
+        # Episode (scenario e, seed s) draws its MPPI noise from the key data (s, e).
+        key=jnp.asarray(np.array([[s, e] for e in range(E) for s in seeds], np.uint32).reshape(E * R, 2)),
     )
     out, compile_s, run_s = _execute(cfg, grid, pf, run_args.params, inputs, mesh)
 
@@ -378,7 +381,7 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
 def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: str | None = None,
              local_planner: str | None = None, seed: int = 0, obstacles: MovingObstacles | None = None, *,
              pipeline: str | None = None, config: NavConfig | None = None,
-             params: DWAParams | Mapping[str, float] | None = None, time_limit: float | None = None,
+             params: DWAParams | MPPIParams | Mapping[str, float] | None = None, time_limit: float | None = None,
              **overrides: Any) -> Episode:
     """One two-level navigation episode (DESIGN §3).
 
@@ -391,7 +394,8 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: s
       seed: the global planner's seed.
       obstacles: `MovingObstacles` (e.g. `jaxplan.random_obstacles`).
       config: `NavConfig` (robot, DWA settings, tolerances, re-planning).
-      params: DWA critic weights (`DWAParams` or a dict of overrides).
+      params: the local planner's weights: `DWAParams`, `MPPIParams` (``local_planner="mppi"``) or a dict of
+        overrides.
       time_limit: seconds (default: 60 s + 3 × the waypoint polyline's length at v_max, capped
         at ``config.max_time``).
       **overrides: the global planner's parameters (as for `jaxplan.plan`).
@@ -410,7 +414,7 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: s
 def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline: str | None = "iaco_dwa",
                    seeds: Sequence[int] = range(1), obstacles: Any = None, *, global_planner: str | None = None,
                    local_planner: str | None = None, config: NavConfig | None = None,
-                   params: DWAParams | Mapping[str, float] | None = None, time_limit: float | None = None,
+                   params: DWAParams | MPPIParams | Mapping[str, float] | None = None, time_limit: float | None = None,
                    mesh: Mesh | str | None = "auto", **overrides: Any) -> EpisodeBatch:
     """Scenarios × seeds single-robot episodes in one compiled global-planning call and one episode call.
 
@@ -445,7 +449,7 @@ def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline:
 def navigate_multi(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline: str | None = "iaco_dwa",
                    seeds: Sequence[int] = range(1), obstacles: Any = None, *, global_planner: str | None = None,
                    local_planner: str | None = None, config: NavConfig | None = None,
-                   params: DWAParams | Mapping[str, float] | None = None, time_limit: float | None = None,
+                   params: DWAParams | MPPIParams | Mapping[str, float] | None = None, time_limit: float | None = None,
                    mesh: Mesh | str | None = "auto", **overrides: Any) -> EpisodeBatch:
     """Multi-robot episodes: ``starts, goals int[N, 2]`` (one team) or ``[E, N, 2]`` (E teams).
 

@@ -30,6 +30,8 @@ class EpisodeInputs(NamedTuple):
       obstacles: `MovingObstacles` with leaves ``[B, M, …]`` (``M`` may be 0).
       active: ``bool[B, N]`` robots that run; the others stand still at their start from step 0
         (an infeasible scenario), still present as discs for the rest.
+      key: ``u32[B, 2]`` each episode's PRNG key data (`jax.random.key_data`): the MPPI step's noise
+        (its robot and step folded in); unused by the other local planners.
     """
 
     start: jnp.ndarray
@@ -40,6 +42,7 @@ class EpisodeInputs(NamedTuple):
     time_limit: jnp.ndarray
     obstacles: MovingObstacles
     active: jnp.ndarray
+    key: jnp.ndarray
 
 
 class EpisodeOutput(NamedTuple):
@@ -104,4 +107,5 @@ class Carry(NamedTuple):
     goal_best: jnp.ndarray  # [B, N] that approach: closest distance to the goal so far (m)
     stall_replan: jnp.ndarray  # [B, N] started creeping, its re-plan not attempted yet (no free slot)
     detour: jnp.ndarray  # [B, N] tracking a path planned around discs: re-checked every NavConfig.recheck_period
+    plan: jnp.ndarray  # [B, N, T, 2] the MPPI step's warm start (T = 0 for the other local planners)
     t: jnp.ndarray  # scalar step counter
