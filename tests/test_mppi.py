@@ -97,8 +97,9 @@ def test_warm_start_is_the_last_solution(step):
 
 
 def test_critics_against_hand_computation():
-    # obstacle: 1 - min(c, d_clip)/d_clip
+    # obstacle and dynamic: 1 - min(c, clip)/clip
     np.testing.assert_allclose(C.obstacle(jnp.array([0.1, 0.5, 2.0, -1.0]), 0.5), [0.8, 0.0, 0.0, 1.0], atol=1e-7)
+    np.testing.assert_allclose(C.dynamic(jnp.array([0.25, 1.0]), 1.0), [0.75, 0.0], atol=1e-7)
     # path distance to the polyline (0,0)-(4,0)-(4,4)
     path = jnp.array([[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [9.0, 9.0]])
     d = C.path_distance(jnp.array([2.0, 5.0, 6.0]), jnp.array([1.0, 2.0, -1.0]), path, jnp.asarray(3))
@@ -125,10 +126,11 @@ def test_critics_against_hand_computation():
 
 
 def test_cost_is_the_weighted_sum():
-    terms = C.Terms(*(jnp.array([0.1 * (i + 1)]) for i in range(7)), end=None)
+    from jaxplan.mppi import CRITICS
+
+    terms = C.Terms(*(jnp.array([0.1 * (i + 1)]) for i in range(len(CRITICS))), end=None)
     w = default_params()
-    expect = sum(float(getattr(w, k)) * 0.1 * (i + 1) for i, k in enumerate(
-        ("obstacle", "path_align", "path_follow", "goal", "goal_heading", "prefer_forward", "constraint")))
+    expect = sum(float(getattr(w, k)) * 0.1 * (i + 1) for i, k in enumerate(CRITICS))
     np.testing.assert_allclose(C.cost(terms, w), [expect], rtol=1e-6)
 
 

@@ -22,7 +22,7 @@ from jaxplan.dwa import Robot, Unicycle
 
 __all__ = ["MPPIConfig", "MPPIParams", "default_params", "CRITICS"]
 
-CRITICS = ("obstacle", "path_align", "path_follow", "goal", "goal_heading", "prefer_forward", "constraint")
+CRITICS = ("obstacle", "dynamic", "path_align", "path_follow", "goal", "goal_heading", "prefer_forward", "constraint")
 """The critics, in the order `MPPIParams` holds their weights (see `jaxplan.mppi._critics`)."""
 
 
@@ -37,7 +37,8 @@ class MPPIConfig:
         applies it: the velocity steps to the command at the start of the period and is held.
       d_safe: a rollout whose clearance (m, footprint disc centre to the nearest blocked square or
         predicted disc edge) drops below this is infeasible (as the DWA's ``d_safe``).
-      d_clip: clearance (m) at which the obstacle critic stops charging.
+      d_clip: clearance (m) to the map at which the obstacle critic stops charging.
+      disc_clip: clearance (m) to the moving discs' inflated edges at which the dynamic critic stops charging.
       path_clip: distance (m) from the global path at which the path-align critic saturates.
       goal_radius: the goal critic charges only while the robot is within this distance (m) of the
         goal (Nav2's ``threshold_to_consider``), so far from the goal the path critics lead.
@@ -60,6 +61,7 @@ class MPPIConfig:
     period: float = 0.2
     d_safe: float = 0.3
     d_clip: float = 0.5
+    disc_clip: float = 1.0
     path_clip: float = 1.0
     goal_radius: float = 2.0
     samples: int = dataclasses.field(default=256, metadata=dict(static=True))
@@ -98,7 +100,10 @@ class MPPIParams(NamedTuple):
         Nav2's ``gamma``); 0 switches it off.
       collision: cost of an infeasible sequence (clearance below d_safe): large, so that the
         softmax keeps to feasible sequences whenever there are any.
-      obstacle, path_align, path_follow, goal, goal_heading, prefer_forward, constraint: critic
+      disc_margin, disc_growth: the moving discs are kept ``disc_margin + disc_growth · t`` metres farther
+        than their constant-velocity prediction at ``t`` s ahead (feasibility and the dynamic critic): a
+        walker may turn, and the longer ahead, the farther it may be from where it was predicted.
+      obstacle, dynamic, path_align, path_follow, goal, goal_heading, prefer_forward, constraint: critic
         weights (`CRITICS`; each critic is normalised to about [0, 1], see `jaxplan.mppi._critics`).
     """
 
@@ -107,7 +112,10 @@ class MPPIParams(NamedTuple):
     noise_omega: jnp.ndarray
     gamma: jnp.ndarray
     collision: jnp.ndarray
+    disc_margin: jnp.ndarray
+    disc_growth: jnp.ndarray
     obstacle: jnp.ndarray
+    dynamic: jnp.ndarray
     path_align: jnp.ndarray
     path_follow: jnp.ndarray
     goal: jnp.ndarray
@@ -116,8 +124,9 @@ class MPPIParams(NamedTuple):
     constraint: jnp.ndarray
 
 
-_DEFAULTS = dict(temperature=0.02, noise_v=0.25, noise_omega=0.6, gamma=0.0, collision=100.0, obstacle=1.0,
-                 path_align=0.5, path_follow=2.0, goal=1.0, goal_heading=0.5, prefer_forward=1.0, constraint=0.2)
+_DEFAULTS = dict(temperature=0.02, noise_v=0.25, noise_omega=0.6, gamma=0.0, collision=100.0, disc_margin=0.0,
+                 disc_growth=0.0, obstacle=1.0, dynamic=3.0, path_align=0.5, path_follow=2.0, goal=1.0,
+                 goal_heading=0.5, prefer_forward=1.0, constraint=0.2)
 
 
 def default_params(**overrides: float) -> MPPIParams:

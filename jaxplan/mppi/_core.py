@@ -91,10 +91,10 @@ def _raw(config: MPPIConfig, params: MPPIParams, mean: jnp.ndarray, key) -> tupl
     return raw, noise
 
 
-def _current_clearance(clearance, state: jnp.ndarray) -> jnp.ndarray:
-    """Clearance (m) of the robot's reference point now (the escape threshold)."""
-    c, _ = clearance(state[0:1], state[1:2], jnp.asarray(0.0, state.dtype))
-    return c[0]
+def _current_clearance(clearance, state: jnp.ndarray, margin) -> jnp.ndarray:
+    """Clearance (m) of the robot's reference point now, the discs inflated by ``margin`` (the escape threshold)."""
+    c_map, c_disc = clearance(state[0:1], state[1:2], jnp.asarray(0.0, state.dtype))
+    return jnp.minimum(c_map, c_disc - margin)[0]
 
 
 def _iteration(table, config: MPPIConfig, params: MPPIParams, state, mean, key, ctx, obstacles, finish):
@@ -104,14 +104,15 @@ def _iteration(table, config: MPPIConfig, params: MPPIParams, state, mean, key, 
 
     def clearance(x, y, t):
         c_map = static_clearance(table, x, y, config.clearance)
-        if moving:
-            return jnp.minimum(c_map, disc_clearance(obstacles, x, y, t, dt)), c_map
-        return c_map, c_map
+        return c_map, disc_clearance(obstacles, x, y, t, dt) if moving else jnp.full_like(c_map, jnp.inf)
 
-    seq: Sequences = rollout(config, state, raw, clearance, ctx, finish)
+    def inflate(t):
+        return params.disc_margin + params.disc_growth * t
+
+    seq: Sequences = rollout(config, state, raw, clearance, ctx, finish, inflate if moving else None)
     threshold = config.d_safe
     if config.escape:
-        threshold = jnp.minimum(threshold, _current_clearance(clearance, state) - ESCAPE_SLACK)
+        threshold = jnp.minimum(threshold, _current_clearance(clearance, state, inflate(0.0)) - ESCAPE_SLACK)
     feasible = seq.clearance >= threshold
     costs = C.cost(seq.terms, params) + params.collision * (~feasible)
     sigma2 = jnp.stack([params.noise_v, params.noise_omega]) ** 2

@@ -4,9 +4,10 @@ A sequence's cost is ``Σ weight_i · critic_i`` (weights in `MPPIParams`) plus 
 infeasible; lower is better. The critics follow Nav2's MPPI controller (``nav2_mppi_controller``),
 normalised so that the weights compare:
 
-* `obstacle` — per point, ``1 − min(c, d_clip)/d_clip`` for clearance ``c`` (m) to the map and the
-  predicted discs: 0 beyond ``d_clip``, 1 at contact (Nav2's obstacle critic's repulsion term);
-  averaged over the points.
+* `obstacle` — per point, ``1 − min(c, d_clip)/d_clip`` for clearance ``c`` (m) to the map: 0 beyond
+  ``d_clip``, 1 at contact (Nav2's obstacle critic's repulsion term); averaged over the points.
+* `dynamic` — the same for the moving discs, ``1 − min(c, disc_clip)/disc_clip`` with ``c`` the clearance
+  to their (inflated) predicted edges: walkers are given more room than walls.
 * `path_align` — per period, the distance (m) of the period's end point to the local global path,
   ``min(d, path_clip)/path_clip``; averaged (Nav2's path-align critic).
 * `path_follow` — progress towards the sub-goal: ``(|p_T − g| − |p_0 − g| + reach) / (2·reach)`` clipped
@@ -38,7 +39,7 @@ from jaxplan.core.geometry import point_segment_distance
 from jaxplan.dwa import abs_angle
 
 __all__ = [
-    "Context", "End", "Terms", "obstacle", "path_distance", "path_align", "path_follow", "goal", "goal_heading",
+    "Context", "End", "Terms", "obstacle", "dynamic", "path_distance", "path_align", "path_follow", "goal", "goal_heading",
     "prefer_forward", "constraint", "zero_sums", "add_point", "add_control", "finish_terms", "cost",
 ]
 
@@ -79,6 +80,7 @@ class Terms(NamedTuple):
     """Every critic's value ``f32[K]`` in [0, 1] (fields as the `MPPIParams` weights), and the end state."""
 
     obstacle: jnp.ndarray
+    dynamic: jnp.ndarray
     path_align: jnp.ndarray
     path_follow: jnp.ndarray
     goal: jnp.ndarray
@@ -93,6 +95,11 @@ class Terms(NamedTuple):
 def obstacle(c: jnp.ndarray, d_clip) -> jnp.ndarray:
     """``1 − min(c, d_clip)/d_clip`` for clearance ``c`` (m; negative inside an obstacle counts as 0)."""
     return 1.0 - jnp.clip(c, 0.0, d_clip) / d_clip
+
+
+def dynamic(c: jnp.ndarray, disc_clip) -> jnp.ndarray:
+    """``1 − min(c, disc_clip)/disc_clip`` for clearance ``c`` (m) to the moving discs."""
+    return obstacle(c, disc_clip)
 
 
 def path_distance(x: jnp.ndarray, y: jnp.ndarray, path: jnp.ndarray, n: jnp.ndarray) -> jnp.ndarray:
@@ -143,12 +150,13 @@ def constraint(v, w, v_raw, w_raw, robot, period) -> jnp.ndarray:
 # Running sums kept by the rollout loop.
 
 def zero_sums(zero: jnp.ndarray) -> dict:
-    return dict(obstacle=zero, goal=zero, path_align=zero, prefer_forward=zero, constraint=zero)
+    return dict(obstacle=zero, dynamic=zero, goal=zero, path_align=zero, prefer_forward=zero, constraint=zero)
 
 
-def add_point(sums: dict, config, ctx: Context, x, y, c) -> dict:
-    """The sums after one rollout point (clearance ``c`` at ``x, y``)."""
-    return dict(sums, obstacle=sums["obstacle"] + obstacle(c, config.d_clip),
+def add_point(sums: dict, config, ctx: Context, x, y, c_map, c_dyn) -> dict:
+    """The sums after one rollout point (clearances ``c_map`` to the map and ``c_dyn`` to the discs at ``x, y``)."""
+    return dict(sums, obstacle=sums["obstacle"] + obstacle(c_map, config.d_clip),
+                dynamic=sums["dynamic"] + dynamic(c_dyn, config.disc_clip),
                 goal=sums["goal"] + goal(x, y, ctx.goal, config.goal_radius))
 
 
@@ -164,6 +172,7 @@ def finish_terms(sums: dict, config, ctx: Context, end: End, steps: int) -> Term
     points = steps * config.substeps
     return Terms(
         obstacle=sums["obstacle"] / points,
+        dynamic=sums["dynamic"] / points,
         path_align=sums["path_align"] / steps,
         path_follow=path_follow(end.x, end.y, ctx.subgoal, ctx.origin, ctx.reach),
         goal=jnp.where(ctx.near_goal, sums["goal"] / points, 0.0),
@@ -176,7 +185,7 @@ def finish_terms(sums: dict, config, ctx: Context, end: End, steps: int) -> Term
 
 def cost(terms: Terms, params) -> jnp.ndarray:
     """``Σ weight_i · critic_i`` ``f32[K]`` (without the collision cost and the control cost)."""
-    return (params.obstacle * terms.obstacle + params.path_align * terms.path_align
+    return (params.obstacle * terms.obstacle + params.dynamic * terms.dynamic + params.path_align * terms.path_align
             + params.path_follow * terms.path_follow + params.goal * terms.goal
             + params.goal_heading * terms.goal_heading + params.prefer_forward * terms.prefer_forward
             + params.constraint * terms.constraint)

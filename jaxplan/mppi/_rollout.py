@@ -38,7 +38,8 @@ from jaxplan.mppi import _critics as C
 __all__ = ["Sequences", "clamp_controls", "rollout", "braking_clearance"]
 
 ClearanceFn = Callable[[jnp.ndarray, jnp.ndarray, jnp.ndarray], tuple[jnp.ndarray, jnp.ndarray]]
-"""``clearance(x, y, t) -> (combined, map)``, metres at points ``x, y [K]`` and time ``t`` (s)."""
+"""``clearance(x, y, t) -> (map, discs)``: metres from points ``x, y [K]`` to the map and to the moving discs
+predicted at time ``t`` (s; +inf without discs)."""
 
 _SMALL_ANGLE = 1e-4
 
@@ -96,7 +97,7 @@ def clamp_controls(robot: Robot, v_prev, w_prev, v_raw, w_raw, period) -> tuple[
 
 
 def _footprint_clearance(clearance: ClearanceFn, footprint, x, y, h, t):
-    """``(combined, map)`` clearance (m) of the footprint at points ``x, y [K]`` with heading ``h`` (complex)."""
+    """``(map, discs)`` clearance (m) of the footprint at points ``x, y [K]`` with heading ``h`` (complex)."""
     if isinstance(footprint, Disc):
         return clearance(x, y, t)
     offsets = footprint_offsets(footprint)
@@ -131,24 +132,27 @@ def braking_clearance(clearance: ClearanceFn, robot: Robot, x, y, h, v, w, t0, p
         straight = jnp.abs(half) < _SMALL_ANGLE
         chord = jnp.where(straight, s, 2.0 * q.imag / jnp.where(straight, 1.0, kappa))
         p = h * q * chord
-        c, _ = _footprint_clearance(clearance, robot.footprint, x + p.real, y + p.imag, h * q * q, t0 + tau)
+        c = jnp.minimum(*_footprint_clearance(clearance, robot.footprint, x + p.real, y + p.imag, h * q * q, t0 + tau))
         c = jnp.where(moving, c, jnp.inf)
         best = c if best is None else jnp.minimum(best, c)
     return best, t_stop
 
 
 def rollout(config, state: jnp.ndarray, raw: jnp.ndarray, clearance: ClearanceFn, ctx: C.Context,
-            finish: jnp.ndarray | None = None) -> Sequences:
+            finish: jnp.ndarray | None = None, inflate: Callable[[jnp.ndarray], jnp.ndarray] | None = None
+            ) -> Sequences:
     """Rolls out K raw control sequences from ``state`` and sums their critics.
 
     Args:
       config: `MPPIConfig` (robot, period, substeps, …).
       state: ``f32[5]`` (x, y, θ, v, ω).
       raw: ``f32[K, T, 2]`` raw (noisy) controls; clamped here step by step.
-      clearance: ``clearance(x, y, t) -> (combined, map)`` (m) at points ``[K]``, ``t`` s after now.
+      clearance: ``clearance(x, y, t) -> (map, discs)`` (m) at points ``[K]``, ``t`` s after now.
       ctx: `jaxplan.mppi._critics.Context` (sub-goal, goal, local path, reach).
       finish: ``f32[3]`` (x, y, radius) the goal region where the robot's run ends, or None: points
         after a sequence enters it do not count towards its clearance (as the DWA's ``finish``).
+      inflate: ``inflate(t) -> m``: how much farther than their predicted edge the discs are kept at time
+        ``t`` (feasibility and the dynamic critic; the braking check uses the bare prediction), or None.
     """
     robot = config.robot
     K, T = raw.shape[0], raw.shape[1]
@@ -180,14 +184,16 @@ def rollout(config, state: jnp.ndarray, raw: jnp.ndarray, clearance: ClearanceFn
             x, y = x0 + p.real, y0 + p.imag
             hj = h * qj * qj
             tj = (t * J + j).astype(dtype) * ds
-            c, c_map = _footprint_clearance(clearance, robot.footprint, x, y, hj, tj)
+            c_map, c_dyn = _footprint_clearance(clearance, robot.footprint, x, y, hj, tj)
+            if inflate is not None:
+                c_dyn = c_dyn - inflate(tj)
             if finish is not None:
-                c = jnp.where(inside, jnp.inf, c)
                 c_map = jnp.where(inside, jnp.inf, c_map)
+                c_dyn = jnp.where(inside, jnp.inf, c_dyn)
                 dx, dy = x - finish[0], y - finish[1]
                 inside = inside | (dx * dx + dy * dy <= finish[2] * finish[2])
-            clear, static = jnp.minimum(clear, c), jnp.minimum(static, c_map)
-            sums = C.add_point(sums, config, ctx, x, y, c)
+            clear, static = jnp.minimum(clear, jnp.minimum(c_map, c_dyn)), jnp.minimum(static, c_map)
+            sums = C.add_point(sums, config, ctx, x, y, c_map, c_dyn)
             if config.keep_rollouts:
                 pts.append(jnp.stack([x, y, jnp.angle(hj)], axis=-1))
         h = h * qj * qj

@@ -38,7 +38,7 @@ def validate_config(config: MPPIConfig) -> MPPIConfig:
     if config.samples < 3:
         raise ValueError(f"MPPIConfig.samples must be >= 3 (two fixed candidates and at least one noisy "
                          f"sequence), got {config.samples}")
-    for name in ("d_clip", "path_clip", "goal_radius"):
+    for name in ("d_clip", "disc_clip", "path_clip", "goal_radius"):
         v = getattr(config, name)
         if not (isinstance(v, (int, float, np.floating)) and math.isfinite(v) and v > 0):
             raise ValueError(f"MPPIConfig.{name} must be a finite number > 0, got {v!r}")

@@ -311,7 +311,8 @@ def _episode_batch(out: Any, E: int, R: int, N: int, active: np.ndarray, reason:
     return EpisodeBatch(
         states=states, steps=n_steps, controls=controls, recovery=recovery, reason=reason_txt,
         feasible=back(to_b(~np.isin(reason, (INFEASIBLE_START, INFEASIBLE_GOAL, UNREACHABLE)))),
-        success=success, collisions=coll, pair_collisions=back(out.pair_collisions), time_s=t_s * nan,
+        success=success, collisions=coll, active_contacts=back(out.active_contacts),
+        passive_contacts=coll - back(out.active_contacts), pair_collisions=back(out.pair_collisions), time_s=t_s * nan,
         rmse=rm * nan, max_curvature=kappa * nan, energy=en * nan, path_length=length * nan,
         recoveries=np.sum(recovery & live, axis=-1), replans=back(out.replans),
         plans=back(to_b(plans)), n_plan=back(to_b(n_plan)), waypoints=back(to_b(wp_m)),
@@ -319,6 +320,8 @@ def _episode_batch(out: Any, E: int, R: int, N: int, active: np.ndarray, reason:
         obstacles=jax.tree_util.tree_map(lambda x: np.asarray(x).reshape((E, R) + x.shape[1:]), obs),
         plan_time_s=plan_time / max(E * R * N, 1), step_time_s=run_s / robot_steps, run_time_s=run_s,
         compile_s=compile_s, period=period, pipeline=pipeline, resolution=res,
+        obstacle_positions=None if out.walkers is None else np.asarray(out.walkers).reshape(
+            (E, R) + out.walkers.shape[1:]),
     )
 
 
