@@ -182,6 +182,29 @@ def test_admissible_never_chooses_a_sequence_that_cannot_stop(corridor):
     assert float(u[0]) < float(state[3])
 
 
+def test_admissible_with_a_walker_coming_head_on(corridor):
+    """A disc walking at the robot down the corridor: every sequence with weight can brake to rest, from its end,
+    before the disc's predicted path reaches it (brute force), and the robot slows down."""
+    from test_dwa import _brakes_clear
+
+    _, table = corridor
+    cfg = CFG.replace(admissible=True)
+    disc_xy, disc_vel = np.array([12.0, 3.5]), np.array([-1.0, 0.0])
+    disc = DiscObstacles(jnp.asarray([disc_xy], jnp.float32), jnp.asarray([disc_vel], jnp.float32),
+                         jnp.array([0.25]))
+    state = jnp.array([4.0, 3.5, 0.0, 1.0, 0.0], jnp.float32)
+    u, info = mppi_control(table, cfg, PARAMS, state, initial_sequence(cfg, state), jax.random.key(5),
+                           jnp.array([18.0, 3.5]), obstacles=disc)
+    w = np.asarray(info.weights)
+    for k in np.nonzero(w > 1e-4)[0]:
+        s = np.asarray(state, np.float64)
+        for v, om in np.asarray(info.controls[k]):
+            s = np.asarray(jp.dwa.advance(jnp.asarray(s), jnp.array([v, om]), cfg.period), np.float64)
+        assert _brakes_clear(s[:3], max(float(s[3]), 0.0), float(s[4]), cfg.robot.decel, disc_xy, disc_vel, 0.25,
+                             0.25, cfg.horizon), k
+    assert np.all(w[~np.asarray(info.admissible)] == 0.0)
+
+
 def test_an_empty_way_drives_at_speed(step):
     state = jnp.array([2.0, 3.5, 0.0, 0.0, 0.0], jnp.float32)
     mean = initial_sequence(CFG, state)

@@ -13,6 +13,7 @@ Pure core, for episodes (`lax.scan` over control steps, `vmap` over episodes)::
     u, info = dwa_control(table, DWAConfig(keep_rollouts=False), default_params(), state, subgoal)
 """
 
+from jaxplan.dwa._brake import braking_clearance
 from jaxplan.dwa._clearance import (
     HYBRID_EXACT_CELLS,
     ClearanceTable,
@@ -35,7 +36,7 @@ from jaxplan.dwa._step import as_obstacles, dwa_step, table_of, validate_config,
 from jaxplan.dwa._window import Window, dynamic_window, sample_controls
 
 __all__ = [
-    "Robot", "abs_angle", "as_obstacles", "curvature_limit", "rotor",
+    "Robot", "abs_angle", "as_obstacles", "braking_clearance", "curvature_limit", "rotor",
     "Ackermann", "CLEARANCE_MODES", "ClearanceTable", "Critics", "DWAConfig", "DWAInfo", "DWAParams", "Disc",
     "DiscObstacles", "EVALUATORS", "HYBRID_EXACT_CELLS", "Rectangle", "Rollouts", "SELECTIONS", "Unicycle", "Window",
     "advance", "clearance_table", "critics", "default_params", "disc_clearance", "dwa_control", "dwa_control_batch",

@@ -70,7 +70,7 @@ class MPPIConfig:
     iterations: int = dataclasses.field(default=1, metadata=dict(static=True))
     clearance: str = dataclasses.field(default="hybrid", metadata=dict(static=True))
     admissible: bool = dataclasses.field(default=False, metadata=dict(static=True))
-    brake_points: int = dataclasses.field(default=6, metadata=dict(static=True))
+    brake_points: int = dataclasses.field(default=8, metadata=dict(static=True))
     escape: bool = dataclasses.field(default=True, metadata=dict(static=True))
     keep_rollouts: bool = dataclasses.field(default=False, metadata=dict(static=True))
 

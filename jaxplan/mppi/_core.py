@@ -109,7 +109,8 @@ def _iteration(table, config: MPPIConfig, params: MPPIParams, state, mean, key, 
     def inflate(t):
         return params.disc_margin + params.disc_growth * t
 
-    seq: Sequences = rollout(config, state, raw, clearance, ctx, finish, inflate if moving else None)
+    closing = jnp.max(jnp.sqrt(jnp.sum(obstacles.velocities ** 2, axis=-1)), initial=0.0) if moving else 0.0
+    seq: Sequences = rollout(config, state, raw, clearance, ctx, finish, inflate if moving else None, closing)
     threshold = config.d_safe
     if config.escape:
         threshold = jnp.minimum(threshold, _current_clearance(clearance, state, inflate(0.0)) - ESCAPE_SLACK)

@@ -20,7 +20,7 @@ as it can (decel) along the curvature it ends on; the sequence is admissible if 
 braking run (checked at ``brake_points`` times against the map and the discs predicted at those
 times) comes closer than the footprint radius — the end state is then not an inevitable
 collision state, and a contact, if any, finds the robot at rest (Fraichard's passive motion
-safety; Bouraine et al. 2012). `braking_clearance` is shared with the DWA's admissibility option.
+safety; Bouraine et al. 2012; `jaxplan.dwa.braking_clearance`, shared with the DWA's option).
 """
 
 from __future__ import annotations
@@ -32,10 +32,12 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
-from jaxplan.dwa import Disc, Robot, curvature_limit, footprint_offsets, footprint_radius, rotor
+from jaxplan.dwa import (
+    Disc, Robot, braking_clearance, curvature_limit, footprint_offsets, footprint_radius, rotor,
+)
 from jaxplan.mppi import _critics as C
 
-__all__ = ["Sequences", "clamp_controls", "rollout", "braking_clearance"]
+__all__ = ["Sequences", "clamp_controls", "rollout"]
 
 ClearanceFn = Callable[[jnp.ndarray, jnp.ndarray, jnp.ndarray], tuple[jnp.ndarray, jnp.ndarray]]
 """``clearance(x, y, t) -> (map, discs)``: metres from points ``x, y [K]`` to the map and to the moving discs
@@ -108,39 +110,9 @@ def _footprint_clearance(clearance: ClearanceFn, footprint, x, y, h, t):
     return best
 
 
-def braking_clearance(clearance: ClearanceFn, robot: Robot, x, y, h, v, w, t0, points: int):
-    """Minimum clearance (m, map and discs) of the braking run from end states ``[K]``, and the stop time.
-
-    From position ``(x, y)``, heading ``h`` (complex unit) and speed ``v`` with yaw rate ``w``, the robot
-    decelerates at ``robot.decel`` along the curvature ``κ = w/v`` it is on, and stops after ``v/decel``
-    seconds; the run is checked at ``points`` evenly spaced times of it (the discs predicted at
-    ``t0 + τ``). A robot already at rest (or reversing) has nothing to check: +inf.
-
-    Returns:
-      ``(clearance f32[K], stop_time f32[K])``.
-    """
-    speed = jnp.maximum(v, 0.0)
-    moving = speed > 1e-3
-    t_stop = speed / jnp.maximum(robot.decel, 1e-6)
-    kappa = jnp.where(moving, w / jnp.where(moving, speed, 1.0), 0.0)
-    best = None
-    for i in range(1, points + 1):
-        tau = t_stop * (i / points)
-        s = speed * tau - 0.5 * robot.decel * tau * tau  # arc length braked so far (m)
-        half = jnp.clip(kappa * s / 2, -math.pi / 2, math.pi / 2)  # the rotor's range
-        q = rotor(half)
-        straight = jnp.abs(half) < _SMALL_ANGLE
-        chord = jnp.where(straight, s, 2.0 * q.imag / jnp.where(straight, 1.0, kappa))
-        p = h * q * chord
-        c = jnp.minimum(*_footprint_clearance(clearance, robot.footprint, x + p.real, y + p.imag, h * q * q, t0 + tau))
-        c = jnp.where(moving, c, jnp.inf)
-        best = c if best is None else jnp.minimum(best, c)
-    return best, t_stop
-
-
 def rollout(config, state: jnp.ndarray, raw: jnp.ndarray, clearance: ClearanceFn, ctx: C.Context,
-            finish: jnp.ndarray | None = None, inflate: Callable[[jnp.ndarray], jnp.ndarray] | None = None
-            ) -> Sequences:
+            finish: jnp.ndarray | None = None, inflate: Callable[[jnp.ndarray], jnp.ndarray] | None = None,
+            closing=0.0) -> Sequences:
     """Rolls out K raw control sequences from ``state`` and sums their critics.
 
     Args:
@@ -153,6 +125,7 @@ def rollout(config, state: jnp.ndarray, raw: jnp.ndarray, clearance: ClearanceFn
         after a sequence enters it do not count towards its clearance (as the DWA's ``finish``).
       inflate: ``inflate(t) -> m``: how much farther than their predicted edge the discs are kept at time
         ``t`` (feasibility and the dynamic critic; the braking check uses the bare prediction), or None.
+      closing: the discs' top speed (m/s), for the braking check's margin between its check points.
     """
     robot = config.robot
     K, T = raw.shape[0], raw.shape[1]
@@ -209,7 +182,8 @@ def rollout(config, state: jnp.ndarray, raw: jnp.ndarray, clearance: ClearanceFn
     end = C.End(carry["x"], carry["y"], carry["h"], carry["v"], carry["w"])
     terms = C.finish_terms(carry["sums"], config, ctx, end, T)
     if config.admissible:
-        brake, _ = braking_clearance(clearance, robot, end.x, end.y, end.h, end.v, end.w, T * P, config.brake_points)
+        brake = braking_clearance(lambda x, y, t: jnp.minimum(*clearance(x, y, t)), robot, end.x, end.y, end.h,
+                                  end.v, end.w, T * P, config.brake_points, closing)
         admissible = brake >= footprint_radius(robot.footprint)
     else:
         admissible = zero == 0.0
