@@ -44,7 +44,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
-from jaxplan.grid import PAD as CMAP_PAD, CollisionMap, point_clearance
+from jaxplan.grid import PAD as CMAP_PAD
+from jaxplan.grid import CollisionMap, point_clearance
 
 __all__ = [
     "ClearanceTable", "clearance_table", "static_clearance", "DiscObstacles", "no_obstacles", "disc_clearance",

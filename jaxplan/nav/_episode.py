@@ -39,8 +39,17 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
-from jaxplan.dwa import ClearanceTable, DWAParams, DiscObstacles, dwa_control, static_clearance
-from jaxplan.dwa import Disc, advance, footprint_offsets, footprint_radius
+from jaxplan.dwa import (
+    ClearanceTable,
+    Disc,
+    DiscObstacles,
+    DWAParams,
+    advance,
+    dwa_control,
+    footprint_offsets,
+    footprint_radius,
+    static_clearance,
+)
 from jaxplan.metrics import point_polyline_distance
 from jaxplan.nav._config import NavConfig
 from jaxplan.nav._moving import MovingObstacles, obstacle_state
