@@ -13,7 +13,7 @@ from __future__ import annotations
 import statistics
 import time
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
 from jaxplan.core.provenance import cpu_info, machine_line
 
@@ -59,3 +59,10 @@ class Steal:
             return "CPU steal during the run: not measurable here"
         note = " (the host lent these cores to other guests: figures are low)" if f > 0.02 else ""
         return f"CPU steal during the run: {100 * f:.1f} %{note}"
+
+
+def blocking(fn: Callable, args: tuple) -> Callable[[], Any]:
+    """A zero-argument call of ``fn(*args)`` that waits for JAX's asynchronous results (what `median_time` times)."""
+    import jax
+
+    return lambda: jax.block_until_ready(fn(*args))

@@ -70,7 +70,7 @@ def measure(iterations: int, repeats: int) -> dict:
                     times.append(dt)
                     steps.append(int(np.asarray(o.ant_steps).sum()))
                 slots = int(np.asarray(o.slots)[0, 0].sum())
-                rates = [n / t for n, t in zip(steps, times)]
+                rates = [n / t for n, t in zip(steps, times, strict=True)]
                 row[backend] = dict(ant_steps_per_s=statistics.median(rates), run_s=statistics.median(times),
                                     slot_use=steps[-1] / max(slots, 1), compile_s=compile_s,
                                     first_minus_run_s=first - statistics.median(times),

@@ -34,6 +34,7 @@ the cores, so figures vary by tens of percent from run to run; compare medians.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import os
 import subprocess
@@ -41,8 +42,7 @@ import sys
 import time
 
 import numpy as np
-from _timing import Steal, machine_line, median_time
-
+from _timing import Steal, blocking, machine_line, median_time
 
 # ---------------------------------------------------------------------------------------------
 # The numpy version of one step (same maths as jaxplan.dwa, vectorised over robots and samples).
@@ -178,12 +178,13 @@ def measure(robots: list[int], repeat: int, sharded: bool) -> dict:
                 fn = jax.jit(dwa_control)
                 args = (table, cfg_dev, params, jax.device_put(states[0]), jax.device_put(goals[0]))
             elif sharded:
-                from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
+                from jax.sharding import Mesh, NamedSharding
+                from jax.sharding import PartitionSpec as P
 
                 mesh = Mesh(np.array(jax.devices()), ("robots",))
                 spec = NamedSharding(mesh, P("robots"))
 
-                def run(t, c, p, s, g):
+                def run(t, c, p, s, g, mesh=mesh):
                     return jax.shard_map(lambda s, g: dwa_control_batch(t, c, p, s, g, chunk=None), mesh=mesh,
                                          in_specs=(P("robots"), P("robots")), out_specs=P("robots"))(s, g)
 
@@ -201,7 +202,7 @@ def measure(robots: list[int], repeat: int, sharded: bool) -> dict:
                 t0 = time.perf_counter()
                 compiled = fn.lower(*args, **kw).compile()
                 compile_s = time.perf_counter() - t0
-                call = (lambda: jax.block_until_ready(compiled(*args)))
+                call = blocking(compiled, args)
                 call()
                 jax_s = median_time(call, n)
                 if one_vmap:
@@ -213,7 +214,7 @@ def measure(robots: list[int], repeat: int, sharded: bool) -> dict:
                            compile_s=compile_s)
             if mode == "hybrid":
                 quads = np.asarray(table.quads)
-                nst = lambda: numpy_step(quads, float(grid.resolution), grid.shape, states, goals, cfg, PAD)
+                nst = functools.partial(numpy_step, quads, float(grid.resolution), grid.shape, states, goals, cfg, PAD)
                 nu, nchosen = nst()
                 row["numpy_ms"] = median_time(nst, max(1, min(n, 5 if B < 1024 else 1))) * 1e3
                 chosen = np.asarray(info.chosen).reshape(-1)

@@ -24,10 +24,10 @@ from pathlib import Path
 import numpy as np
 import scipy
 import scipy.sparse as sp
+from _timing import median_time
 from scipy.sparse.csgraph import dijkstra as scipy_dijkstra
 
 import jaxplan as jp
-from _timing import median_time
 from jaxplan.grid import _kernels
 
 

@@ -33,11 +33,11 @@ import time
 import jax
 import jax.numpy as jnp
 import numpy as np
+from _timing import median_time
 
 import jaxplan as jp
-from _timing import median_time
-from jaxplan.metrics import _host as H
 from jaxplan.grid._collision import cached_collision_map
+from jaxplan.metrics import _host as H
 from jaxplan.metrics._front import _core, _hausdorff_core, _pad, bucket
 
 

@@ -179,7 +179,10 @@ def section_multi(d: Path, args) -> None:
         b = jp.navigate_multi(grid, S, G, pipeline="iaco_dwa", seeds=seeds, obstacles=obs, config=cfg)
         wall = time.perf_counter() - t0
         run_ = b.feasible.all(axis=2)  # [E, R] teams whose robots all ran
-        per_seed = lambda x: np.array([np.mean(x[:, r][run_[:, r]]) for r in range(len(seeds))])  # noqa: E731
+
+        def per_seed(x, run_=run_):
+            return np.array([np.mean(x[:, r][run_[:, r]]) for r in range(len(seeds))])
+
         contacts = per_seed(b.collisions.sum(axis=2))
         pairs = per_seed(np.triu(b.pair_collisions, 1).sum(axis=(2, 3)))
         kappa = per_seed(np.nanmax(b.max_curvature, axis=2))

@@ -24,7 +24,6 @@ from pathlib import Path
 
 import jax
 import numpy as np
-
 from _timing import Steal, machine_line
 
 from jaxplan.aco._tsp import solve_tsp
@@ -37,7 +36,7 @@ TARGET_SPEEDUP = 90.0
 def _manifest(folder: Path) -> dict[str, float]:
     lines = (folder / "MANIFEST.tsv").read_text().splitlines()
     head = lines[0].split("\t")
-    rows = [dict(zip(head, line.split("\t"))) for line in lines[1:] if line.strip()]
+    rows = [dict(zip(head, line.split("\t"), strict=True)) for line in lines[1:] if line.strip()]
     return {r["file"][: -len(".tsp")]: float(r["optimum"]) for r in rows if r["file"].endswith(".tsp")}
 
 

@@ -37,7 +37,14 @@ import numpy as np
 import jaxplan as jp
 from jaxplan.experiments import random_pairs
 from jaxplan.tune import (
-    Split, aco_objective, compare, dwa_objective, make_strategy, plot_tuning, relaxed_dwa, tune_loop,
+    Split,
+    aco_objective,
+    compare,
+    dwa_objective,
+    make_strategy,
+    plot_tuning,
+    relaxed_dwa,
+    tune_loop,
 )
 
 METHODS = ("grid", "random", "cma_es", "snes", "issa", "ssa", "reinforce", "surrogate")

@@ -79,6 +79,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import datetime as dt
+import functools
 import json
 import os
 import statistics
@@ -94,7 +95,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
-from _timing import Steal, median_time  # noqa: E402
+from _timing import Steal, blocking, median_time  # noqa: E402
 
 PAPER_CHEN2023_MS = 8468.0
 SECTIONS = ("aco", "dwa", "exact", "metrics", "episodes", "tune", "tsp", "scale")
@@ -218,8 +219,8 @@ def section_aco(args) -> list[Row]:
 def _dwa_program(robots: int):
     """``(compiled, args, compile_s, grid, states, goals, cfg)`` for bench_dwa.py's scene with ``robots`` robots."""
     import jax
-
     from bench_dwa import scene
+
     from jaxplan.dwa import DWAConfig, default_params, dwa_control, dwa_control_batch
     from jaxplan.dwa._step import table_of
 
@@ -239,20 +240,19 @@ def _dwa_program(robots: int):
 
 
 def section_dwa(args) -> list[Row]:
-    import jax
-
     from bench_dwa import numpy_step
+
     from jaxplan.dwa._clearance import PAD
 
     rows: list[Row] = []
     n, n_np = args.repeats + 4, args.repeats
     for B in (1, 64):
         compiled, a, compile_s, grid, states, goals, cfg, table = _dwa_program(B)
-        call = lambda: jax.block_until_ready(compiled(*a))  # noqa: E731
+        call = blocking(compiled, a)
         call()
         t_jax = median_time(call, n)
         quads = np.asarray(table.quads)
-        nst = lambda: numpy_step(quads, float(grid.resolution), grid.shape, states, goals, cfg, PAD)  # noqa: E731
+        nst = functools.partial(numpy_step, quads, float(grid.resolution), grid.shape, states, goals, cfg, PAD)
         nst()
         t_np = median_time(nst, n_np)
         points = B * cfg.samples * cfg.steps
@@ -271,10 +271,10 @@ def section_dwa(args) -> list[Row]:
 
 
 def section_exact(args) -> list[Row]:
+    from bench_exact import csgraph_of
     from scipy.sparse.csgraph import dijkstra
 
     import jaxplan as jp
-    from bench_exact import csgraph_of
 
     d = Path(args.data_dir) / "movingai"
     for f in (d / "brc202d.map", d / "brc202d.map.scen"):
@@ -323,9 +323,9 @@ def section_exact(args) -> list[Row]:
 def section_metrics(args) -> list[Row]:
     import jax
     import jax.numpy as jnp
+    from bench_metrics import numpy_metrics, random_walks
 
     import jaxplan as jp
-    from bench_metrics import numpy_metrics, random_walks
     from jaxplan.grid._collision import cached_collision_map
     from jaxplan.metrics._front import _core, _pad, bucket
 
@@ -370,10 +370,9 @@ class _LastProgram:
 
 
 def section_episodes(args) -> list[Row]:
-    import jax
+    from bench_nav import WAREHOUSE, load
 
     import jaxplan as jp
-    from bench_nav import WAREHOUSE, load
     from jaxplan.nav import _front as F
 
     d = Path(args.data_dir) / "movingai"
@@ -406,7 +405,7 @@ def section_episodes(args) -> list[Row]:
         # One episode's compiled control loop alone (episode 0), against real time.
         one = batch(S[:1], G[:1])[1]
         compiled, a = memo.last
-        call = lambda: jax.block_until_ready(compiled(*a))  # noqa: E731
+        call = blocking(compiled, a)
         call()
         n_loop = args.repeats + 4
         t_loop = median_time(call, n_loop)
@@ -609,7 +608,8 @@ def table(rows: list[Row]) -> str:
     right = {1, 2, 4, 6}
 
     def line(c) -> str:
-        return " | ".join(x.rjust(w) if i in right else x.ljust(w) for i, (x, w) in enumerate(zip(c, widths)))
+        cells = zip(c, widths, strict=True)
+        return " | ".join(x.rjust(w) if i in right else x.ljust(w) for i, (x, w) in enumerate(cells))
 
     out = [line(head), "-+-".join("-" * w for w in widths)]
     for k, r in enumerate(rows):

@@ -118,9 +118,9 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
              str(r.figures)) for r in done]
     heads = ("config", "run folder", "run (s)", "figures (s)", "figures")
     widths = [max(len(h), *(len(r[j]) for r in rows)) for j, h in enumerate(heads)]
-    print("  ".join(h.ljust(w) for h, w in zip(heads, widths)))
+    print("  ".join(h.ljust(w) for h, w in zip(heads, widths, strict=True)))
     for r in rows:
-        print("  ".join(c.ljust(w) for c, w in zip(r, widths)))
+        print("  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)))
     print(f"total {time.perf_counter() - t0:.1f} s; figures in {args.figures}/index.md")
     bad = 0
     for r in done:

@@ -58,7 +58,8 @@ PAPERS: dict[str, Paper] = {p.key: p for p in (
     Paper("chu2024", "Liyang Chu, Haifeng Guo, Qingshi Meng", 2024,
           "Intelligent Logistics Vehicle Path Planning Using Fused Optimization Ant Colony Algorithm With Grid",
           "International Journal of Information Technologies and Systems Approach (IJITSA)", "10.4018/IJITSA.342613",
-          "terrain-aware 'Opt Ant': height grids, 16-direction moves, right-turn rules, dead-end alerts, Bezier corners",
+          "terrain-aware 'Opt Ant': height grids, 16-direction moves, right-turn rules, dead-end alerts, "
+          "Bezier corners",
           ("opt_ant", "opt_ant_dwa")),
     Paper("chen2023", "Yun Chen, Jinfeng Wu, Chaoshuai He, Si Zhang", 2023,
           "Intelligent Warehouse Robot Path Planning Based on Improved Ant Colony Algorithm",

@@ -39,7 +39,7 @@ def tsplib() -> Path:
 def manifest(folder: Path) -> list[dict[str, str]]:
     lines = (folder / "MANIFEST.tsv").read_text().splitlines()
     head = lines[0].split("\t")
-    return [dict(zip(head, line.split("\t"))) for line in lines[1:] if line.strip()]
+    return [dict(zip(head, line.split("\t"), strict=True)) for line in lines[1:] if line.strip()]
 
 
 def scenario_pairs(folder: Path) -> list[tuple[Path, Path]]:

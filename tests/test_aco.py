@@ -10,8 +10,8 @@ from scipy import stats
 
 import jaxplan as jp
 from jaxplan.aco import COLONIES, draw, hash_uniform
-from jaxplan.aco._planners import split_params, cached_map_tables, compiled, seed_keys
 from jaxplan.aco._context import goal_tables
+from jaxplan.aco._planners import cached_map_tables, compiled, seed_keys, split_params
 from jaxplan.registry import resolve
 
 PLANNERS = sorted(COLONIES)
@@ -24,7 +24,7 @@ def _assert_path_valid(grid, path, start, goal, connectivity):
     assert grid.free[path[:, 1], path[:, 0]].all()
     table = jp.neighbour_table(grid, connectivity)
     moves = {tuple(o): j for j, o in enumerate(table.offsets)}
-    for a, b in zip(path[:-1], path[1:]):
+    for a, b in zip(path[:-1], path[1:], strict=True):
         d = tuple((b - a).tolist())
         assert d in moves and table.valid[a[1] * grid.width + a[0], moves[d]], f"bad step {tuple(a)}->{tuple(b)}"
     assert len({tuple(c) for c in path.tolist()}) == len(path), "path revisits a cell"
@@ -205,7 +205,7 @@ def test_compacting_the_walking_ants_changes_no_result(monkeypatch):
             outs.append(W.walk(jnp.where(tables.valid, tables.index, -1), table, z + gt.start[0], z + gt.goal[0], z, z,
                                jnp.full(A, 11, jnp.uint32), jnp.arange(A), None, max_steps=cfg.max_steps,
                                width=grid.width, lut=W.move_lut(tables.offsets), dead_end=dead_end))
-    for plain, compact in zip(outs[:2], outs[2:]):
+    for plain, compact in zip(outs[:2], outs[2:], strict=True):
         for field in ("cells", "n", "status", "ant_steps"):
             np.testing.assert_array_equal(getattr(plain, field), getattr(compact, field))
     assert (np.asarray(outs[0].status) != 1).sum() > 3 * A // 4, "the case must actually compact"
@@ -232,7 +232,8 @@ def test_praco_with_one_colony_exchanges_with_no_one():
         r = jp.plan(grid, (0, 0), (6, 5), planner="praco", seed=0, colonies=1, ants=1, iterations=1,
                     keep_pheromone=True, update_backend=backend)
         index = {tuple(o): k for k, o in enumerate(offsets(8))}
-        edges = [(int(y0 * 7 + x0), index[(x1 - x0, y1 - y0)]) for (x0, y0), (x1, y1) in zip(r.path[:-1], r.path[1:])]
+        steps = zip(r.path[:-1], r.path[1:], strict=True)
+        edges = [(int(y0 * 7 + x0), index[(x1 - x0, y1 - y0)]) for (x0, y0), (x1, y1) in steps]
         tau = r.info["tau"][0]
         # rho_res 0.7 of the initial 1.0, plus the own colony's (w − 1 = 5) and best-so-far (w = 6) deposits, 1/Z each.
         np.testing.assert_allclose([tau[c, k] for c, k in edges], 0.7 + 11.0 / r.cost, rtol=1e-5)

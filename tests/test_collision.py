@@ -64,7 +64,7 @@ def test_segment_decision_matches_brute_force(scene, radius):
     q = np.clip(p + rng.normal(0, 5, (150, 2)), -0.4, [33.4, 29.4])
     got = np.asarray(jax.jit(jax.vmap(lambda a, b: segment_free(cmap, a, b, radius)))(p, q))
     clear = np.asarray(jax.jit(jax.vmap(lambda a, b: segment_clearance(cmap, a, b, radius)))(p, q))
-    want = np.array([_brute_segment(a, b, squares) for a, b in zip(p, q)])
+    want = np.array([_brute_segment(a, b, squares) for a, b in zip(p, q, strict=True)])
     thr = max(radius, TOUCH)
     decided = np.abs(want - thr) > 1e-3  # sampling brute force is only good to 5e-4
     assert np.array_equal(got[decided], (want >= thr)[decided])

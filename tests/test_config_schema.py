@@ -3,16 +3,23 @@ the deprecated generator names."""
 
 import dataclasses
 import json
-import tomllib
 import warnings
 from pathlib import Path
 
 import pytest
+import tomllib
 
 from jaxplan import config_reference
 from jaxplan.experiments import schema
 from jaxplan.experiments.config import (
-    FIGURE_KINDS, ExperimentFile, MapSpec, ObstacleSpec, QuickSpec, ScenarioSpec, StatsSpec, parse_config,
+    FIGURE_KINDS,
+    ExperimentFile,
+    MapSpec,
+    ObstacleSpec,
+    QuickSpec,
+    ScenarioSpec,
+    StatsSpec,
+    parse_config,
 )
 from jaxplan.experiments.schema import Reader, setting, settings
 from jaxplan.tune import TuneFile

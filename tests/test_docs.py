@@ -18,7 +18,6 @@ import re
 from pathlib import Path
 
 import pytest
-
 from conftest import ROOT
 
 DOCS = sorted(p for p in [ROOT / "README.md", ROOT / "CHANGELOG.md", *(ROOT / "docs").rglob("*.md")] if p.is_file())
@@ -140,3 +139,20 @@ def test_python_snippets_run(doc: Path, monkeypatch):
         except Exception as e:  # pragma: no cover - the failure message is the point
             raise AssertionError(f"{_rel(doc)}, the python block at line {line} failed: {e!r}\n{code}") from e
 
+
+
+CODE_POINTER = re.compile(r"docs/([\w/.-]+\.md)(?:#([\w-]+))?")
+
+
+def test_code_pointers_into_docs_resolve():
+    """Docstrings and comments that send the reader to ``docs/X.md`` (or ``docs/X.md#heading``) name a page, and
+    a heading, that exist: measurements moved out of the code must stay findable."""
+    bad = []
+    for src in sorted([*(ROOT / "jaxplan").rglob("*.py"), *(ROOT / "benchmarks").glob("*.py")]):
+        for page, anchor in CODE_POINTER.findall(src.read_text()):
+            dest = ROOT / "docs" / page
+            if not dest.is_file():
+                bad.append(f"{_rel(src)}: docs/{page} does not exist")
+            elif anchor and anchor not in anchors(dest):
+                bad.append(f"{_rel(src)}: no heading #{anchor} in docs/{page}")
+    assert not bad, "\n".join(bad)

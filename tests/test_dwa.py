@@ -11,10 +11,22 @@ import pytest
 
 import jaxplan as jp
 from jaxplan.dwa import (
-    Ackermann, DWAConfig, DWAParams, DiscObstacles, Rectangle, Unicycle, advance, clearance_table,
-    default_params, dwa_control, dwa_step, input_memberships, rule_table, static_clearance,
+    Ackermann,
+    DiscObstacles,
+    DWAConfig,
+    DWAParams,
+    Rectangle,
+    Unicycle,
+    _fuzzy,
+    advance,
+    clearance_table,
+    default_params,
+    dwa_control,
+    dwa_step,
+    input_memberships,
+    rule_table,
+    static_clearance,
 )
-from jaxplan.dwa import _fuzzy
 from jaxplan.dwa._fuzzy import fuzzy_evaluate
 from jaxplan.grid._collision import collision_map
 
@@ -297,7 +309,7 @@ def test_batched_equals_per_robot(clutter):
                        per)  # drop each robot itself
     u, info = dwa_step(states, goals, clutter, obstacles=per, config=config)
     for i in (0, 3):
-        ui, ii = dwa_step(states[i], goals[i], clutter, obstacles=jax.tree.map(lambda a: a[i], per), config=config)
+        ui, ii = dwa_step(states[i], goals[i], clutter, obstacles=jax.tree.map(lambda a, i=i: a[i], per), config=config)
         np.testing.assert_allclose(ui, u[i], atol=1e-5)
         np.testing.assert_allclose(ii.clearance, info.clearance[i], atol=1e-5)
 
@@ -308,7 +320,7 @@ def test_same_input_same_output(clutter):
     a = dwa_step(states, goals, clutter)
     b = dwa_step(states, goals, clutter)
     np.testing.assert_array_equal(a[0], b[0])
-    for x, y in zip(a[1], b[1]):
+    for x, y in zip(a[1], b[1], strict=True):
         np.testing.assert_array_equal(x, y)
 
 
@@ -511,7 +523,7 @@ def test_flee_rollouts_split_the_clearance_without_changing_it(clutter):
     states, goals = _states(rng, 4, clutter, Unicycle())
     for robot in (Unicycle(), Unicycle(footprint=Rectangle(0.6, 0.4))):
         cfg = DWAConfig(keep_rollouts=False, robot=robot, n_v=6, n_omega=9)
-        for state, goal in zip(jnp.asarray(states, jnp.float32), jnp.asarray(goals, jnp.float32)):
+        for state, goal in zip(jnp.asarray(states, jnp.float32), jnp.asarray(goals, jnp.float32), strict=True):
             a = control(table, cfg, default_params(), state, goal, discs)[1]
             b = control(table, cfg.replace(recovery="flee"), default_params(), state, goal, discs)[1]
             np.testing.assert_array_equal(b.clearance, a.clearance)

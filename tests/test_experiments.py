@@ -20,8 +20,8 @@ import pytest
 from scipy import stats as sps
 
 from jaxplan.cli import main
-from jaxplan.experiments.config import ConfigError, apply_quick, load_config, parse_config
 from jaxplan.experiments import RunFolderError, read_manifest, run_experiment
+from jaxplan.experiments.config import ConfigError, apply_quick, load_config, parse_config
 
 ROOT = Path(__file__).resolve().parents[1]
 

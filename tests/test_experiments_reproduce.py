@@ -11,10 +11,10 @@ import pytest
 from jaxplan.cli import main
 from jaxplan.experiments.config import load_config
 from jaxplan.experiments.reproduce import reproduction_configs
+from jaxplan.papers import PAPERS
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = reproduction_configs(ROOT / "configs")
-from jaxplan.papers import PAPERS
 
 
 def test_every_paper_has_a_reproduction_config():

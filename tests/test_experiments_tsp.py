@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 import jaxplan as jp
-from jaxplan.experiments.config import ConfigError, parse_config
 from jaxplan.experiments import accuracy, read_manifest, reductions, run_experiment
+from jaxplan.experiments.config import ConfigError, parse_config
 
 CITIES = [(0, 0), (3, 1), (6, 0), (7, 4), (5, 7), (2, 8), (-1, 5), (1, 3)]
 OVERRIDES = {"colonies": 2, "ants": 4, "iterations": 6}
@@ -280,8 +280,8 @@ name = "astar"
 def test_executed_optimum_on_an_open_map_is_the_straight_line():
     """The reference of a navigation episode's gap: on a map without obstacles, the line-of-sight smoothed exact
     path is the straight segment between the cell centres."""
-    from jaxplan.experiments.config import PlannerConfig
     from jaxplan.experiments import MapWork
+    from jaxplan.experiments.config import PlannerConfig
     from jaxplan.experiments.trial_metrics import executed_optimum
 
     grid = jp.grid_from_array(np.ones((12, 16), bool), resolution=0.5)  # all free; the outside counts as blocked

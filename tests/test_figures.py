@@ -12,9 +12,9 @@ from pathlib import Path
 import pytest
 
 from jaxplan.cli import main
+from jaxplan.experiments import run_experiment
 from jaxplan.experiments.config import ConfigError, parse_config
 from jaxplan.experiments.figures import draw_figures
-from jaxplan.experiments import run_experiment
 
 PLAN = """
 metrics = ["success", "length", "turns", "smoothness", "plan_time_s"]

@@ -20,7 +20,7 @@ GENERATORS = {
 
 def _same(a: jp.Scene, b: jp.Scene) -> bool:
     la, lb = jax.tree_util.tree_leaves(a.grid), jax.tree_util.tree_leaves(b.grid)
-    return all(np.array_equal(x, y) for x, y in zip(la, lb)) and np.array_equal(a.start, b.start)
+    return all(np.array_equal(x, y) for x, y in zip(la, lb, strict=True)) and np.array_equal(a.start, b.start)
 
 
 @pytest.mark.parametrize("name", sorted(GENERATORS))
@@ -130,7 +130,8 @@ def test_urban_counts_at_their_limits_draw():
     assert jp.UrbanGenerator(n_dynamic=0)(0).dynamic_slots.shape == (0, 2)
 
 
-@pytest.mark.parametrize("old,new", [("warehouse_seed003", "warehouse_chen2023"), ("warehouse_seed004", "warehouse_yu2020")])
+@pytest.mark.parametrize("old,new", [("warehouse_seed003", "warehouse_chen2023"),
+                                     ("warehouse_seed004", "warehouse_yu2020")])
 def test_old_generator_names_warn_and_still_work(old, new):
     with pytest.warns(DeprecationWarning, match=new):
         fn = getattr(jp, old)

@@ -200,7 +200,7 @@ def test_float_vertex_clearance_is_exact_far_from_obstacles():
     pts = np.array([[13.4, 12.6], [13.4, 13.4], [7.4, 13.4], [13.45, 7.45], [3.2, 17.9]])
     want = _brute_clearance(free, pts) * 0.5
     assert want[0] == pytest.approx(0.5 * math.hypot(13.4 - 10.5, 12.6 - 10.5))
-    for p, w in zip(pts, want):
+    for p, w in zip(pts, want, strict=True):
         m = M.path_metrics(p[None], grid)
         assert m["min_clearance"] == m["mean_clearance"] == pytest.approx(w, rel=1e-6)
     rng = np.random.default_rng(5)
@@ -453,7 +453,7 @@ def test_diversity():
 def test_colony_reports_the_run_metrics():
     scene = jp.demo_warehouse()
     r = jp.plan_batch(scene.grid, [scene.start], [scene.goal], planner="aco", seeds=[0, 1], ants=8, iterations=6)
-    for h, conv, div, ok in zip(r.history[0], r.converged[0], r.diversity[0], r.successes[0]):
+    for h, conv, div, ok in zip(r.history[0], r.converged[0], r.diversity[0], r.successes[0], strict=True):
         final = h[-1]
         assert conv == (np.flatnonzero(h <= final * 1.001)[0] if np.isfinite(final) else -1)
         assert np.all(div >= 0) and np.all(div[ok < 2] == 0)

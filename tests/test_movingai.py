@@ -6,13 +6,12 @@ import re
 
 import numpy as np
 import pytest
+from conftest import manifest, scenario_pairs
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import jaxplan as jp
 from jaxplan.grid import parse_map, parse_scenarios
-
-from conftest import manifest, scenario_pairs
 
 HEADER = "type octile\nheight {h}\nwidth {w}\nmap\n"
 

@@ -13,7 +13,14 @@ import jaxplan as jp
 from jaxplan.dwa import Ackermann, DiscObstacles, Unicycle, clearance_table
 from jaxplan.grid import collision_map
 from jaxplan.mppi import (
-    BRAKE_ROW, MEAN_ROW, MPPIConfig, clamp_controls, default_params, initial_sequence, mppi_control, shift,
+    BRAKE_ROW,
+    MEAN_ROW,
+    MPPIConfig,
+    clamp_controls,
+    default_params,
+    initial_sequence,
+    mppi_control,
+    shift,
 )
 from jaxplan.mppi import _critics as C
 

@@ -547,7 +547,10 @@ def test_the_lookahead_point_starts_on_the_leg_from_the_start():
     # Start (0.5, 8.5), a corner at (0.5, 0.5), then east to (8.5, 0.5).
     wp = jnp.asarray([[0.5, 0.5], [8.5, 0.5], [8.5, 0.5], [8.5, 0.5]], jnp.float32)
     origin = jnp.asarray([0.5, 8.5], jnp.float32)
-    look = lambda pos: lookahead_point(jnp.asarray(pos, jnp.float32), wp, jnp.int32(2), jnp.int32(0), 1.5, origin)
+
+    def look(pos):
+        return lookahead_point(jnp.asarray(pos, jnp.float32), wp, jnp.int32(2), jnp.int32(0), 1.5, origin)
+
     p, k = look([0.5, 8.5])
     np.testing.assert_allclose(p, [0.5, 7.0], atol=1e-6)  # 1.5 m down the first leg, not past the corner
     assert int(k) == 0

@@ -13,8 +13,17 @@ import jaxplan as jp
 from jaxplan.dwa._clearance import DiscObstacles, disc_clearance
 from jaxplan.grid._collision import cached_collision_map, segment_free
 from jaxplan.nav._moving import (
-    FAR, MovingObstacles, concat_obstacles, discs_at, moving_obstacles, no_obstacles, obstacle_state, pad_obstacles,
-    route_lengths, stack_obstacles, trajectories,
+    FAR,
+    MovingObstacles,
+    concat_obstacles,
+    discs_at,
+    moving_obstacles,
+    no_obstacles,
+    obstacle_state,
+    pad_obstacles,
+    route_lengths,
+    stack_obstacles,
+    trajectories,
 )
 from jaxplan.nav._traffic import crossing_traffic, head_on, random_obstacles
 
@@ -64,7 +73,7 @@ def ref_position(route, loop: bool, s: float) -> np.ndarray:
     if period == 0:
         return pts[0]
     u = s % period
-    for a, b, length in zip(pts[:-1], pts[1:], seg):
+    for a, b, length in zip(pts[:-1], pts[1:], seg, strict=True):
         if u <= length and length > 0:
             return a + (b - a) * (u / length)
         u -= length
@@ -152,7 +161,7 @@ def test_arc_length_matches_reference_including_bounce_and_loop_wraparound(obs):
     times = np.concatenate([np.linspace(-6.0, 30.0, 361), [0.0, 2.5, 6.5, 13.5]])  # several periods, both ways
     pos = np.asarray(traj(obs, times))
     for i, route in enumerate(ROUTES):
-        for t, p in zip(times, pos[:, i]):
+        for t, p in zip(times, pos[:, i], strict=True):
             want = ref_position(route, LOOPS[i], OFFSETS[i] + SPEEDS[i] * t)
             np.testing.assert_allclose(p, want, atol=2e-5, err_msg=f"obstacle {i} at t={t}")
 
@@ -265,7 +274,7 @@ def test_batch_of_obstacle_sets_vmap_and_leading_axes(obs):
     assert batch.waypoints.shape == (3, 5, 5, 2) and batch.radii.shape == (3, 5)
     for t in (0.0, 1.7, 8.2):
         leading = state(batch, t)  # leading batch axis handled directly
-        mapped = jax.vmap(lambda o: state(o, t))(batch)
+        mapped = jax.vmap(lambda o, t=t: state(o, t))(batch)
         jitted = jax.jit(jax.vmap(obstacle_state, in_axes=(0, None)))(batch, t)
         for b, o in enumerate(sets):
             p, v = state(o, t)
@@ -359,7 +368,7 @@ def test_random_obstacles_are_reproducible_and_collision_free(maze, loop):
     a = random_obstacles(maze, n=4, speed=[1.0, 1.5, 1.0, 1.5], radius=0.25, seed=3, loop=loop)
     b = random_obstacles(maze, n=4, speed=[1.0, 1.5, 1.0, 1.5], radius=0.25, seed=3, loop=loop)
     c = random_obstacles(maze, n=4, speed=[1.0, 1.5, 1.0, 1.5], radius=0.25, seed=4, loop=loop)
-    for x, y in zip(a, b):
+    for x, y in zip(a, b, strict=True):
         np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
     assert not np.array_equal(np.asarray(a.waypoints), np.asarray(c.waypoints))
     assert a.count == 4 and bool(jnp.all(a.loop == loop))
@@ -433,7 +442,7 @@ def test_crossing_traffic_crosses_the_path_on_time(maze, jitter):
     speed = 1.2
     obs = crossing_traffic(maze, path, n=3, speed=speed, radius=0.25, seed=2, jitter=jitter)
     again = crossing_traffic(maze, path, n=3, speed=speed, radius=0.25, seed=2, jitter=jitter)
-    for x, y in zip(obs, again):
+    for x, y in zip(obs, again, strict=True):
         np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
     assert obs.count == 3 and not bool(jnp.any(obs.loop))
     assert_collision_free(maze, obs)
@@ -478,7 +487,7 @@ def test_head_on_starts_at_the_goal_and_heads_for_the_start(maze):
     pos = np.asarray(traj(obs, times))[:, 0]
     np.testing.assert_allclose(pos[0], path[-1], atol=1e-5)
     np.testing.assert_allclose(pos[-1], path[0], atol=1e-4)
-    for t, p in zip(times, pos):  # along the path, from the goal end, at the given speed
+    for t, p in zip(times, pos, strict=True):  # along the path, from the goal end, at the given speed
         np.testing.assert_allclose(p, ref_position(path[::-1], False, t), atol=1e-4)
     v = np.asarray(state(obs, 0.1)[1][0])
     np.testing.assert_allclose(v, (path[-2] - path[-1]) / np.linalg.norm(path[-2] - path[-1]), atol=1e-5)

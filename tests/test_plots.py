@@ -86,7 +86,7 @@ def test_map_layer_shows_free_cells_only(grid, layer, label):
 def test_clearance_layer_shows_only_the_tunnels(grid):
     data = _image(plot_map(_ax(), grid, layer="clearance_height"), "clearance height (m)").get_array()
     ys, xs = np.nonzero(~np.ma.getmaskarray(data))
-    assert sorted(zip(xs.tolist(), ys.tolist())) == [(1, 1), (2, 1), (3, 1), (6, 3)]
+    assert sorted(zip(xs.tolist(), ys.tolist(), strict=True)) == [(1, 1), (2, 1), (3, 1), (6, 3)]
 
 
 def test_risk_scale_starts_at_zero_and_an_empty_layer_gets_no_colorbar(grid):
@@ -109,7 +109,7 @@ def test_map_rejects_unknown_layer(grid):
 def test_turn_rule_markers_at_free_rule_cells(grid):
     ax = plot_map(_ax(), grid, show_turn_rule=True)
     (line,) = [ln for ln in ax.lines if ln.get_label() == "right-turn rule"]
-    got = sorted(zip(line.get_xdata().tolist(), line.get_ydata().tolist()))
+    got = sorted(zip(line.get_xdata().tolist(), line.get_ydata().tolist(), strict=True))
     assert got == sorted([((0 + 0.5) * RES, (0 + 0.5) * RES), ((2 + 0.5) * RES, (7 + 0.5) * RES)])
     assert not plot_map(_ax(), grid).lines  # off by default
 
@@ -299,7 +299,7 @@ def test_planner_returns_its_final_pheromone_on_request():
     nb = jp.neighbour_table(g, 8)
     never = 0.7**4
     offs = nb.offsets.tolist()
-    for a, b in zip(r.path[:-1], r.path[1:]):
+    for a, b in zip(r.path[:-1], r.path[1:], strict=True):
         k = offs.index((b - a).tolist())
         assert tau[0, a[1] * 8 + a[0], k] > never * 1.001
     assert np.isclose(tau[0][nb.valid], never, rtol=1e-5).any()

@@ -162,7 +162,7 @@ def test_paths_are_collision_free_and_consistent(random32, planner, robot_radius
 @pytest.mark.parametrize("planner", SAMPLERS)
 def test_room_map_with_pocket(room, planner):
     grid, starts, goals = room
-    for s, g in zip(starts, goals):
+    for s, g in zip(starts, goals, strict=True):
         r = jp.plan(grid, s, g, planner=planner, seed=0, iterations=1500)
         _assert_rrt_result(grid, r, s, g)
 
@@ -231,7 +231,7 @@ def test_random_maps_give_valid_paths_or_reasons(seed, density, planner):
         assert "budget" in r.info["reason"]
         return
     pts = r.info["points"]
-    assert all(S.segment_clear(grid, a, b) for a, b in zip(pts[:-1], pts[1:]))
+    assert all(S.segment_clear(grid, a, b) for a, b in zip(pts[:-1], pts[1:], strict=True))
     _assert_grid_path(grid, r.path, start, goal)
     assert r.length >= any_angle_optimum(grid, start, goal) - 1e-9
 
@@ -399,7 +399,7 @@ def test_segment_test_agrees_with_the_jax_test(random32):
     q = p + rng.normal(0, 3, (120, 2))
     zigzag = np.stack([p, q], axis=1).reshape(-1, 2)  # segments p0-q0, q0-p1, p1-q1, ...: test the even ones
     for radius_m in (0.0, 0.1):
-        ours = np.array([S.segment_clear(random32, a, b, radius_m) for a, b in zip(p, q)])
+        ours = np.array([S.segment_clear(random32, a, b, radius_m) for a, b in zip(p, q, strict=True)])
         theirs = _segments_free(random32, zigzag, radius_m / random32.resolution)[0::2]
         np.testing.assert_array_equal(ours, theirs)
         assert 10 < ours.sum() < len(ours) - 10
@@ -442,7 +442,7 @@ def _assert_kng(grid: jp.GridMap, r: jp.PlanResult, start, goal, threshold: floa
 
 def test_kng_keeps_turning_vertices_and_line_of_sight(room):
     grid, starts, goals = room
-    for s, g in zip(starts, goals):
+    for s, g in zip(starts, goals, strict=True):
         r = jp.plan(grid, s, g, planner="astar_kng")
         _assert_kng(grid, r, s, g)
         np.testing.assert_array_equal(r.info["grid_path"], jp.astar(grid, s, g).path)
@@ -454,7 +454,7 @@ def test_kng_keeps_turning_vertices_and_line_of_sight(room):
 def test_kng_matches_the_jax_key_node_smoother(room):
     """The numba key-node pass equals `jp.smooth(..., "key_nodes")` (about 10 s: JAX compiles)."""
     grid, starts, goals = room
-    for s, g in zip(starts, goals):
+    for s, g in zip(starts, goals, strict=True):
         r = astar_kng(grid, s, g)
         ref = jp.smooth(r.info["grid_path"], grid, "key_nodes", threshold=20.0)
         np.testing.assert_array_equal(r.path, ref.points)
@@ -530,7 +530,7 @@ def test_float64_accepted_segments_pass_float32_segment_free_on_wide_maps():
     off = np.concatenate([rng.uniform(1.2e-5, 4e-5, N // 2), rng.uniform(3e-4, 6e-4, N - N // 2)])
     c = np.array([499.5, 19.5]) + off[:, None] * away
     p, q = c - d * rng.uniform(2, 8, N)[:, None], c + d * rng.uniform(2, 8, N)[:, None]
-    accepted = np.array([S.segment_clear(grid, a, b) for a, b in zip(p, q)])
+    accepted = np.array([S.segment_clear(grid, a, b) for a, b in zip(p, q, strict=True)])
     ok32 = np.asarray(check(p.astype(np.float32), q.astype(np.float32)))
     assert accepted.sum() > N // 4  # the margin is not so wide that it rejects everything
     assert not np.any(accepted & ~ok32), np.flatnonzero(accepted & ~ok32)[:5]

@@ -5,14 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from conftest import scenario_pairs
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from scipy.sparse.csgraph import dijkstra as scipy_dijkstra
 
 import jaxplan as jp
-
-from conftest import scenario_pairs
 
 
 def _check_scenarios(m, sc):
@@ -41,7 +40,7 @@ def _assert_valid_path(g: jp.GridMap, res: jp.PlanResult, start, goal, k: int) -
     table = jp.neighbour_table(g, k)
     moves = {tuple(o): j for j, o in enumerate(table.offsets)}
     W = g.width
-    for a, b in zip(p[:-1], p[1:]):
+    for a, b in zip(p[:-1], p[1:], strict=True):
         d = tuple((b - a).tolist())
         assert d in moves, f"step {d} is not a {k}-connected move"
         assert table.valid[a[1] * W + a[0], moves[d]], f"step {tuple(a)}->{tuple(b)} cuts a corner"
@@ -175,7 +174,7 @@ def test_shortest_lengths_groups_shared_ends(movingai):
     starts = np.concatenate([np.repeat(hub[None], 20, 0), others[20:]])
     goals = np.concatenate([others[:20], np.repeat(hub[None], 20, 0)])
     got = jp.shortest_lengths(g, starts, goals)
-    single = [jp.astar(g, s, t).length for s, t in zip(starts, goals)]
+    single = [jp.astar(g, s, t).length for s, t in zip(starts, goals, strict=True)]
     np.testing.assert_allclose(got, single, rtol=1e-12)
 
 

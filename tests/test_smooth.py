@@ -40,7 +40,7 @@ def assert_clear(grid, pts: np.ndarray, radius_cells: float = 0.0) -> None:
     """No segment touches a blocked square; with a radius, dense samples keep that distance."""
     sq = _blocked_squares(grid)
     pts = np.asarray(pts, np.float64)
-    for p, q in zip(pts[:-1], pts[1:]):
+    for p, q in zip(pts[:-1], pts[1:], strict=True):
         near = sq[np.max(np.abs(sq - (p + q) / 2), axis=1) <= np.hypot(*(q - p)) / 2 + 1.0 + radius_cells]
         for c in near:
             assert not _segment_meets_square(p, q, c), f"segment {p}->{q} meets blocked cell {c}"

@@ -10,9 +10,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from conftest import manifest
 from scipy import stats
 
-from conftest import manifest
 from jaxplan.aco._tsp import TourResult, _construct, solve_tsp, tsp_defaults, two_opt
 from jaxplan.aco._tsplib import load_tour, load_tsplib, tour_length
 
@@ -264,7 +264,7 @@ def test_two_opt_reaches_a_local_optimum(eil51):
     rng = np.random.default_rng(1)
     tours = np.stack([rng.permutation(51) for _ in range(6)]).astype(np.int32)
     out = np.asarray(jax.jit(lambda t: two_opt(dist, t, 400))(jnp.asarray(tours)))
-    for before, after in zip(tours, out):
+    for before, after in zip(tours, out, strict=True):
         assert sorted(after.tolist()) == list(range(51))
         assert tour_length(eil51, after) < tour_length(eil51, before)
         # No 2-opt move shortens the result.

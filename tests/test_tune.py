@@ -13,8 +13,21 @@ import pytest
 import jaxplan as jp
 from jaxplan.experiments.config import ConfigError, parse_config
 from jaxplan.tune import (
-    STRATEGIES, Split, adaptive_weight, aco_objective, dwa_objective, function_objective, levy, make_bounds,
-    make_strategy, parse_tune_config, relaxed_dwa_loss, run_tuning, sanitize, score_function_grad, tune_loop,
+    STRATEGIES,
+    Split,
+    aco_objective,
+    adaptive_weight,
+    dwa_objective,
+    function_objective,
+    levy,
+    make_bounds,
+    make_strategy,
+    parse_tune_config,
+    relaxed_dwa_loss,
+    run_tuning,
+    sanitize,
+    score_function_grad,
+    tune_loop,
 )
 
 C = jnp.array([1.0, -2.0, 0.5])
@@ -265,7 +278,7 @@ def test_killed_and_resumed_run_follows_the_uninterrupted_trajectory(name, box, 
     assert resumed["resumed_from"] == 4
     assert resumed["rows"] == full["rows"]
     np.testing.assert_array_equal(resumed["best_x"], full["best_x"])
-    for a, b in zip(jax.tree_util.tree_leaves(resumed["state"]), jax.tree_util.tree_leaves(full["state"])):
+    for a, b in zip(jax.tree_util.tree_leaves(resumed["state"]), jax.tree_util.tree_leaves(full["state"]), strict=True):
         a, b = jnp.asarray(a), jnp.asarray(b)
         if jnp.issubdtype(a.dtype, jax.dtypes.prng_key):
             a, b = jax.random.key_data(a), jax.random.key_data(b)

@@ -11,9 +11,8 @@ import pytest
 from numba import njit
 
 import jaxplan as jp
-from jaxplan.aco import COLONIES, hash_uniform
+from jaxplan.aco import COLONIES, _walk_ffi, hash_uniform
 from jaxplan.aco import _rules as R
-from jaxplan.aco import _walk_ffi
 from jaxplan.aco import _walk_numba as WN
 from jaxplan.aco import _walk_numba_intrinsics as WI
 from jaxplan.aco._colony import RunConfig, run_batch
@@ -113,7 +112,8 @@ def _walk_inputs(grid, B: int, S: int, m: int, seed: int):
     )
 
 
-@pytest.mark.parametrize("dead_end, penalise", [("die", False), ("retreat", False), ("retreat", True), ("alert", False)])
+@pytest.mark.parametrize("dead_end, penalise",
+                         [("die", False), ("retreat", False), ("retreat", True), ("alert", False)])
 @pytest.mark.parametrize("ants", [24, 200])  # 2 runs x 2 colonies x ants: 200 gives 800 ants, compacted in JAX
 def test_walk_equals_jax_walk_field_by_field(dead_end, penalise, ants):
     scene = jp.RandomMapGenerator(20, 18, 0.25)(3)
@@ -152,13 +152,13 @@ def test_walk_with_opt_ant_hook_equals_jax_walk(dead_end):
     ]), jnp.float32)  # inf where unreachable
     tau = jnp.asarray(rng.uniform(10, 40, (B, S, C, K)), jnp.float32)
     logits = jnp.where(tables.valid, params["alpha"] * jnp.log(tau), -jnp.inf)
-    A = B * S * m
     run_of = np.repeat(np.arange(B), S * m)
     starts = rng.choice(free, B)
     args = (jnp.where(tables.valid, tables.index, -1), logits.reshape(B * S * C, K),
             jnp.asarray(starts[run_of], jnp.int32), jnp.asarray(goals[run_of], jnp.int32),
             jnp.asarray(run_of * S * C, jnp.int32), jnp.asarray(run_of * C, jnp.int32),
-            jnp.asarray(rng.integers(0, 2**32, B, dtype=np.uint32)[run_of]), jnp.asarray(np.tile(np.arange(m), B), jnp.int32),
+            jnp.asarray(rng.integers(0, 2**32, B, dtype=np.uint32)[run_of]),
+            jnp.asarray(np.tile(np.arange(m), B), jnp.int32),
             jnp.asarray(rng.random(B * C) < 0.03) if dead_end == "alert" else None)
     kw = dict(max_steps=150, width=grid.width, lut=move_lut(tables.offsets), dead_end=dead_end)
     hook = functools.partial(R.hook_opt_ant, tables, params, h_cell.reshape(B * C))
@@ -170,7 +170,8 @@ def test_walk_with_opt_ant_hook_equals_jax_walk(dead_end):
 
 
 def _both(grid, starts, goals, planner, seeds, **kw):
-    return [jp.plan_batch(grid, starts, goals, planner=planner, seeds=seeds, walk_backend=b, **kw) for b in ("jax", "numba")]
+    return [jp.plan_batch(grid, starts, goals, planner=planner, seeds=seeds, walk_backend=b, **kw)
+            for b in ("jax", "numba")]
 
 
 @pytest.mark.parametrize("planner", PLANNERS)
@@ -269,7 +270,8 @@ def test_vmap_over_params_matches_per_element_runs(room):
         fn = jax.jit(jax.vmap(lambda b, c=c: run_batch(COLONIES["iaco"], c, tables, gt, {**params, "beta": b}, keys)))
         outs[backend] = fn(betas)
     for field in ("cells", "n", "cost", "history", "ant_steps", "loop_steps", "slots"):
-        np.testing.assert_array_equal(np.asarray(getattr(outs["numba"], field)), np.asarray(getattr(outs["jax"], field)))
+        np.testing.assert_array_equal(np.asarray(getattr(outs["numba"], field)),
+                                      np.asarray(getattr(outs["jax"], field)))
     c = RunConfig(**{**cfg.__dict__, "walk_backend": "numba"})
     single = jax.jit(lambda b: run_batch(COLONIES["iaco"], c, tables, gt, {**params, "beta": b}, keys))(betas[1])
     np.testing.assert_array_equal(np.asarray(single.cells), np.asarray(outs["numba"].cells[1]))
@@ -289,7 +291,7 @@ def test_jax_backends_compile_no_native_call_and_reach_the_same_paths(room):
     # The demo's setting: no numba at all. Statistics may differ in the last bits from the native
     # update (another summation order); on this map the runs take the same paths.
     from jaxplan.aco._context import goal_tables
-    from jaxplan.aco._planners import COLONIES, seed_keys, cached_map_tables, compiled, split_params
+    from jaxplan.aco._planners import COLONIES, cached_map_tables, compiled, seed_keys, split_params
     from jaxplan.registry import resolve
 
     grid, starts, goals = room
@@ -386,7 +388,8 @@ def test_update_backends_agree(room, planner):
     outs = {}
     for backend in ("jax", "numba"):
         c = RunConfig(**{**cfg.__dict__, "update_backend": backend, "keep_pheromone": True})
-        outs[backend] = jax.jit(lambda t, g, pr, k, c=c: run_batch(COLONIES[planner], c, t, g, pr, k))(tables, gt, params, keys)
+        program = jax.jit(lambda t, g, pr, k, c=c: run_batch(COLONIES[planner], c, t, g, pr, k))
+        outs[backend] = program(tables, gt, params, keys)
     a, b = outs["jax"], outs["numba"]
     exact = ("success", "successes", "ant_steps") + (("cells", "n") if planner != "praco" else ())
     for field in exact:

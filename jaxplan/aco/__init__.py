@@ -3,11 +3,26 @@
 from jaxplan.aco._colony import Colony, ColonyState, RunConfig, RunOutput, run, run_batch
 from jaxplan.aco._context import GoalTables, MapTables, goal_tables, map_tables
 from jaxplan.aco._planners import (
-    COLONIES, STATIC_PARAMS, UNIT_PARAMS, BatchResult, aco_defaults, cached_map_tables, plan_batch, seed_keys,
+    COLONIES,
+    STATIC_PARAMS,
+    UNIT_PARAMS,
+    BatchResult,
+    aco_defaults,
+    cached_map_tables,
+    plan_batch,
+    seed_keys,
     split_params,
 )
 from jaxplan.aco._tsp import (
-    TSP_PLANNERS, TSP_STATIC_PARAMS, TourResult, TSPConfig, TSPOutput, resolve_tsp, run_tsp, solve_tsp, tsp_defaults,
+    TSP_PLANNERS,
+    TSP_STATIC_PARAMS,
+    TourResult,
+    TSPConfig,
+    TSPOutput,
+    resolve_tsp,
+    run_tsp,
+    solve_tsp,
+    tsp_defaults,
     two_opt,
 )
 from jaxplan.aco._tsplib import METRICS, TSPProblem, load_tour, load_tsplib, tour_length, tsp_distances

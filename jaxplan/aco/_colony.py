@@ -15,11 +15,12 @@ import jax
 import jax.numpy as jnp
 
 from jaxplan.aco import _rules as R
-from jaxplan.aco._context import GoalTables, MapTables
 from jaxplan.aco import _walk_numba
+from jaxplan.aco._context import GoalTables, MapTables
 from jaxplan.aco._walk import DEAD_END_RULES, GOAL, Ants, move_lut, walk
-from jaxplan.metrics import converged_iteration, diversity as run_diversity
 from jaxplan.aco._walk_numba import WALK_BACKENDS, HookTables
+from jaxplan.metrics import converged_iteration
+from jaxplan.metrics import diversity as run_diversity
 
 __all__ = ["Colony", "RunConfig", "ColonyState", "RunOutput", "run", "run_batch", "HEURISTICS"]
 
@@ -321,7 +322,8 @@ def update_backend(cfg: RunConfig) -> str:
     return cfg.update_backend
 
 
-def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys: jax.Array) -> RunOutput:
+def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict,
+              keys: jax.Array) -> RunOutput:
     """Plays ``cfg.iterations`` iterations on every scenario of ``goals`` (leading axis N) with
     every key of ``keys [R]``. Outputs have leading axes ``[N, R]``.
 

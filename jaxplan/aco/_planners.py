@@ -123,7 +123,8 @@ def _validate(name: str):
         if p["connectivity"] not in (4, 8, 16):
             raise ValueError(f"planner {name!r}: connectivity must be one of (4, 8, 16), got {p['connectivity']!r}")
         if p.get("walk_backend", "auto") not in WALK_BACKENDS:
-            raise ValueError(f"planner {name!r}: walk_backend must be one of {WALK_BACKENDS}, got {p['walk_backend']!r}")
+            raise ValueError(f"planner {name!r}: walk_backend must be one of {WALK_BACKENDS}, "
+                             f"got {p['walk_backend']!r}")
         if p.get("update_backend", "auto") not in WALK_BACKENDS:
             raise ValueError(
                 f"planner {name!r}: update_backend must be one of {WALK_BACKENDS}, got {p['update_backend']!r}")
@@ -400,10 +401,10 @@ def plan_batch(
     R_ = len(seed_keys(seed_list))
     t0 = time.perf_counter()
     if planner in _SEEDLESS:  # deterministic: one plan per scenario serves every seed
-        once = [spec.fn(grid, a, b, 0, **p) for a, b in zip(s, g)]
+        once = [spec.fn(grid, a, b, 0, **p) for a, b in zip(s, g, strict=True)]
         results = [[r] * R_ for r in once]
     else:  # sampling planners (rrt_star, mrbs_rrt) depend on the seed
-        results = [[spec.fn(grid, a, b, seed, **p) for seed in seed_list] for a, b in zip(s, g)]
+        results = [[spec.fn(grid, a, b, seed, **p) for seed in seed_list] for a, b in zip(s, g, strict=True)]
     dt = time.perf_counter() - t0
     P = max((len(r.path) for row in results for r in row), default=1)
     paths = np.full((len(results), R_, max(P, 1), 2), -1, np.int64)

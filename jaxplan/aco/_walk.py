@@ -14,8 +14,8 @@ from typing import Callable, NamedTuple
 import jax
 import jax.numpy as jnp
 
-
-__all__ = ["Ants", "walk", "draw", "hash_uniform", "move_lut", "moves_between", "WALKING", "GOAL", "DEAD_END", "STEP_LIMIT", "DEAD_END_RULES"]
+__all__ = ["Ants", "walk", "draw", "hash_uniform", "move_lut", "moves_between", "WALKING", "GOAL", "DEAD_END",
+           "STEP_LIMIT", "DEAD_END_RULES"]
 
 WALKING, GOAL, DEAD_END, STEP_LIMIT = 0, 1, 2, 3
 # Compact the walking ants into a quarter-size loop once most have stopped (from this many ants).
@@ -106,7 +106,8 @@ def hash_uniform(seed: jnp.ndarray, t: jnp.ndarray, ant: jnp.ndarray) -> jnp.nda
 def move_lut(offsets: jnp.ndarray) -> jnp.ndarray:
     """``i32[25]``: index of the move (dx, dy) at ``(dy + 2) * 5 + dx + 2``, −1 if none."""
     k = offsets.shape[0]
-    return jnp.full((25,), -1, jnp.int32).at[(offsets[:, 1] + 2) * 5 + offsets[:, 0] + 2].set(jnp.arange(k, dtype=jnp.int32))
+    slots = (offsets[:, 1] + 2) * 5 + offsets[:, 0] + 2
+    return jnp.full((25,), -1, jnp.int32).at[slots].set(jnp.arange(k, dtype=jnp.int32))
 
 
 def moves_between(a: jnp.ndarray, b: jnp.ndarray, width: int, lut: jnp.ndarray) -> jnp.ndarray:
@@ -234,7 +235,8 @@ def walk(
                 pos_new = jnp.where(back, prev_cell, pos_new)
                 if hook is not None:
                     before = cells[ar_, jnp.maximum(n - 2, 0)]
-                    prev_new = jnp.where(back, jnp.where(n >= 2, moves_between(before, prev_cell, width, lut), -1), prev_new)
+                    undone = jnp.where(n >= 2, moves_between(before, prev_cell, width, lut), -1)
+                    prev_new = jnp.where(back, undone, prev_new)
                 n_new = jnp.where(back, n - 1, n_new)
                 dies = stuck & (n == 0)
             else:

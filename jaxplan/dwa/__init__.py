@@ -26,10 +26,18 @@ from jaxplan.dwa._clearance import (
 from jaxplan.dwa._config import CLEARANCE_MODES, EVALUATORS, SELECTIONS, DWAConfig, DWAParams, default_params
 from jaxplan.dwa._core import DWAInfo, dwa_control, dwa_control_batch, evaluate, trajectory
 from jaxplan.dwa._critics import Critics, critics
-from jaxplan.dwa._fuzzy import fuzzy_evaluate, input_memberships, rule_table
 from jaxplan.dwa._fastmath import abs_angle, rotor
+from jaxplan.dwa._fuzzy import fuzzy_evaluate, input_memberships, rule_table
 from jaxplan.dwa._robot import (
-    Ackermann, Disc, Rectangle, Robot, Unicycle, advance, curvature_limit, footprint_offsets, footprint_radius,
+    Ackermann,
+    Disc,
+    Rectangle,
+    Robot,
+    Unicycle,
+    advance,
+    curvature_limit,
+    footprint_offsets,
+    footprint_radius,
 )
 from jaxplan.dwa._rollout import Rollouts, rollout
 from jaxplan.dwa._step import as_obstacles, dwa_step, table_of, validate_config, validate_params

@@ -44,7 +44,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
-from jaxplan.grid import PAD as CMAP_PAD, CollisionMap, point_clearance
+from jaxplan.grid import PAD as CMAP_PAD
+from jaxplan.grid import CollisionMap, point_clearance
 
 __all__ = [
     "ClearanceTable", "clearance_table", "static_clearance", "DiscObstacles", "no_obstacles", "disc_clearance",
@@ -220,7 +221,8 @@ def no_obstacles() -> DiscObstacles:
 def disc_clearance(obstacles: DiscObstacles, x: jnp.ndarray, y: jnp.ndarray, t, dt: float | None = None) -> jnp.ndarray:
     """Distance (m) from points ``x, y [...]`` to the nearest disc edge at time ``t`` (s); +inf if M = 0.
 
-    ``t`` is a scalar, or one time per point (an array of the points' shape). Negative inside a disc. ``dt`` (s) is the spacing of ``obstacles.track``'s samples, needed
+    ``t`` is a scalar, or one time per point (an array of the points' shape). Negative inside a disc.
+    ``dt`` (s) is the spacing of ``obstacles.track``'s samples, needed
     only when a track is given.
     """
     M = obstacles.radii.shape[-1]

@@ -17,12 +17,20 @@ import jax
 import numpy as np
 from numpy.typing import ArrayLike
 
+from jaxplan.core.cache import lru_cache, memoize
 from jaxplan.dwa._clearance import ClearanceTable, DiscObstacles, clearance_table
-from jaxplan.dwa._config import CLEARANCE_MODES, EVALUATORS, RECOVERIES, SELECTIONS, DWAConfig, DWAParams, default_params
+from jaxplan.dwa._config import (
+    CLEARANCE_MODES,
+    EVALUATORS,
+    RECOVERIES,
+    SELECTIONS,
+    DWAConfig,
+    DWAParams,
+    default_params,
+)
 from jaxplan.dwa._core import DWAInfo, dwa_control, dwa_control_batch
 from jaxplan.dwa._fastmath import MAX_ROTOR_ANGLE
 from jaxplan.dwa._robot import Ackermann, Disc, Rectangle, Unicycle, footprint_radius
-from jaxplan.core.cache import lru_cache, memoize
 from jaxplan.grid import GridMap, collision_map
 
 __all__ = ["dwa_step", "table_of", "validate_config", "validate_params", "as_obstacles"]
@@ -123,8 +131,8 @@ def _check_config(config: DWAConfig) -> None:
     for f in config.straighten:
         f = _number("config.straighten fraction", f)
         if not 1 <= round(f * steps) <= steps - 1:
-            raise ValueError(f"config.straighten fraction {f} turns for {round(f * steps)} of the {steps} rollout points: "
-                             "it must leave at least one point on each part")
+            raise ValueError(f"config.straighten fraction {f} turns for {round(f * steps)} of the {steps} rollout "
+                             "points: it must leave at least one point on each part")
     if float(r.omega_max) * dt > 2 * MAX_ROTOR_ANGLE:
         raise ValueError(f"{name}.omega_max · config.dt = {float(r.omega_max) * dt:.3g} rad: a sample may turn at most "
                          f"π rad per rollout step (shorten dt)")
@@ -309,7 +317,10 @@ def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any
     else:
         # Pad the batch to whole chunks: one compilation per bucket, no remainder trace.
         Bp = B if B <= CHUNK else -(-B // CHUNK) * CHUNK
-        pad = lambda a: np.concatenate([a, np.repeat(a[-1:], Bp - B, axis=0)]) if Bp > B else a
+
+        def pad(a):
+            return np.concatenate([a, np.repeat(a[-1:], Bp - B, axis=0)]) if Bp > B else a
+
         if obs is not None and obs.radii.ndim == 2:
             obs = DiscObstacles(*(None if a is None else pad(a) for a in obs))
         if pa is not None and pa.ndim == 3:

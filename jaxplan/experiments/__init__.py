@@ -13,10 +13,23 @@
 """
 
 from jaxplan.experiments.config import (
-    METRICS, ConfigError, ExperimentConfig, apply_quick, load_config, parse_config,
+    METRICS,
+    ConfigError,
+    ExperimentConfig,
+    apply_quick,
+    load_config,
+    parse_config,
 )
 from jaxplan.experiments.prepare import (
-    ID_COLUMNS, MapWork, Prepared, Unit, load_map_spec, prepare, random_pairs, spec_scenarios, trial_columns,
+    ID_COLUMNS,
+    MapWork,
+    Prepared,
+    Unit,
+    load_map_spec,
+    prepare,
+    random_pairs,
+    spec_scenarios,
+    trial_columns,
 )
 from jaxplan.experiments.progress import clock
 from jaxplan.experiments.runner import run_experiment

@@ -30,14 +30,24 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Callable, Mapping, Sequence
 
+import tomllib
+
 from jaxplan.experiments.schema import (
-    ConfigError, Reader, Setting, declaration, describe, did_you_mean, frozen, join, setting, setting_of,
+    ConfigError,
+    Reader,
+    Setting,
+    declaration,
+    describe,
+    did_you_mean,
+    frozen,
+    join,
+    setting,
+    setting_of,
     settings,
 )
 
@@ -802,7 +812,8 @@ def _read_planners(r: Reader, raw: dict) -> tuple[PlannerConfig, ...]:
 
 def _check_tsp(r: Reader, p: str, name: str, overrides: dict) -> None:
     """A tsp planner: its name, then unknown override names one by one, then `solve_tsp`'s own value checks."""
-    from jaxplan.aco import TSP_PLANNERS, resolve_tsp as tsp_resolve, tsp_defaults
+    from jaxplan.aco import TSP_PLANNERS, tsp_defaults
+    from jaxplan.aco import resolve_tsp as tsp_resolve
 
     if name not in TSP_PLANNERS:
         r.bad(join(p, "name"), f"unknown TSP planner {name!r} (known: {', '.join(TSP_PLANNERS)})"

@@ -13,8 +13,8 @@ compile a second planner program), a 10 x 20 velocity window without unrolling (
 compile), colonies of 20 ants x 20 iterations walked and updated in JAX
 (``walk_backend="jax", update_backend="jax"``: the numba walk is the faster engine for
 large colonies, but its one-time compilation per install would be most of a first demo
-whose colonies take milliseconds either way; the results are the same). `jaxplan demo` also keeps JAX's persistent compilation
-cache (``~/.cache/jaxplan/jax``), so later runs skip most of it. ``quick=True`` (tests) uses
+whose colonies take milliseconds either way; the results are the same). `jaxplan demo` also keeps JAX's persistent
+compilation cache (``~/.cache/jaxplan/jax``), so later runs skip most of it. ``quick=True`` (tests) uses
 a generated 14x10 warehouse, a 5 x 9 window, small colonies and a 30 s limit.
 
 Min clearance is the smallest gap (m) over the executed steps between the robot's disc
@@ -162,7 +162,7 @@ def _animation(result: DemoResult, grid, path: Path, frames: int) -> list[str]:
     for d in discs:
         ax.add_patch(d)
     trails, robots = [], []
-    for k, (name, ep) in enumerate(eps):
+    for k, (name, _ep) in enumerate(eps):
         (tr,) = ax.plot([], [], color=f"C{k}", lw=1.6, label=name)
         (rb,) = ax.plot([], [], "o", color=f"C{k}", ms=7, mec="k")
         trails.append(tr)
@@ -172,7 +172,7 @@ def _animation(result: DemoResult, grid, path: Path, frames: int) -> list[str]:
     period = float(eps[0][1].times[1] - eps[0][1].times[0]) if len(eps[0][1].times) > 1 else 0.2
 
     def draw(t):
-        for (name, ep), tr, rb in zip(eps, trails, robots):
+        for (_name, ep), tr, rb in zip(eps, trails, robots, strict=True):
             s = min(t, len(ep.trajectory) - 1)
             tr.set_data(ep.trajectory[:s + 1, 0], ep.trajectory[:s + 1, 1])
             rb.set_data([ep.trajectory[s, 0]], [ep.trajectory[s, 1]])

@@ -26,8 +26,16 @@ from jaxplan.core.cache import Built, memoize
 from jaxplan.experiments.config import PlannerConfig, nav_config
 from jaxplan.experiments.prepare import ID_COLUMNS, MapWork, Prepared, Unit, trial_columns
 from jaxplan.experiments.trial_metrics import (
-    INT_METRICS, LOS_KEYS, PATH_KEYS, accuracy, executed_optimum, grid_path_lengths, hausdorff, los_metrics,
-    optimality_gaps, reductions,
+    INT_METRICS,
+    LOS_KEYS,
+    PATH_KEYS,
+    accuracy,
+    executed_optimum,
+    grid_path_lengths,
+    hausdorff,
+    los_metrics,
+    optimality_gaps,
+    reductions,
 )
 
 __all__ = ["run_unit", "chunk_rows", "obstacle_fn", "NAV_KEYS"]

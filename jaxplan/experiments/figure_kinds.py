@@ -16,8 +16,19 @@ import numpy as np
 from jaxplan.experiments import plots
 from jaxplan.experiments.config import METRICS, ExperimentConfig, FigureSpec, applies, nav_config
 from jaxplan.experiments.run_data import (
-    RunData, cell_path_m, disc_positions, figure_metric, figure_title, map_layer, metric_label, need_trials,
-    panel_grid, scenario_of, scenario_seed, selected, trial_obstacles,
+    RunData,
+    cell_path_m,
+    disc_positions,
+    figure_metric,
+    figure_title,
+    map_layer,
+    metric_label,
+    need_trials,
+    panel_grid,
+    scenario_of,
+    scenario_seed,
+    selected,
+    trial_obstacles,
 )
 
 __all__ = ["DRAW"]
@@ -33,7 +44,7 @@ def _curves(run: RunData, spec: FigureSpec, key: str, ylabel: str, what: str):
     sc = scenario_of(run, spec, mi)
     band = spec.params.get("band", "iqr") or None
     fig, axes = panel_grid(len(mi))
-    for ax, m in zip(axes[0], mi):
+    for ax, m in zip(axes[0], mi, strict=True):
         curves = {}
         for p in pi:
             got = run.arrays(m, p, sc)
@@ -66,7 +77,7 @@ def _box(run, spec):
     metric = figure_metric(run, spec)
     mi, pi = selected(run, spec)
     fig, axes = panel_grid(len(mi), w=max(4.0, 1.1 * len(pi) + 1.5))
-    for ax, m in zip(axes[0], mi):
+    for ax, m in zip(axes[0], mi, strict=True):
         name = run.prep.maps[m].spec.name
         data, labels = [], []
         for p in pi:
@@ -101,7 +112,7 @@ def _bar(run, spec):
     cfg = run.config
     fig, axes = panel_grid(len(mi), w=max(4.0, 1.2 * len(pi) + 1.5))
     any_paper = False
-    for ax, m in zip(axes[0], mi):
+    for ax, m in zip(axes[0], mi, strict=True):
         name = run.prep.maps[m].spec.name
         here = [p for p in pi if applies(cfg.planners[p], run.prep.maps[m].spec)]
         xs, labels = np.arange(len(here)), []
@@ -187,7 +198,7 @@ def _paths(run, spec):
     sc, seed, r = scenario_seed(run, spec, mi)
     smoother = spec.params.get("smoothing")
     fig, axes = panel_grid(len(mi), w=6.0, h=4.8)
-    for ax, m in zip(axes[0], mi):
+    for ax, m in zip(axes[0], mi, strict=True):
         mw = run.prep.maps[m]
         res = float(mw.grid.resolution)
         paths, labels, smoothed, smoothed_labels = [], [], [], []
@@ -234,7 +245,7 @@ def _pheromone(run, spec):
     if not todo:
         raise ValueError(f"figure {spec.name!r}: no ant colony planner selected")
     fig, axes = panel_grid(len(todo), w=5.5, h=4.4)
-    for ax, (m, p) in zip(axes[0], todo):
+    for ax, (m, p) in zip(axes[0], todo, strict=True):
         mw, pc = run.prep.maps[m], run.config.planners[p]
         overrides = {k: tuple(v) if isinstance(v, list) else v for k, v in pc.overrides.items()}
         res = plan(mw.grid, mw.starts[sc], mw.goals[sc], planner=pc.name, seed=seed, keep_pheromone=True,
@@ -335,7 +346,7 @@ def _fan(run, spec):
     sc, seed, r = scenario_seed(run, spec, mi)
     panels = [(m, p) for m in mi for p in pi]
     fig, axes = panel_grid(len(panels), w=6.0, h=4.8)
-    for ax, (m, p) in zip(axes[0], panels):
+    for ax, (m, p) in zip(axes[0], panels, strict=True):
         mw, pc = run.prep.maps[m], run.config.planners[p]
         navcfg, weights = nav_config(pc)
         dwa = navcfg.dwa
@@ -365,7 +376,7 @@ def _fan(run, spec):
                 from jaxplan.nav import discs_at
 
                 discs = discs_at(obs, s * dwa.period)
-                for c, rad in zip(np.asarray(discs.positions), np.asarray(discs.radii)):
+                for c, rad in zip(np.asarray(discs.positions), np.asarray(discs.radii), strict=True):
                     ax.add_patch(plt.Circle(tuple(c), float(rad), color="tab:red", alpha=0.5))
             _, info = dwa_step(state, subgoal, mw.grid, obstacles=discs, params=weights or None, config=dwa,
                                path=plan if len(plan) > 1 else None)
@@ -396,7 +407,7 @@ def _tours(run, spec):
     mi, pi = selected(run, spec, "tsp")
     _, seed, r = scenario_seed(run, spec)
     fig, axes = panel_grid(len(mi), w=5.5, h=4.8)
-    for ax, m in zip(axes[0], mi):
+    for ax, m in zip(axes[0], mi, strict=True):
         mw = run.prep.maps[m]
         if mw.problem.coords is None:
             raise ValueError(f"figure {spec.name!r}: instance {mw.spec.name!r} has no city coordinates")

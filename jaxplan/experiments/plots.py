@@ -180,10 +180,10 @@ def _as_path_list(paths: ArrayLike | Sequence[ArrayLike], lengths: ArrayLike | N
             raise ValueError(f"lengths must have one entry per path ({len(out)}), got shape {n.shape}")
         if not np.issubdtype(n.dtype, np.integer):
             raise ValueError(f"lengths must be integers (points per path), got dtype {n.dtype}")
-        for i, (q, k) in enumerate(zip(out, n)):
+        for i, (q, k) in enumerate(zip(out, n, strict=True)):
             if not 0 <= k <= len(q):
                 raise ValueError(f"lengths[{i}] = {int(k)} is outside [0, {len(q)}] (the points available)")
-        out = [q[: int(k)] for q, k in zip(out, n)]
+        out = [q[: int(k)] for q, k in zip(out, n, strict=True)]
     for i, q in enumerate(out):
         if np.issubdtype(q.dtype, np.integer) and (q < 0).any():
             # Integer cells are never negative: this is padding (BatchResult.paths pads with -1).
@@ -480,7 +480,7 @@ def plot_convergence(
     if band is not None and band not in BANDS:
         raise ValueError(f"band must be one of {BANDS} or None, got {band!r}")
     arrays, names = _histories(history, labels)
-    for h, name in zip(arrays, names):
+    for h, name in zip(arrays, names, strict=True):
         centre, low, high, _ = convergence_bands(h, band or "iqr")
         I = len(centre)
         xs = np.arange(1, I + 1) if x is None else np.asarray(x, dtype=np.float64)

@@ -97,8 +97,8 @@ def sha256(*chunks: bytes) -> str:
 
 def load_map_spec(spec: MapSpec):
     """(grid, default start, default goal, digest) of a map entry."""
-    from jaxplan.grid import load_map
     from jaxplan.experiments.config import _generators
+    from jaxplan.grid import load_map
 
     if spec.path is not None:
         grid = load_map(spec.path, resolution=spec.resolution)

@@ -253,7 +253,7 @@ def analyse(trials_path: str | os.PathLike, timings_path: str | os.PathLike | No
                         else:
                             pairs.append([a, b, math.nan, math.nan, x.size, y.size])
                     adj = holm([q[3] for q in pairs]) if st.correction == "holm" else [q[3] for q in pairs]
-                    for q, pa in zip(pairs, adj):
+                    for q, pa in zip(pairs, adj, strict=True):
                         tests.append(TestRow(mp.name, metric, "welch_t", q[0], q[1], q[2], q[3], float(pa), q[4], q[5]))
     return Analysis(tuple(summary), tuple(tests), per_seed, seeds, infeasible)
 
@@ -267,8 +267,9 @@ def _cell(v) -> str:
 
 
 def _write_csv(path: str | os.PathLike, columns: Sequence[str], rows: list[list]) -> None:
-    from jaxplan.core.io import atomic_write
     import io
+
+    from jaxplan.core.io import atomic_write
 
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")

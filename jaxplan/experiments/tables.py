@@ -22,7 +22,8 @@ def text_table(columns: Sequence[tuple[str, list[str]]], labels: Sequence[str], 
     line = "+" + "+".join("-" * (w + 2) for w in widths) + "+"
 
     def fmt(r):
-        return "| " + " | ".join(c.ljust(w) if j == 0 else c.rjust(w) for j, (c, w) in enumerate(zip(r, widths))) + " |"
+        cells = (c.ljust(w) if j == 0 else c.rjust(w) for j, (c, w) in enumerate(zip(r, widths, strict=True)))
+        return "| " + " | ".join(cells) + " |"
 
     return "\n".join([title, line, fmt(heads), line] + [fmt(r) for r in rows] + [line])
 

@@ -311,7 +311,8 @@ class UrbanGenerator:
                     if rng.random() < self.park_prob:
                         free[by : by + 4, bx : bx + 4] = True
                         yy, xx = np.mgrid[0:4, 0:4]
-                        height[by : by + 4, bx : bx + 4] = self.hill_height * np.exp(-((yy - 1.5) ** 2 + (xx - 1.5) ** 2) / 3.0)
+                        bump = np.exp(-((yy - 1.5) ** 2 + (xx - 1.5) ** 2) / 3.0)
+                        height[by : by + 4, bx : bx + 4] = self.hill_height * bump
             turn = (crossing & (rng.random((size, size)) < self.right_turn_prob)).astype(np.int8)
             plain = np.flatnonzero((street_cell & ~crossing).ravel())
             plain = plain[(plain != start[1] * size + start[0]) & (plain != goal[1] * size + goal[0])]
@@ -377,7 +378,8 @@ class MountainGenerator:
                 break
         else:  # pragma: no cover
             raise RuntimeError("could not draw a connected mountain map")
-        grid = grid_from_array(free, resolution=self.resolution, height=h.astype(np.float32), clearance_height=clearance)
+        grid = grid_from_array(free, resolution=self.resolution, height=h.astype(np.float32),
+                               clearance_height=clearance)
         return Scene(grid, np.array(start, np.int64), np.array(goal, np.int64), _cells(), "mountain 30x30")
 
 

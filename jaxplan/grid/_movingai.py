@@ -21,8 +21,8 @@ from __future__ import annotations
 
 import math
 import os
-from pathlib import Path
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 
@@ -197,7 +197,8 @@ def parse_scenarios(text: str, where: str = "<scen>", grid: GridMap | None = Non
         f = line.split("\t") if "\t" in line else line.split()
         f = [x.strip() for x in f]
         if len(f) != 9:
-            raise ValueError(f"{where}:{lineno}: expected 9 fields (bucket map width height sx sy gx gy optimal), got {len(f)}")
+            raise ValueError(f"{where}:{lineno}: expected 9 fields (bucket map width height sx sy gx gy optimal), "
+                             f"got {len(f)}")
         try:
             bucket, w, h, sx, sy, gx, gy = (int(f[i]) for i in (0, 2, 3, 4, 5, 6, 7))
             opt = float(f[8])

@@ -39,7 +39,8 @@ from jaxplan.core.geometry import point_segment_distance
 from jaxplan.dwa import abs_angle
 
 __all__ = [
-    "Context", "End", "Terms", "obstacle", "dynamic", "path_distance", "path_align", "path_follow", "goal", "goal_heading",
+    "Context", "End", "Terms", "obstacle", "dynamic", "path_distance", "path_align", "path_follow", "goal",
+    "goal_heading",
     "prefer_forward", "constraint", "zero_sums", "add_point", "add_control", "finish_terms", "cost",
 ]
 

@@ -25,7 +25,6 @@ safety; Bouraine et al. 2012; `jaxplan.dwa.braking_clearance`, shared with the D
 
 from __future__ import annotations
 
-import math
 from typing import Callable, NamedTuple
 
 import jax
@@ -33,7 +32,13 @@ import jax.numpy as jnp
 from jax import lax
 
 from jaxplan.dwa import (
-    Disc, Robot, braking_clearance, curvature_limit, footprint_offsets, footprint_radius, rotor,
+    Disc,
+    Robot,
+    braking_clearance,
+    curvature_limit,
+    footprint_offsets,
+    footprint_radius,
+    rotor,
 )
 from jaxplan.mppi import _critics as C
 

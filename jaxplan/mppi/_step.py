@@ -17,7 +17,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from jaxplan.core.cache import lru_cache
-from jaxplan.dwa import CLEARANCE_MODES, DWAConfig, as_obstacles, table_of, validate_config as validate_dwa_config
+from jaxplan.dwa import CLEARANCE_MODES, DWAConfig, as_obstacles, table_of
+from jaxplan.dwa import validate_config as validate_dwa_config
 from jaxplan.grid import GridMap
 from jaxplan.mppi._config import MPPIConfig, MPPIParams, default_params
 from jaxplan.mppi._core import MPPIInfo, initial_sequence, mppi_control, shift

@@ -17,8 +17,15 @@ from jaxplan.nav._config import NavConfig
 from jaxplan.nav._episode import run_episodes
 from jaxplan.nav._front import navigate, navigate_batch, navigate_multi, planning_grid
 from jaxplan.nav._moving import (
-    MovingObstacles, concat_obstacles, discs_at, moving_obstacles, no_obstacles, obstacle_state, pad_obstacles,
-    stack_obstacles, trajectories,
+    MovingObstacles,
+    concat_obstacles,
+    discs_at,
+    moving_obstacles,
+    no_obstacles,
+    obstacle_state,
+    pad_obstacles,
+    stack_obstacles,
+    trajectories,
 )
 from jaxplan.nav._pipelines import PIPELINES, Pipeline, get_pipeline, pipelines
 from jaxplan.nav._results import Episode, EpisodeBatch

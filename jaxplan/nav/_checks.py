@@ -15,7 +15,8 @@ from numpy.typing import ArrayLike
 from jaxplan.dwa import DWAParams, footprint_radius, validate_config, validate_params
 from jaxplan.grid import GridMap
 from jaxplan.mppi import MPPIParams
-from jaxplan.mppi import validate_config as validate_mppi_config, validate_params as validate_mppi_params
+from jaxplan.mppi import validate_config as validate_mppi_config
+from jaxplan.mppi import validate_params as validate_mppi_params
 from jaxplan.nav._config import LOCAL_PLANNERS, PREDICTIONS, SUBGOAL_MODES, NavConfig
 from jaxplan.nav._moving import MovingObstacles, no_obstacles
 from jaxplan.nav._pipelines import Pipeline, get_pipeline

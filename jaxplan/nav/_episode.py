@@ -42,16 +42,32 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
-from jaxplan.dwa import ClearanceTable, DWAParams, DiscObstacles, dwa_control, static_clearance
-from jaxplan.mppi import MPPIParams, initial_sequence, mppi_control, shift
-from jaxplan.dwa import Disc, advance, footprint_offsets, footprint_radius
+from jaxplan.dwa import (
+    ClearanceTable,
+    Disc,
+    DiscObstacles,
+    DWAParams,
+    advance,
+    dwa_control,
+    footprint_offsets,
+    footprint_radius,
+    static_clearance,
+)
 from jaxplan.metrics import point_polyline_distance
+from jaxplan.mppi import MPPIParams, initial_sequence, mppi_control, shift
 from jaxplan.nav._config import NavConfig
 from jaxplan.nav._moving import MovingObstacles, obstacle_state, route_target
-from jaxplan.nav._social import SocialForce, WalkerState, advance_walkers, initial_walkers
 from jaxplan.nav._replan import path_blocked, replan_slots
+from jaxplan.nav._social import SocialForce, WalkerState, advance_walkers, initial_walkers
 from jaxplan.nav._state import (
-    ACTIVE_SPEED, COLLISION, GOAL, RUNNING, TIMEOUT, Carry, EpisodeInputs, EpisodeOutput,
+    ACTIVE_SPEED,
+    COLLISION,
+    GOAL,
+    RUNNING,
+    TIMEOUT,
+    Carry,
+    EpisodeInputs,
+    EpisodeOutput,
 )
 from jaxplan.nav._tracking import corner_cap, follow, lookahead_point, rewatch, subgoal_index, threatened
 

@@ -38,10 +38,10 @@ from numpy.typing import ArrayLike
 
 from jaxplan.core.cache import Built, memoize
 from jaxplan.dwa import DWAParams, table_of
-from jaxplan.mppi import MPPIParams
 from jaxplan.grid import GridMap, clearance_field, shortest_lengths
 from jaxplan.metrics import EnergyModel, energy
-from jaxplan.nav._checks import check_obstacle_starts, checked_run, obstacle_sets, resolve_config
+from jaxplan.mppi import MPPIParams
+from jaxplan.nav._checks import check_obstacle_starts, checked_run, obstacle_sets
 from jaxplan.nav._config import NavConfig
 from jaxplan.nav._episode import run_episodes
 from jaxplan.nav._moving import MovingObstacles, obstacle_state, stack_obstacles

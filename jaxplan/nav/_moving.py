@@ -53,7 +53,8 @@ from numpy.typing import ArrayLike
 from jaxplan.dwa import DiscObstacles
 
 __all__ = [
-    "MovingObstacles", "obstacle_state", "route_target", "with_reactive", "discs_at", "trajectories", "route_lengths", "no_obstacles",
+    "MovingObstacles", "obstacle_state", "route_target", "with_reactive", "discs_at", "trajectories", "route_lengths",
+    "no_obstacles",
     "pad_obstacles", "concat_obstacles", "stack_obstacles", "moving_obstacles", "per_obstacle", "FAR",
     "FAR_SPACING",
 ]

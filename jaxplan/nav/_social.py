@@ -88,7 +88,7 @@ def initial_walkers(pos: jnp.ndarray, vel: jnp.ndarray, target: jnp.ndarray, for
 
 
 def _ellipse_b(r: jnp.ndarray, v_other: jnp.ndarray, dt_step: float) -> jnp.ndarray:
-    """The semi-minor axis ``b`` (m) of Helbing & Molnár's Eq. (4) for ``r`` (from the other to the walker, [..., 2])."""
+    """The semi-minor axis ``b`` (m) of Helbing & Molnár's Eq. (4); ``r [..., 2]`` from the other to the walker."""
     step = v_other * dt_step
     s = jnp.sqrt(jnp.sum(step * step, axis=-1) + 1e-12)
     a = jnp.sqrt(jnp.sum(r * r, axis=-1) + 1e-12)

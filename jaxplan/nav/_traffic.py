@@ -125,7 +125,7 @@ def _pruned_route(blocked: _Blocked, cells: np.ndarray, r_cells: float) -> np.nd
     if len(pts) > 1:
         kept.append(pts[-1])
     route = np.stack(kept)
-    ok = all(blocked.free_for(a, b, r_cells) for a, b in zip(route[:-1], route[1:]))
+    ok = all(blocked.free_for(a, b, r_cells) for a, b in zip(route[:-1], route[1:], strict=True))
     return route if ok else None
 
 
@@ -163,7 +163,7 @@ def _random_route(rng: np.random.Generator, pool: np.ndarray, labels: np.ndarray
         # Each leg is pruned on its own, so the random stops stay vertices: pruning a
         # whole loop would cut from the first cell straight back to itself.
         pieces, ok_route = [first[None].astype(np.float64)], True
-        for a, b in zip(stops[:-1], stops[1:]):
+        for a, b in zip(stops[:-1], stops[1:], strict=True):
             if np.array_equal(a, b):
                 continue
             leg = _pruned_route(blocked, np.asarray(astar(inflated, a, b).path, np.int64), r / res)

@@ -12,7 +12,11 @@ them; importing jaxplan changes no JAX setting (`jaxplan.scale._host_devices`).
 """
 
 from jaxplan.scale._host_devices import (
-    AUTO_MIN_PER_DEVICE, HOST_DEVICES_ENV, auto_mesh, host_devices_setting, use_host_devices,
+    AUTO_MIN_PER_DEVICE,
+    HOST_DEVICES_ENV,
+    auto_mesh,
+    host_devices_setting,
+    use_host_devices,
 )
 from jaxplan.scale._hosts import host_share, initialize, merge_shards, shard_path, write_shard
 from jaxplan.scale._memory import MemoryEstimate, MemoryLimitError, aco_memory, check_memory, dwa_memory, memory_limit

@@ -18,8 +18,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxplan.grid import CollisionMap, polyline_free, segment_free
-from jaxplan.smooth._result import Smoothed, compact, drop_repeats
 from jaxplan.metrics import count_sharp_turns_padded as sharp_turn_count
+from jaxplan.smooth._result import Smoothed, compact, drop_repeats
 
 __all__ = ["bspline"]
 
@@ -100,7 +100,8 @@ def bspline(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, spacing: fl
         a, b = out[:-1], out[1:]
         mg = margin[jnp.maximum(sp[:-1], sp[1:])]
         mg = jnp.maximum(mg, margin[jnp.minimum(sp[:-1], sp[1:])])
-        ok = jax.vmap(lambda p, q, g: segment_free(cmap, p, q, radius + g, radius + _REACH, chunk=2, step=0.5))(a, b, mg)
+        ok = jax.vmap(lambda p, q, g: segment_free(cmap, p, q, radius + g, radius + _REACH, chunk=2, step=0.5))(
+            a, b, mg)
         bad = ~ok & (jnp.arange(out.shape[0] - 1) < m - 1)
         # A bad chord pins the two middle control vertices of the spans at both of its ends.
         hit = jnp.zeros(L, bool)

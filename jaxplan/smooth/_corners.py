@@ -88,7 +88,8 @@ def _bezier(v, u1, u2, theta, t, K: int, kappa: float):
     return pts, dev, kmax
 
 
-def _corners(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, radius: float, K: int, size_of, curve) -> Smoothed:
+def _corners(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, radius: float, K: int, size_of,
+             curve) -> Smoothed:
     if K < 6:
         raise ValueError(f"corner samples must be >= 6 (so no smoothed corner is a sharp turn), got {K}")
     given, n_given = jnp.asarray(points, jnp.float32), n
@@ -157,7 +158,9 @@ def fillet(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, radius_max: 
       `Smoothed` with ``points [L·K, 2]``; ``removed`` counts the corners replaced by arcs,
       ``max_curvature`` is ``1/R_min`` in 1/m.
     """
-    size = lambda theta: radius_max * jnp.tan(theta / 2)
+    def size(theta):
+        return radius_max * jnp.tan(theta / 2)
+
     return _corners(cmap, points, n, radius, samples, size, lambda v, a, b, th, t: _arc(v, a, b, th, t, samples))
 
 
@@ -170,6 +173,8 @@ def bezier_corners(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, cut_
     the control points pass the corner and the curve loops beyond it). ``max_curvature`` is
     the maximum of the analytic curvature over 65 parameter values per curve, in 1/m.
     """
-    size = lambda theta: jnp.full_like(theta, cut_max)
+    def size(theta):
+        return jnp.full_like(theta, cut_max)
+
     return _corners(cmap, points, n, radius, samples, size,
                     lambda v, a, b, th, t: _bezier(v, a, b, th, t, samples, kappa))

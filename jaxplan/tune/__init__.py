@@ -20,25 +20,51 @@ Example::
     run_dir = run_tuning("configs/tune_iaco.toml", out="runs", quick=True)
 """
 
-from jaxplan.tune._bounds import Bounds, clip, from_unit, make_bounds, reflect, to_unit
 from jaxplan.tune._base import Strategy, sanitize
+from jaxplan.tune._bounds import Bounds, clip, from_unit, make_bounds, reflect, to_unit
+from jaxplan.tune._config import TuneConfig, TuneFile, apply_tune_quick, load_tune_config, parse_tune_config
 from jaxplan.tune._evosax import cma_es, snes
-from jaxplan.tune._search import grid_search, random_search
-from jaxplan.tune._strategies import (
-    STRATEGIES, STRATEGY_SPECS, StrategySpec, make_strategy, option_problems, strategy_options,
-)
 from jaxplan.tune._gradients import (
-    RelaxedResult, quadratic_features, reinforce, relaxed_dwa, relaxed_dwa_loss, score_function_grad, surrogate,
+    RelaxedResult,
+    quadratic_features,
+    reinforce,
+    relaxed_dwa,
+    relaxed_dwa_loss,
+    score_function_grad,
+    surrogate,
 )
 from jaxplan.tune._objective import (
-    ACO_METRICS, DWA_METRICS, DWAEpisodes, Evaluation, Objective, Split, aco_objective, dwa_episodes, dwa_objective,
-    dwa_scenarios, function_objective,
+    ACO_METRICS,
+    DWA_METRICS,
+    DWAEpisodes,
+    Evaluation,
+    Objective,
+    Split,
+    aco_objective,
+    dwa_episodes,
+    dwa_objective,
+    dwa_scenarios,
+    function_objective,
 )
-from jaxplan.tune._config import TuneConfig, TuneFile, apply_tune_quick, load_tune_config, parse_tune_config
-from jaxplan.tune._workflow import (
-    TuneResult, build_objective, compare, fragment_toml, plot_tuning, run_tuning, tune_loop,
-)
+from jaxplan.tune._search import grid_search, random_search
 from jaxplan.tune._sparrow import SparrowState, adaptive_weight, issa, levy, ssa
+from jaxplan.tune._strategies import (
+    STRATEGIES,
+    STRATEGY_SPECS,
+    StrategySpec,
+    make_strategy,
+    option_problems,
+    strategy_options,
+)
+from jaxplan.tune._workflow import (
+    TuneResult,
+    build_objective,
+    compare,
+    fragment_toml,
+    plot_tuning,
+    run_tuning,
+    tune_loop,
+)
 
 __all__ = [
     "Bounds", "clip", "from_unit", "make_bounds", "reflect", "to_unit",
@@ -47,7 +73,8 @@ __all__ = [
     "RelaxedResult", "quadratic_features", "reinforce", "relaxed_dwa", "relaxed_dwa_loss", "score_function_grad",
     "surrogate", "ACO_METRICS", "DWA_METRICS", "DWAEpisodes", "Evaluation", "Objective", "Split", "aco_objective",
     "dwa_episodes", "dwa_objective", "dwa_scenarios", "function_objective",
-    "TuneConfig", "TuneFile", "apply_tune_quick", "load_tune_config", "parse_tune_config", "TuneResult", "build_objective",
+    "TuneConfig", "TuneFile", "apply_tune_quick", "load_tune_config", "parse_tune_config", "TuneResult",
+    "build_objective",
     "compare", "fragment_toml", "plot_tuning", "run_tuning", "tune_loop",
     "SparrowState", "adaptive_weight", "issa", "levy", "ssa",
 ]

@@ -13,11 +13,12 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping
+
+import tomllib
 
 from jaxplan.experiments.config import RUN_NAME, MapSpec, MapTable, ScenarioSpec, default_data_dir, read_maps
 from jaxplan.experiments.schema import ConfigError, Reader, Setting, declaration, frozen, setting, setting_of

@@ -140,7 +140,7 @@ def surrogate(population_size: int, generations: int, ridge: float = 1e-3, steps
     model from the best ``P/2`` points seen and ``P/2`` uniform starts, then a ``jitter`` (unit cube)
     Gaussian perturbation so that the proposals stay diverse."""
     require_positive("surrogate", ridge=ridge, steps=steps, learning_rate=learning_rate)  # ridge 0: singular fits
-    require_positive("surrogate", strict=False, jitter=jitter)
+    require_positive("surrogate", strict=True, jitter=jitter)
     cap = population_size * generations
     opt = optax.adam(learning_rate)
 

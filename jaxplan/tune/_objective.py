@@ -39,7 +39,6 @@ from typing import Any, Callable, Mapping, NamedTuple, Sequence
 import jax
 import jax.numpy as jnp
 import numpy as np
-
 from jax.sharding import PartitionSpec as P
 
 from jaxplan.scale import BATCH_AXIS, auto_mesh, pad_leading, padded_size
@@ -234,7 +233,7 @@ def _check_names(bounds: Bounds, allowed: Mapping[str, Any], what: str, static: 
 
 def _check_sign(bounds: Bounds, what: str, unit: Sequence[str] = ()) -> None:
     """Positivity (and [0, 1]) constraints of the planner, enforced through the box."""
-    for (name, _), n, lo, hi in zip(_slots(bounds), bounds.names, bounds.low, bounds.high):
+    for (name, _), n, lo, hi in zip(_slots(bounds), bounds.names, bounds.low, bounds.high, strict=True):
         if lo < 0:
             raise ValueError(f"{what}: bounds of {n!r}: the parameter must be >= 0, but low = {lo:g}")
         if name in unit and hi > 1:
@@ -263,8 +262,16 @@ def aco_objective(grid, train: Split, test: Split, planner: str = "iaco", space:
       ValueError: naming the parameter, for an unknown or static name, bad bounds, or bounds
         outside the parameter's valid range (negative; above 1 for ρ, δ, ρ_res, λ_p).
     """
-    from jaxplan.aco import goal_tables, run_batch
-    from jaxplan.aco import COLONIES, STATIC_PARAMS, UNIT_PARAMS, cached_map_tables, seed_keys, split_params
+    from jaxplan.aco import (
+        COLONIES,
+        STATIC_PARAMS,
+        UNIT_PARAMS,
+        cached_map_tables,
+        goal_tables,
+        run_batch,
+        seed_keys,
+        split_params,
+    )
     from jaxplan.grid import collision_map
     from jaxplan.metrics import clearance_metrics, geometry_metrics
     from jaxplan.registry import resolve
@@ -403,7 +410,7 @@ def dwa_scenarios(grid, starts: np.ndarray, goals: np.ndarray, seeds: Sequence[i
 
     res = float(grid.resolution)
     S, G, P, V, R = [], [], [], [], []
-    for i, (a, b) in enumerate(zip(np.asarray(starts), np.asarray(goals))):
+    for i, (a, b) in enumerate(zip(np.asarray(starts), np.asarray(goals), strict=True)):
         pa, pb = (np.asarray(a, float) + 0.5) * res, (np.asarray(b, float) + 0.5) * res
         d = pb - pa
         L = float(np.hypot(*d))
@@ -518,4 +525,4 @@ def function_objective(fn: Callable, space: Mapping | Bounds, defaults=None, tra
     test = dummy._replace(seeds=tuple(test_seeds))
     return Objective(name, "function", name, bounds, np.clip(defaults, bounds.low, bounds.high), {"cost": 1.0},
                      {"train": dummy, "test": test}, program,
-                     {n: np.asarray(v) for n, v in zip(bounds.names, defaults)})
+                     {n: np.asarray(v) for n, v in zip(bounds.names, defaults, strict=True)})

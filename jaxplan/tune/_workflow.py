@@ -198,7 +198,7 @@ def tune_loop(objective: Objective, strategy: Strategy, generations: int, run_di
                    "gen_best": float(finite.min()) if finite.size else math.nan,
                    "gen_mean": float(finite.mean()) if finite.size else math.nan,
                    "gen_worst": float(finite.max()) if finite.size else math.nan, "n_bad": int(n_bad),
-                   **{n: float(v) for n, v in zip(b.names, bx)}}
+                   **{n: float(v) for n, v in zip(b.names, bx, strict=True)}}
             rows.append(row)
             times.append(f"{g + 1},{ev.time_s!r},{ev.compile_s!r}")
             atomic_write(run_dir / "generations.csv", _csv(rows, b.names))
@@ -379,7 +379,7 @@ def run_tuning(config_path, out="runs", quick: bool = False, data_dir=None, prog
         "population": cfg.population, "generations": cfg.generations, "evaluations": res["evaluations"],
         "resumed_from_generation": res["resumed_from"], "n_bad": res["n_bad"],
         "space": {n: [float(lo), float(hi)] for n, lo, hi in zip(objective.bounds.names, objective.bounds.low,
-                                                                    objective.bounds.high)},
+                                                                    objective.bounds.high, strict=True)},
         "defaults": objective.params(objective.defaults), "best": objective.params(best),
         "best_train_during_search": res["best_f"],
         "train": compare(objective, best, "train", cfg.population), "test": compare(objective, best, "test"),
