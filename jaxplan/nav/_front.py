@@ -393,7 +393,7 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: s
       start, goal: cells ``(x, y)``.
       global_planner: a registry planner (default ``"iaco"``), tracked through key nodes by a
         weighted DWA — or give ``pipeline`` (e.g. ``"iaco_dwa"``) for a seed's system.
-      local_planner: ``"dwa"`` (default) or ``"follow"``.
+      local_planner: ``"dwa"`` (default), ``"mppi"`` or ``"follow"``.
       seed: the global planner's seed.
       obstacles: `MovingObstacles` (e.g. `jaxplan.random_obstacles`).
       config: `NavConfig` (robot, DWA settings, tolerances, re-planning).
