@@ -3,8 +3,8 @@
 from jaxplan.aco._colony import Colony, ColonyState, RunConfig, RunOutput, run, run_batch
 from jaxplan.aco._context import GoalTables, MapTables, goal_tables, map_tables
 from jaxplan.aco._planners import (
-    COLONIES, STATIC_PARAMS, UNIT_PARAMS, BatchResult, aco_defaults, cached_map_tables, plan_batch, seed_keys,
-    split_params,
+    COLONIES, STATIC_PARAMS, UNIT_PARAMS, BatchResult, aco_defaults, cached_map_tables, plan_batch, plan_memory,
+    seed_keys, split_params,
 )
 from jaxplan.aco._tsp import (
     TSP_PLANNERS, TSP_STATIC_PARAMS, TourResult, TSPConfig, TSPOutput, resolve_tsp, run_tsp, solve_tsp, tsp_defaults,
@@ -19,5 +19,6 @@ __all__ = [
     "load_tsplib", "resolve_tsp", "run_tsp", "solve_tsp", "tour_length", "tsp_defaults", "tsp_distances", "two_opt",
     "Ants", "BatchResult", "COLONIES", "Colony", "ColonyState", "GoalTables", "MapTables", "RunConfig", "RunOutput",
     "STATIC_PARAMS", "UNIT_PARAMS", "aco_defaults", "cached_map_tables", "goal_tables", "map_tables",
-    "plan_batch", "run", "run_batch", "seed_keys", "sharing_cores", "split_params", "draw", "hash_uniform", "walk",
+    "plan_batch", "plan_memory", "run", "run_batch", "seed_keys", "sharing_cores", "split_params", "draw",
+    "hash_uniform", "walk",
 ]
