@@ -431,14 +431,14 @@ def test_every_batched_entry_point_refuses_before_any_work(tmp_path):
 
 
 def test_a_figure_name_cannot_leave_the_figure_folder(tmp_path, capsys):
-    from jaxplan.core.io import confined
-
     cfg = tmp_path / "escape.toml"
     cfg.write_text(CONV + 'name = "../../../../tmp/x"\n')
     assert _run(cfg, tmp_path / "runs") == 2
     err = capsys.readouterr().err
     assert "figures[0].name: must match" in err and "it names the figure's files, inside the figure folder" in err
     _record("figure-name", 2, next(x.strip() for x in err.splitlines() if "figures[0].name" in x))
+    from jaxplan.core.io import confined
+
     for bad in ("../x", "a/b", ".hidden", "-x", "", "x\0y", "/etc/passwd"):
         with pytest.raises(ValueError, match="cannot name a file"):
             confined(tmp_path, bad, ".png")
@@ -594,7 +594,7 @@ def test_out_of_memory_in_the_middle_of_a_run_is_one_line_and_exit_1(conv, tmp_p
                                              "17179869184 bytes.")
         raise MemoryError()
 
-    monkeypatch.setattr("jaxplan.aco.plan_batch", broken)
+    monkeypatch.setattr("jaxplan.aco._planners._run_colony", broken)  # inside plan_batch, as XLA would fail
     assert _run(conv[0], tmp_path / "runs") == 1
     line = _one_line(capsys.readouterr().err)
     assert expect in line and "JAXPLAN_MEMORY_LIMIT" in line
@@ -605,7 +605,7 @@ def test_debug_prints_the_traceback(conv, tmp_path, monkeypatch, capsys):
     def broken(*a, **k):
         raise MemoryError()
 
-    monkeypatch.setattr("jaxplan.aco.plan_batch", broken)
+    monkeypatch.setattr("jaxplan.aco._planners._run_colony", broken)
     assert main(["--debug", "run", str(conv[0]), "--out", str(tmp_path / "runs"), "--no-progress"]) == 1
     err = capsys.readouterr().err
     assert "Traceback (most recent call last)" in err and err.strip().splitlines()[-1].startswith("jaxplan: error:")
@@ -631,7 +631,6 @@ def test_a_bad_jaxplan_host_devices_is_one_line_and_exit_2(tmp_path, value):
 
 def test_ctrl_c_exits_130_and_says_how_to_resume(tmp_path):
     """SIGINT once the first chunk is committed: exit 130, one line, no traceback, the lock released."""
-    from jaxplan.core.io import folder_lock
     from jaxplan.experiments import read_manifest
 
     cfg = tmp_path / "long.toml"
@@ -656,9 +655,11 @@ def test_ctrl_c_exits_130_and_says_how_to_resume(tmp_path):
     line = _one_line(err)
     assert "interrupted" in line and "run the same command to resume" in line
     assert 1 <= committed() < 40
+    _record("sigint", 130, line)
+    from jaxplan.core.io import folder_lock
+
     with folder_lock(run):  # released: the same command can resume
         pass
-    _record("sigint", 130, line)
 
 
 def test_a_truncated_tuning_checkpoint_falls_back_to_the_intact_one_before(tmp_path, capsys):

@@ -76,8 +76,8 @@ def chunk_memory(prep: Prepared, m: int, p: int) -> MemoryEstimate:
     nav, _ = nav_config(pc)
     glob = pc.global_planner
     plans = plan_memory(mw.grid, glob, runs, **ov) if glob in COLONIES else None
-    ep = episode_memory(runs, nav.steps, nav.dwa.samples, discs=pc.obstacles.n if pc.obstacles else 0,
-                        map_cells=mw.grid.n_cells)
+    ep = episode_memory(runs, nav.steps, nav.dwa.samples, rollout_steps=nav.dwa.steps,
+                        discs=pc.obstacles.n if pc.obstacles else 0, map_cells=mw.grid.n_cells)
     parts = {**ep.parts, **({"global plans": plans.total} if plans is not None else {})}
     total = ep.total + (plans.total if plans is not None else 0)
     return MemoryEstimate(total, parts, runs, ep.per_run + (plans.per_run if plans is not None else 0))

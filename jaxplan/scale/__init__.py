@@ -4,9 +4,10 @@
 every device (DESIGN §7); results equal the single-device call's. Before it allocates, `plan_batch`
 estimates its working memory (`aco_memory`) and refuses a batch above `memory_limit()`
 (``$JAXPLAN_MEMORY_LIMIT``, default 80 % of the available memory) with `MemoryLimitError`,
-naming the largest batch that fits. Multi-host sweeps: `initialize` (`jax.distributed`), each
-host's `host_share` of the batch, `write_shard` and `merge_shards` (recipe in
-``scripts/sweep_hosts.py``). On a CPU, `use_host_devices` (also ``jaxplan.use_host_devices``) is the
+naming the largest batch that fits; `jaxplan.solve_tsp` (`tsp_memory`), a tuning population, an
+experiment's chunks (navigation: `episode_memory`) and trials (`table_memory`) are guarded the same
+way. Multi-host sweeps: `initialize` (`jax.distributed`), each host's `host_share` of the batch,
+`write_shard` and `merge_shards` (recipe in ``scripts/sweep_hosts.py``). On a CPU, `use_host_devices` (also ``jaxplan.use_host_devices``) is the
 explicit opt-in to one host device per core, after which ``mesh="auto"`` shards large batches over
 them; importing jaxplan changes no JAX setting (`jaxplan.scale._host_devices`).
 """

@@ -3,7 +3,9 @@
 A sweep of thousands of scenarios × seeds fails late and badly when it runs out of memory
 (the kernel kills the process, or XLA aborts mid-run). `plan_batch` therefore estimates the
 working memory of its compiled program from the configuration's sizes before it allocates
-anything, and refuses a batch above the limit with the largest batch that would fit.
+anything, and refuses a batch above the limit with the largest batch that would fit; so do
+`solve_tsp` (`tsp_memory`), a tuning population, and an experiment's chunks (navigation:
+`episode_memory`) and trials (`table_memory`), before their first step.
 
 The estimate counts the arrays that scale with the batch (each with the number of copies the
 compiled program keeps alive at once, read off its buffer assignment) plus the per-map tables;
@@ -30,6 +32,9 @@ _TAU_COPIES = 6
 # The walk's path buffers are produced and consumed inside one iteration; XLA keeps at most
 # two generations alive (this iteration's and the scan carry's best-so-far extraction).
 _PATH_COPIES = 2
+# Floats per rollout pose of a DWA fan while a control step is evaluated (pose, critics, clearances and their
+# temporaries), an upper bound of what navigate_batch's episodes were measured to use (docs/decisions.md).
+_FAN_FLOATS = 7
 
 
 class MemoryEstimate(NamedTuple):
@@ -136,21 +141,21 @@ def tsp_memory(cities: int, colonies: int, ants: int, iterations: int, runs: int
     return MemoryEstimate(total, parts, runs, (total - parts["distance tables"]) / max(runs, 1))
 
 
-def episode_memory(robots: int, steps: int, samples: int, *, discs: int = 0, waypoints: int = 16,
-                   map_cells: int = 0) -> MemoryEstimate:
+def episode_memory(robots: int, steps: int, samples: int, *, rollout_steps: int = 20, discs: int = 0,
+                   waypoints: int = 16, map_cells: int = 0) -> MemoryEstimate:
     """Estimated working memory (bytes) of ``robots`` navigation episodes of ``steps`` control steps in one
     call (`jaxplan.navigate_batch`: robots = scenarios × seeds; `navigate_multi`: × robots per team).
 
-    Per robot and step the episode keeps its state (5 floats), control (2) and flags on the device and,
-    after the call, host copies in float64 for the metrics (positions, segment lengths, velocities):
-    about 40 floats in all. Per robot: the DWA's ``samples`` rollouts of the live step (`dwa_memory`'s 16
-    floats each, plus 4 per disc), the waypoints and the obstacles' routes. Per call: the map's
-    clearance and planning tables.
+    Per robot: the live control step's DWA fan — ``samples`` rollouts of ``rollout_steps`` poses with their
+    critics and clearances (`_FAN_FLOATS` floats per pose; the discs add little) — which dominates; the
+    trajectory (state, control and flags per control step, and the host's float64 copies for the metrics:
+    40 floats per step); the waypoints and the discs' routes. Per call: the map's clearance and planning
+    tables. Against the measured peak RSS rise it is an upper bound, not far above (docs/decisions.md).
     """
-    per_step = 40 * _F32
+    fan = samples * (rollout_steps * _FAN_FLOATS + 16 + 4 * discs) * _F32
     parts = {
-        "trajectories": robots * (steps + 1) * per_step,
-        "dwa samples": robots * samples * (16 + 4 * discs) * _F32,
+        "dwa fans": robots * fan,
+        "trajectories": robots * (steps + 1) * 40 * _F32,
         "waypoints and discs": robots * (waypoints * 2 + discs * 64) * _F32,
         "map tables": 8 * map_cells * _F32,
     }
