@@ -426,6 +426,59 @@ def test_every_batched_entry_point_refuses_before_any_work(tmp_path):
     _record("plan-batch-seeds", "MemoryLimitError", out["astar"])
 
 
+_PEAK = """
+import gc, json, sys
+import numpy as np
+import jaxplan as jp
+from jaxplan.aco import TSPProblem, resolve_tsp, tsp_distances
+from jaxplan.nav import NavConfig, navigate_batch
+from jaxplan.scale import episode_memory, tsp_memory
+
+def status(key):
+    for line in open("/proc/self/status"):
+        if line.startswith(key):
+            return int(line.split()[1]) * 1024
+
+def peak(fn):
+    fn()  # compiles
+    gc.collect()
+    base = status("VmRSS:")
+    open("/proc/self/clear_refs", "w").write("5")  # resets the peak (VmHWM) to the current RSS
+    fn()
+    return status("VmHWM:") - base
+
+what = sys.argv[1]
+if what == "navigate":
+    grid = jp.WarehouseGenerator()(0).grid
+    free = np.argwhere(np.asarray(grid.free))[:, ::-1]
+    idx = np.random.default_rng(0).choice(len(free), (16, 2))
+    cfg = NavConfig(max_time=60.0)
+    out = [peak(lambda: navigate_batch(grid, free[idx[:, 0]], free[idx[:, 1]], "astar_kng_dwa", seeds=range(4),
+                                       config=cfg, mesh=None)),
+           episode_memory(64, cfg.steps, cfg.dwa.samples, rollout_steps=cfg.dwa.steps, map_cells=grid.n_cells).total]
+else:
+    xy = np.random.default_rng(0).uniform(0, 1000, (1000, 2))
+    prob = TSPProblem("r", xy, tsp_distances(xy, "EUC_2D"), "EUC_2D", 1000)
+    p = resolve_tsp(what, {"iterations": 3})
+    out = [peak(lambda: jp.solve_tsp(prob, what, seed=0, iterations=3)),
+           tsp_memory(1000, int(p.get("colonies", 1)), int(p["ants"]), 3).total]
+print(json.dumps(out))
+"""
+
+
+@pytest.mark.slow  # ~50 s on 2 cores: a navigation batch and two TSP runs, each compiled, then measured
+@pytest.mark.parametrize("what", ["navigate", "aco", "praco"])
+def test_the_navigation_and_tsp_estimates_bound_the_measured_peak(what):
+    """`episode_memory` and `tsp_memory` are upper bounds of a call's peak RSS rise, and not wildly pessimistic
+    (each measured in a process of its own: memory an earlier call freed would hide the peak)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "JAX_NUM_CPU_DEVICES")}
+    env["JAXPLAN_HOST_DEVICES"] = "1"
+    proc = subprocess.run([sys.executable, "-c", _PEAK, what], capture_output=True, text=True, timeout=600, env=env)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    measured, estimate = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert measured <= estimate < 3 * max(measured, 1), (what, measured / 2**20, estimate / 2**20)
+
+
 # ---------------------------------------------------------------------------------------------
 # Confinement and leaks
 
