@@ -52,7 +52,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxplan.core.io import atomic_write, confined, folder_lock
-from jaxplan.experiments import RunFolderError, clock
+from jaxplan.experiments import CheckpointError, RunFolderError, clock
 from jaxplan.tune._base import Strategy, sanitize
 from jaxplan.tune._objective import Objective, Split
 from jaxplan.tune._strategies import make_strategy
@@ -100,7 +100,13 @@ def _save_state(path: Path, state) -> str:
         if jnp.issubdtype(a.dtype, jax.dtypes.prng_key):
             a = jax.random.key_data(a)  # typed keys are stored as their raw data
         data[f"leaf_{i:04d}"] = np.asarray(a)
-    ocp.PyTreeCheckpointer().save(path.resolve(), data, force=True)
+    try:
+        ocp.PyTreeCheckpointer().save(path.resolve(), data, force=True)
+    except OSError:
+        raise
+    except Exception as e:  # noqa: BLE001 - orbax's and tensorstore's own errors: one clear message
+        raise CheckpointError(f"cannot save the tuning checkpoint {path.resolve()}: {type(e).__name__}; check the "
+                              f"disk, then run the same command to resume") from e
     return _state_digest(data)
 
 
