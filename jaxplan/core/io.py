@@ -21,6 +21,7 @@ Imports nothing from jaxplan (the bottom layer, `jaxplan.core`).
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import re
 import secrets
@@ -207,13 +208,17 @@ def folder_lock(folder: str | os.PathLike) -> Iterator[Path]:
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            raise FolderInUseError(Path(folder), _read_pid(path)) from None
+            locked = True
+        except OSError as e:
+            if e.errno in (errno.EAGAIN, errno.EWOULDBLOCK, errno.EACCES):
+                raise FolderInUseError(Path(folder), _read_pid(path)) from None
+            locked = False  # a file system without flock (ENOLCK, EINVAL): work unlocked rather than not at all
         os.ftruncate(fd, 0)
         os.write(fd, f"{os.getpid()}\n".encode())
         try:
             yield path
         finally:
-            fcntl.flock(fd, fcntl.LOCK_UN)
+            if locked:
+                fcntl.flock(fd, fcntl.LOCK_UN)
     finally:
         os.close(fd)
