@@ -7,9 +7,10 @@ estimates its working memory (`aco_memory`) and refuses a batch above `memory_li
 naming the largest batch that fits; `jaxplan.solve_tsp` (`tsp_memory`), a tuning population, an
 experiment's chunks (navigation: `episode_memory`) and trials (`table_memory`) are guarded the same
 way. Multi-host sweeps: `initialize` (`jax.distributed`), each host's `host_share` of the batch,
-`write_shard` and `merge_shards` (recipe in ``scripts/sweep_hosts.py``). On a CPU, `use_host_devices` (also ``jaxplan.use_host_devices``) is the
-explicit opt-in to one host device per core, after which ``mesh="auto"`` shards large batches over
-them; importing jaxplan changes no JAX setting (`jaxplan.scale._host_devices`).
+`write_shard` and `merge_shards` (recipe in ``scripts/sweep_hosts.py``). On a CPU,
+`use_host_devices` (also ``jaxplan.use_host_devices``) is the explicit opt-in to one host device per
+core, after which ``mesh="auto"`` shards large batches over them; importing jaxplan changes no JAX
+setting (`jaxplan.scale._host_devices`).
 """
 
 from jaxplan.scale._host_devices import (
