@@ -77,19 +77,19 @@ def describe_failure(e: BaseException, command: str | None = None) -> tuple[int,
     if _is(e, "jaxplan.core.io", "FolderInUseError"):
         return FAULT, str(e)
     if _is(e, "jaxplan.experiments.store", "CheckpointError"):
-        return FAULT, _first_line(e)
+        return FAULT, _first_line(e, 1000)
     if _is(e, "jaxplan.scale._memory", "MemoryLimitError"):
-        return BAD_INPUT, _first_line(e, 600)
+        return BAD_INPUT, _first_line(e, 1000)
     if isinstance(e, MemoryError):
         return FAULT, ("out of memory: the machine could not give the memory this step needed; use fewer seeds, "
                        "scenarios or ants per chunk (--chunk), or set JAXPLAN_MEMORY_LIMIT so that the memory guard "
                        "refuses such a batch before it starts")
     if isinstance(e, FileNotFoundError):
-        return BAD_INPUT, _first_line(e, 600)
+        return BAD_INPUT, _first_line(e, 1000)
     if isinstance(e, OSError):
         return FAULT, _os_error(e, command)
     if isinstance(e, ValueError):
-        return BAD_INPUT, _first_line(e, 600) if "\n" not in str(e).strip() else str(e).strip()
+        return BAD_INPUT, _first_line(e, 1000) if "\n" not in str(e).strip() else str(e).strip()
     name = type(e).__name__
     text = _first_line(e)
     if name in ("XlaRuntimeError", "JaxRuntimeError") or "RESOURCE_EXHAUSTED" in text:
