@@ -59,7 +59,15 @@ the function; its subpackage is ``import jaxplan.smooth``)."""
 __all__ = sorted([*_SOURCE, "metrics"])
 
 
+_NEEDS_EVERY_PLANNER = ("plan_batch",)
+"""Names that take any registered planner: loading one imports `jaxplan.planning` (which imports every planner
+jaxplan ships, so they are registered), as ``jp.plan`` does — else ``jp.plan_batch(..., planner="astar")``
+right after ``import jaxplan`` would not know A*."""
+
+
 def _load(name: str) -> Any:
+    if name in _NEEDS_EVERY_PLANNER:
+        importlib.import_module("jaxplan.planning")
     value = getattr(importlib.import_module(f"jaxplan.{_SOURCE[name]}"), name)
     if name != "smooth":  # see _Package.smooth
         globals()[name] = value  # later lookups skip __getattr__

@@ -5,6 +5,10 @@ module imports only the standard library at the top, and each command imports wh
 Before a command runs, the process opts in to one JAX CPU host device per core
 (`jaxplan.use_host_devices`; ``$JAXPLAN_HOST_DEVICES`` overrides the count, ``off`` leaves JAX's
 default, and an ``XLA_FLAGS`` device count stands), so batched calls shard over the cores.
+
+A failure ends in one line naming the cause and what to do, with exit code 2 (bad input) or 1 (a fault of
+the environment); Ctrl-C ends with 130 and says how to resume; ``jaxplan --debug CMD`` adds the traceback
+(`jaxplan.core.failure`).
 """
 
 from __future__ import annotations
@@ -63,28 +67,12 @@ def cmd_plan(args: argparse.Namespace) -> int:
     return 0 if res.success else 1
 
 
-def _config_run(call) -> Path | None:
-    """``call()``'s run folder, or None after printing a config's every problem (or a run-folder clash)."""
-    from jaxplan.experiments.config import ConfigError
-    from jaxplan.experiments.store import RunFolderError
-
-    try:
-        return call()
-    except ConfigError as e:
-        print(f"jaxplan: error: invalid config {e}", file=sys.stderr)
-    except RunFolderError as e:
-        print(f"jaxplan: error: {e}", file=sys.stderr)
-    return None
-
-
 def cmd_run(args: argparse.Namespace) -> int:
     """``jaxplan run CONFIG``: validate the whole config, then run (or resume) it; exit 2 listing every problem."""
     from jaxplan.experiments.runner import run_experiment
 
-    run_dir = _config_run(lambda: run_experiment(args.config, args.out, quick=args.quick, data_dir=args.data_dir,
-                                                 progress=not args.no_progress, chunk=args.chunk))
-    if run_dir is None:
-        return 2
+    run_dir = run_experiment(args.config, args.out, quick=args.quick, data_dir=args.data_dir,
+                             progress=not args.no_progress, chunk=args.chunk)
     print((run_dir / "summary.md").read_text())
     print(f"wrote {run_dir}/ (trials.csv, summary.csv, summary.md, report.md)")
     return 0
@@ -94,9 +82,12 @@ def cmd_figures(args: argparse.Namespace) -> int:
     """``jaxplan figures RUN``: every ``[[figures]]`` entry of the run's config as PNG and SVG, plus index.md."""
     from jaxplan.experiments.figures import draw_figures
 
-    drawn, problems = draw_figures(args.run, args.out, data_dir=args.data_dir)
+    drawn, problems = draw_figures(args.run, args.out, data_dir=args.data_dir, partial=args.partial)
     name = Path(args.run).resolve().name
     print(f"wrote {len(drawn)} figures to {Path(args.out) / name}/ (index.md lists them)")
+    for d in drawn:
+        if d.partial:
+            print(f"  partial: {d.name}: {d.partial}", file=sys.stderr)
     for p in problems:
         print(f"  not drawn: {p}", file=sys.stderr)
     return 0 if not problems else 1
@@ -137,10 +128,8 @@ def cmd_tune(args: argparse.Namespace) -> int:
     """``jaxplan tune CONFIG``: run (or resume) a tuning config; writes OUT/NAME/ with the best weights."""
     from jaxplan.tune import run_tuning
 
-    run_dir = _config_run(lambda: run_tuning(args.config, out=args.out, quick=args.quick, data_dir=args.data_dir,
-                                             progress=not args.no_progress, resume=not args.no_resume))
-    if run_dir is None:
-        return 2
+    run_dir = run_tuning(args.config, out=args.out, quick=args.quick, data_dir=args.data_dir,
+                         progress=not args.no_progress, resume=not args.no_resume)
     print(f"wrote {run_dir}/ (generations.csv, summary.json, best.toml: a [[planners]] entry for `jaxplan run`, "
           f"convergence.png)")
     return 0
@@ -160,7 +149,11 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="jaxplan", description="Grid path planning for warehouse robots, in JAX.")
+    p = argparse.ArgumentParser(
+        prog="jaxplan", description="Grid path planning for warehouse robots, in JAX.",
+        epilog="Exit codes: 0 done; 2 bad input (fix the command, config or data); 1 a fault (disk, memory, a "
+               "damaged checkpoint, a folder in use; retry once fixed); 130 interrupted (the same command resumes).")
+    p.add_argument("--debug", action="store_true", help="print the traceback of a failure (default: one line)")
     sub = p.add_subparsers(dest="command", required=True)
     d = sub.add_parser("demo", help="iaco_dwa vs aco_dwa among moving obstacles on the built-in warehouse; "
                                     "prints a table, writes figures/demo.png and demo.gif")
@@ -193,6 +186,8 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("run", help="a run folder written by `jaxplan run` (e.g. runs/NAME)")
     f.add_argument("--out", default="figures", help="figure root (default: figures; files go to OUT/RUN/)")
     f.add_argument("--data-dir", default=None, help="folder that the config's map paths are relative to")
+    f.add_argument("--partial", action="store_true", help="draw a figure even if some of its chunks' arrays are "
+                                                          "missing or damaged, labelled partial (default: refuse it)")
     f.set_defaults(func=cmd_figures)
     g = sub.add_parser("reproduce", help="run every paper's reproduction config (configs/<paper>_*.toml, e.g. "
                                          "cui2025_table2.toml), then draw its figures")
@@ -231,16 +226,92 @@ def _use_host_devices() -> None:
         pass
 
 
+class _Interrupts:
+    """Ctrl-C during a command: every SIGINT raises `KeyboardInterrupt` in the main thread, and after the first
+    one SIGINT is sent again every half second until the command has stopped: an interrupt raised while
+    Python runs a garbage-collection callback (JAX registers one) is swallowed there, and the command would
+    go on for hours. Those swallowed ones are not reported either (no "Exception ignored" traceback)."""
+
+    def __init__(self):
+        import threading
+
+        self.hit = False
+        self.stopped = threading.Event()
+        self.previous = None
+        self.hook = sys.unraisablehook
+
+    def __enter__(self) -> "_Interrupts":
+        import signal
+        import threading
+
+        if threading.current_thread() is threading.main_thread():
+            self.previous = signal.signal(signal.SIGINT, self._handler)
+        return self
+
+    def _handler(self, signum, frame) -> None:
+        if not self.hit:
+            import threading
+
+            self.hit = True
+            hook = self.hook
+            sys.unraisablehook = lambda u: None if isinstance(u.exc_value, KeyboardInterrupt) else hook(u)
+            threading.Thread(target=self._repeat, daemon=True).start()
+        raise KeyboardInterrupt
+
+    def _repeat(self) -> None:
+        import os
+        import signal
+
+        while not self.stopped.wait(0.5):
+            os.kill(os.getpid(), signal.SIGINT)
+
+    def __exit__(self, *exc) -> None:
+        import signal
+
+        self.stopped.set()
+        if self.previous is not None:  # after a Ctrl-C, a repeat still on its way is ignored
+            signal.signal(signal.SIGINT, signal.SIG_IGN if self.hit else self.previous)
+
+    def restore(self) -> None:
+        """The SIGINT handler and unraisable hook as they were before the command."""
+        import signal
+
+        sys.unraisablehook = self.hook
+        if self.previous is not None:
+            signal.signal(signal.SIGINT, self.previous)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Runs ``jaxplan ARGV``; returns the exit status (2 for a bad input, with the message on stderr)."""
+    """Runs ``jaxplan ARGV``; returns the exit status: 0 done, 2 bad input, 1 a fault, 130 interrupted.
+
+    A failure prints one line on stderr naming the cause and what to do (`jaxplan.core.failure`), and the
+    traceback only with ``--debug``. Called as the console script (``argv`` None), an interrupted process
+    leaves at once after its message (``os._exit``): JAX's and numba's threads are not waited for.
+    """
     args = build_parser().parse_args(argv)
+    interrupts = _Interrupts()
     try:
-        if args.func is not cmd_bench:  # the benchmarks run in a process of their own, which opts in itself
-            _use_host_devices()
-        return int(args.func(args))
-    except (ValueError, FileNotFoundError) as e:
-        print(f"jaxplan: error: {e}", file=sys.stderr)
-        return 2
+        with interrupts:
+            if args.func is not cmd_bench:  # the benchmarks run in a process of their own, which opts in itself
+                _use_host_devices()
+            return int(args.func(args))
+    except (Exception, KeyboardInterrupt) as e:  # noqa: BLE001 - every failure ends in one line and an exit code
+        from jaxplan.core.failure import INTERRUPTED, describe_failure
+
+        if args.debug:
+            import traceback
+
+            traceback.print_exc()
+        code, message = describe_failure(e, args.command)
+        print(message if code == INTERRUPTED else f"jaxplan: error: {message}", file=sys.stderr, flush=True)
+        if code == INTERRUPTED and argv is None:
+            import os
+
+            sys.stdout.flush()
+            os._exit(code)
+        return code
+    finally:
+        interrupts.restore()
 
 
 if __name__ == "__main__":  # pragma: no cover

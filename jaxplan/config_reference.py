@@ -19,6 +19,7 @@ import json
 import sys
 from pathlib import Path
 
+from jaxplan.core.io import atomic_write
 from jaxplan.experiments.config import METRICS, ExperimentFile
 from jaxplan.experiments.schema import json_schema, markdown
 from jaxplan.tune import TuneFile
@@ -102,7 +103,7 @@ def write(root: str | Path | None = None, *, check: bool = False) -> list[str]:
             stale.append(rel)
             if not check:
                 f.parent.mkdir(parents=True, exist_ok=True)
-                f.write_text(text, encoding="utf-8")
+                atomic_write(f, text)
     return stale
 
 

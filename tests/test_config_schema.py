@@ -3,11 +3,11 @@ the deprecated generator names."""
 
 import dataclasses
 import json
+import tomllib
 import warnings
 from pathlib import Path
 
 import pytest
-import tomllib
 
 from jaxplan import config_reference
 from jaxplan.experiments import schema

@@ -46,3 +46,38 @@ def test_atomic_file_for_writers_that_take_a_file(tmp_path):
     with pytest.raises(ValueError, match="mode"):
         with atomic_file(p, "a"):
             pass
+
+
+def test_folder_lock_refuses_a_second_process_and_takes_over_a_dead_ones(tmp_path):
+    import subprocess
+    import sys
+
+    from jaxplan.core.io import LOCK_NAME, FolderInUseError, folder_lock
+
+    holder = subprocess.Popen([sys.executable, "-c", "import sys, time\nfrom jaxplan.core.io import folder_lock\n"
+                               f"with folder_lock({str(tmp_path)!r}):\n    print('held', flush=True)\n"
+                               "    time.sleep(60)\n"], stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        with pytest.raises(FolderInUseError, match=f"in use by pid {holder.pid}") as e:
+            with folder_lock(tmp_path):
+                pass
+        assert e.value.pid == holder.pid
+    finally:
+        holder.kill()
+        holder.wait()
+    # The kernel dropped the dead holder's lock: it is taken over, and the file names the new holder.
+    assert (tmp_path / LOCK_NAME).read_text().split()[0] == str(holder.pid)
+    with folder_lock(tmp_path) as path:
+        assert path.read_text().split()[0] == str(os.getpid())
+    with folder_lock(tmp_path):  # released at the end of the block
+        pass
+
+
+def test_confined_names_stay_inside_their_folder(tmp_path):
+    from jaxplan.core.io import confined
+
+    assert confined(tmp_path, "run-1.quick", ".png") == tmp_path / "run-1.quick.png"
+    for bad in ("..", "../x", "a/b", "a\\b", ".hidden", "-rf", "", "x\ny", None):
+        with pytest.raises(ValueError, match="cannot name a file"):
+            confined(tmp_path, bad)

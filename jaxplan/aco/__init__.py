@@ -10,6 +10,7 @@ from jaxplan.aco._planners import (
     aco_defaults,
     cached_map_tables,
     plan_batch,
+    plan_memory,
     seed_keys,
     split_params,
 )
@@ -34,5 +35,6 @@ __all__ = [
     "load_tsplib", "resolve_tsp", "run_tsp", "solve_tsp", "tour_length", "tsp_defaults", "tsp_distances", "two_opt",
     "Ants", "BatchResult", "COLONIES", "Colony", "ColonyState", "GoalTables", "MapTables", "RunConfig", "RunOutput",
     "STATIC_PARAMS", "UNIT_PARAMS", "aco_defaults", "cached_map_tables", "goal_tables", "map_tables",
-    "plan_batch", "run", "run_batch", "seed_keys", "sharing_cores", "split_params", "draw", "hash_uniform", "walk",
+    "plan_batch", "plan_memory", "run", "run_batch", "seed_keys", "sharing_cores", "split_params", "draw",
+    "hash_uniform", "walk",
 ]

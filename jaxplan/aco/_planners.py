@@ -46,10 +46,20 @@ from jaxplan.core.cache import Built, digest, memoize
 from jaxplan.grid import GridMap, passable
 from jaxplan.registry import register_planner, resolve
 from jaxplan.result import PlanResult
-from jaxplan.scale import BATCH_AXIS, aco_memory, auto_mesh, check_memory, check_mesh, pad_leading, padded_size
+from jaxplan.scale import (
+    BATCH_AXIS,
+    MemoryEstimate,
+    aco_memory,
+    auto_mesh,
+    check_memory,
+    check_mesh,
+    pad_leading,
+    padded_size,
+    table_memory,
+)
 
-__all__ = ["COLONIES", "BatchResult", "plan_batch", "aco_defaults", "STATIC_PARAMS", "UNIT_PARAMS", "seed_keys",
-           "split_params", "cached_map_tables"]
+__all__ = ["COLONIES", "BatchResult", "plan_batch", "plan_memory", "aco_defaults", "STATIC_PARAMS", "UNIT_PARAMS",
+           "seed_keys", "split_params", "cached_map_tables"]
 
 COLONIES: dict[str, Colony] = {
     "aco": Colony("aco", R.init_uniform, R.cost_length, (R.deposit_inverse,)),
@@ -289,24 +299,60 @@ class BatchResult(NamedTuple):
         )
 
 
+def _seed_count(seeds) -> int:
+    """How many seeds ``seeds`` holds, without building a list of a huge range (the memory guard runs first)."""
+    if isinstance(seeds, (int, np.integer)):
+        return 1
+    try:
+        return len(seeds)
+    except TypeError:
+        return len(list(seeds))
+
+
+def _colony_memory(name: str, grid: GridMap, cfg: RunConfig, connectivity: int, runs: int) -> MemoryEstimate:
+    colony = COLONIES[name]
+    return aco_memory(grid.n_cells, connectivity, runs, cfg.colonies, cfg.ants, cfg.max_steps, cfg.iterations,
+                      keep_pheromone=cfg.keep_pheromone, hook=colony.hook is not None, penalty=cfg.penalise,
+                      alert=cfg.dead_end == "alert", jax_walk=walk_backend(colony, cfg) == "jax")
+
+
+def _colony_what(name: str, grid: GridMap, cfg: RunConfig) -> str:
+    return f"planner {name!r} with {cfg.colonies * cfg.ants} ants on a {grid.shape[0]}x{grid.shape[1]} map"
+
+
+def plan_memory(grid: GridMap, planner: str, runs: int, **overrides: Any) -> MemoryEstimate:
+    """Estimated working memory (bytes) of `plan_batch` over ``runs`` = scenarios × seeds of ``planner``.
+
+    An ACO planner: `jaxplan.scale.aco_memory` of its colony (pheromone, ant paths, tables). Any other
+    planner: its result table, with paths of at most ``4·(H + W)`` cells (the exact path length is known
+    only after planning; `plan_batch` checks again with it before it allocates the paths).
+    """
+    _, p = resolve(planner, overrides)
+    if planner in COLONIES:
+        cfg, _, connectivity, _ = split_params(grid, p)
+        return _colony_memory(planner, grid, cfg, connectivity, runs)
+    return _result_memory(runs, 4 * (grid.shape[0] + grid.shape[1]))
+
+
+def _result_memory(runs: int, path_cells: int) -> MemoryEstimate:
+    """A non-colony `plan_batch`'s results: one reference and five numbers per run, and its padded path."""
+    return table_memory(runs, {"results": 8 + 5 * 8, "paths": path_cells * 2 * 8})
+
+
 def _run_colony(name: str, grid: GridMap, starts: np.ndarray, goals: np.ndarray, seeds, p: Mapping[str, Any],
                 keep_pheromone: bool = False, mesh: Mesh | None = None):
     cfg, params, connectivity, vh = split_params(grid, p)
     if keep_pheromone:
         cfg = RunConfig(**{**cfg.__dict__, "keep_pheromone": True})
-    tables = cached_map_tables(grid, connectivity, vh)
     N = len(starts)
-    keys = seed_keys(seeds)
     colony = COLONIES[name]
-    runs = (N if mesh is None else padded_size(N, check_mesh(mesh))) * keys.shape[0]
+    runs = (N if mesh is None else padded_size(N, check_mesh(mesh))) * _seed_count(seeds)
     # Refuse a batch that cannot fit before anything of it is allocated (on a mesh, per device).
     devices = 1 if mesh is None else mesh.devices.size
-    C, K = tables.index.shape
-    est = aco_memory(C, K, runs // devices, cfg.colonies, cfg.ants, cfg.max_steps, cfg.iterations,
-                     keep_pheromone=cfg.keep_pheromone, hook=colony.hook is not None, penalty=cfg.penalise,
-                     alert=cfg.dead_end == "alert", jax_walk=walk_backend(colony, cfg) == "jax")
-    check_memory(est, f"planner {name!r} with {cfg.colonies * cfg.ants} ants on a {grid.shape[0]}x{grid.shape[1]} map",
+    check_memory(_colony_memory(name, grid, cfg, connectivity, runs // devices), _colony_what(name, grid, cfg),
                  unit="runs (scenarios x seeds)" + (" per device" if devices > 1 else ""))
+    tables = cached_map_tables(grid, connectivity, vh)
+    keys = seed_keys(seeds)
     gt = goal_tables(grid, starts, goals, connectivity, vh, geodesic=cfg.heuristic == "geodesic")
     if mesh is not None:
         gt = pad_leading(gt, padded_size(N, mesh))  # copies of the last scenario, sliced off below
@@ -397,6 +443,8 @@ def plan_batch(
         mesh = auto_mesh(mesh, len(s))
         out, dt, compile_s, width = _run_colony(planner, grid, s, g, seeds, p, mesh=mesh)
         return _to_batch(planner, out, dt, compile_s, width)
+    what = f"planner {planner!r} on a {grid.shape[0]}x{grid.shape[1]} map"
+    check_memory(_result_memory(len(s) * _seed_count(seeds), 1), what, unit="runs (scenarios x seeds)")
     seed_list = [int(x) for x in seeds]
     R_ = len(seed_keys(seed_list))
     t0 = time.perf_counter()
@@ -407,6 +455,7 @@ def plan_batch(
         results = [[spec.fn(grid, a, b, seed, **p) for seed in seed_list] for a, b in zip(s, g, strict=True)]
     dt = time.perf_counter() - t0
     P = max((len(r.path) for row in results for r in row), default=1)
+    check_memory(_result_memory(len(results) * R_, max(P, 1)), what, unit="runs (scenarios x seeds)")
     paths = np.full((len(results), R_, max(P, 1), 2), -1, np.int64)
     for i, row in enumerate(results):
         for j, r in enumerate(row):

@@ -48,6 +48,7 @@ from jaxplan.aco import _rules as R
 from jaxplan.aco._tsplib import TSPProblem, tour_length
 from jaxplan.aco._walk import hash_uniform
 from jaxplan.core.cache import Built, memoize
+from jaxplan.scale import check_memory, tsp_memory
 
 __all__ = ["TSP_PLANNERS", "TSP_STATIC_PARAMS", "TSPConfig", "TSPOutput", "TourResult", "resolve_tsp", "run_tsp",
            "solve_tsp", "tsp_defaults"]
@@ -355,6 +356,9 @@ def solve_tsp(problem: TSPProblem, planner: str = "praco", seed: int = 0, **over
     if not np.all(np.isfinite(d)) or np.any(d < 0):
         raise ValueError("problem.dist must hold finite, non-negative distances")
     cfg = TSPConfig(planner, int(p.get("colonies", 1)), int(p["ants"]), int(p["iterations"]), p["local_search"])
+    check_memory(tsp_memory(d.shape[0], cfg.colonies, cfg.ants, cfg.iterations, 1,
+                            local_search=cfg.local_search == "2opt"),
+                 f"TSP planner {planner!r} with {cfg.colonies * cfg.ants} ants on {d.shape[0]} cities", unit="runs")
     params = {k: jnp.asarray(v, jnp.float32) for k, v in p.items() if k not in TSP_STATIC_PARAMS}
     dist = jnp.asarray(d, jnp.float32)
     key = jax.random.key(int(seed))

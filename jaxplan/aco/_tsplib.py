@@ -16,6 +16,12 @@ Distances follow the TSPLIB 95 specification (Reinelt, "TSPLIB 95", section 2):
 
 jaxplan's own ``"EUCLIDEAN"`` metric is the unrounded Euclidean distance. The diagonal is 0
 whatever the file says (TSPLIB matrices often carry a large sentinel there; a tour never uses it).
+
+Sizes are checked against content before anything is allocated: a ``DIMENSION`` the coordinate or
+matrix section does not hold is an error (a 200-byte file claiming a billion cities must not ask for
+gigabytes), and the ``[n, n]`` distance matrix of a file that does hold n cities goes through the
+memory guard (`jaxplan.scale.check_memory`). Errors quote no line that is not recognisably TSPLIB
+(a config that names the wrong file must not print that file's content).
 """
 
 from __future__ import annotations
@@ -26,6 +32,8 @@ from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
+
+from jaxplan.scale import MemoryLimitError, memory_limit
 
 __all__ = ["TSPProblem", "load_tsplib", "load_tour", "tour_length", "tsp_distances", "METRICS"]
 
@@ -43,6 +51,7 @@ _HEADER_KEYS = ("NAME", "TYPE", "COMMENT", "DIMENSION", "CAPACITY", "EDGE_WEIGHT
 _SECTIONS = ("NODE_COORD_SECTION", "EDGE_WEIGHT_SECTION", "DISPLAY_DATA_SECTION", "TOUR_SECTION",
              "FIXED_EDGES_SECTION", "DEPOT_SECTION", "DEMAND_SECTION", "EDGE_DATA_SECTION")
 _GEO_PI, _GEO_RRR = 3.141592, 6378.388
+_MATRIX_BYTES = 40  # per entry of an [n, n] distance matrix: the f64 result and tsp_distances' temporaries
 
 
 class TSPProblem(NamedTuple):
@@ -122,7 +131,7 @@ def _parse(p: Path, lines: list[str]) -> tuple[dict[str, tuple[int, str]], dict[
             continue
         if not line[0].isalpha():
             if current is None:
-                raise ValueError(f"{p.name} line {i}: data outside a section: {line[:60]!r}")
+                raise ValueError(f"{p.name} line {i}: data outside a section (is this a TSPLIB file?)")
             current.append((i, line.split()))
             continue
         current = None
@@ -131,7 +140,7 @@ def _parse(p: Path, lines: list[str]) -> tuple[dict[str, tuple[int, str]], dict[
             break
         if word.endswith("_SECTION"):
             if word not in _SECTIONS:
-                raise ValueError(f"{p.name} line {i}: unknown section {word!r}")
+                raise ValueError(f"{p.name} line {i}: unknown section {word[:40]!r}")
             if word in sections:
                 raise ValueError(f"{p.name} line {i}: section {word} appears twice")
             current = []
@@ -145,7 +154,8 @@ def _parse(p: Path, lines: list[str]) -> tuple[dict[str, tuple[int, str]], dict[
         if key not in _HEADER_KEYS:
             if ":" in line:
                 continue  # unknown specification fields (e.g. BEST_KNOWN) are informational
-            raise ValueError(f"{p.name} line {i}: unrecognised line {line[:60]!r}")
+            raise ValueError(f"{p.name} line {i}: unrecognised line: neither a TSPLIB header key nor a section "
+                             f"(is this a TSPLIB file?)")
         header[key] = (i, value.strip())
     return header, sections
 
@@ -167,16 +177,27 @@ def _number(p: Path, line: int, token: str) -> float:
     try:
         v = float(token)
     except ValueError:
-        raise ValueError(f"{p.name} line {line}: {token!r} is not a number") from None
+        raise ValueError(f"{p.name} line {line}: {token[:40]!r} is not a number") from None
     if not math.isfinite(v):
-        raise ValueError(f"{p.name} line {line}: {token!r} is not a finite number")
+        raise ValueError(f"{p.name} line {line}: {token[:40]!r} is not a finite number")
     return v
 
 
+def _check_matrix(p: Path, n: int) -> None:
+    """The memory guard for an ``[n, n]`` distance matrix, naming the most cities that fit."""
+    need, limit = _MATRIX_BYTES * n * n, memory_limit()
+    if need > limit:
+        raise MemoryLimitError(
+            f"{p.name}: the distance matrix of {n} cities needs about {need / 2**30:.2f} GiB, above the limit of "
+            f"{limit / 2**30:.2f} GiB; at most {math.isqrt(limit // _MATRIX_BYTES)} cities fit. Use a smaller "
+            f"instance, or raise the limit with JAXPLAN_MEMORY_LIMIT (e.g. 16G)")
+
+
 def _coordinates(p: Path, name: str, section: tuple[int, list], n: int) -> np.ndarray:
-    """``f64[n, 2]`` from ``index x y`` lines (any order, each index 1..n once)."""
+    """``f64[n, 2]`` from ``index x y`` lines (any order, each index 1..n once); nothing of size n is allocated
+    before the section is known to hold n nodes."""
     start, rows = section
-    xy = np.full((n, 2), np.nan)
+    xy: dict[int, tuple[float, float]] = {}
     for line, tokens in rows:
         if len(tokens) != 3:
             raise ValueError(f"{p.name} line {line}: {name} expects 'index x y' (3 numbers), got {len(tokens)}: "
@@ -184,17 +205,17 @@ def _coordinates(p: Path, name: str, section: tuple[int, list], n: int) -> np.nd
         try:
             k = int(tokens[0])
         except ValueError:
-            raise ValueError(f"{p.name} line {line}: node index {tokens[0]!r} is not an integer") from None
+            raise ValueError(f"{p.name} line {line}: node index {tokens[0][:40]!r} is not an integer") from None
         if not 1 <= k <= n:
             raise ValueError(f"{p.name} line {line}: node index {k} outside 1..{n} (DIMENSION)")
-        if not np.isnan(xy[k - 1, 0]):
+        if k in xy:
             raise ValueError(f"{p.name} line {line}: node {k} listed twice in {name}")
-        xy[k - 1] = (_number(p, line, tokens[1]), _number(p, line, tokens[2]))
-    missing = np.flatnonzero(np.isnan(xy[:, 0]))
-    if missing.size:
-        raise ValueError(f"{p.name} line {start}: {name} has {n - missing.size} of {n} nodes (DIMENSION); "
-                         f"missing node {missing[0] + 1}")
-    return xy
+        xy[k] = (_number(p, line, tokens[1]), _number(p, line, tokens[2]))
+    if len(xy) < n:
+        missing = next(k for k in range(1, n + 1) if k not in xy)  # at most len(xy) + 1 steps
+        raise ValueError(f"{p.name} line {start}: {name} has {len(xy)} of {n} nodes (DIMENSION); "
+                         f"missing node {missing}")
+    return np.asarray([xy[k] for k in range(1, n + 1)], np.float64).reshape(n, 2)
 
 
 def _explicit(p: Path, header: dict, sections: dict, n: int) -> np.ndarray:
@@ -210,16 +231,20 @@ def _explicit(p: Path, header: dict, sections: dict, n: int) -> np.ndarray:
     start, rows = sections["EDGE_WEIGHT_SECTION"]
     # Entries run across lines freely; remember each one's line for error messages.
     values = [(line, t) for line, tokens in rows for t in tokens]
+    # The entry count from DIMENSION, checked against the section before any [n, n] array exists.
+    needed = {"FULL_MATRIX": n * n, "UPPER_ROW": n * (n - 1) // 2, "LOWER_ROW": n * (n - 1) // 2,
+              "UPPER_DIAG_ROW": n * (n + 1) // 2, "LOWER_DIAG_ROW": n * (n + 1) // 2}[fmt]
+    if len(values) != needed:
+        last = values[-1][0] if values else start
+        raise ValueError(f"{p.name} line {last}: EDGE_WEIGHT_SECTION ({fmt_raw}, DIMENSION {n}) needs {needed} "
+                         f"entries, found {len(values)}")
+    _check_matrix(p, n)
     if fmt == "FULL_MATRIX":
         ii, jj = np.indices((n, n)).reshape(2, -1)
     else:
         ii, jj = np.indices((n, n)).reshape(2, -1)
         keep = {"UPPER_ROW": jj > ii, "LOWER_ROW": jj < ii, "UPPER_DIAG_ROW": jj >= ii, "LOWER_DIAG_ROW": jj <= ii}[fmt]
         ii, jj = ii[keep], jj[keep]  # row-major order of the listed triangle
-    if len(values) != ii.size:
-        last = values[-1][0] if values else start
-        raise ValueError(f"{p.name} line {last}: EDGE_WEIGHT_SECTION ({fmt_raw}, DIMENSION {n}) needs {ii.size} "
-                         f"entries, found {len(values)}")
     w = np.array([_number(p, line, t) for line, t in values], np.float64)
     bad = np.flatnonzero(w < 0)
     if bad.size:
@@ -292,6 +317,7 @@ def load_tsplib(path: str | Path, metric: str | None = None) -> TSPProblem:
     if "NODE_COORD_SECTION" not in sections:
         raise ValueError(f"{p.name}: EDGE_WEIGHT_TYPE {wtype} needs a NODE_COORD_SECTION")
     m = wtype if metric is None else _check_metric(metric)
+    _check_matrix(p, n)
     return TSPProblem(name, coords, tsp_distances(coords, m), m, n)
 
 
@@ -316,7 +342,7 @@ def load_tour(path: str | Path) -> np.ndarray:
             try:
                 v = int(t)
             except ValueError:
-                raise ValueError(f"{p.name} line {line}: tour entry {t!r} is not an integer") from None
+                raise ValueError(f"{p.name} line {line}: tour entry {t[:40]!r} is not an integer") from None
             if v == -1:
                 break
             nodes.append((line, v))

@@ -6,7 +6,10 @@ helper does not pull in JAX or numba with another:
 * `jaxplan.core.cache`: the one cache of the library (`functools.lru_cache` where keys hash,
   `memoize` with content keys for maps and arrays, `Built` for "seconds spent compiling now").
 * `jaxplan.core.geometry`: exact point/segment-to-unit-square distances, as numpy, JAX and numba twins.
-* `jaxplan.core.io`: the one atomic write (temporary file beside the target, fsync, `os.replace`).
+* `jaxplan.core.io`: the one atomic write (temporary file beside the target, fsync, `os.replace`), the folder
+  lock of run and tuning folders, and `confined` (a name from a config stays inside its folder).
+* `jaxplan.core.failure`: how the command line ends on a failure (one line, exit code 2 bad input / 1 fault /
+  130 interrupted).
 * `jaxplan.core.provenance`: the one provenance record (git, CPU, versions, devices) of runs and benchmarks.
 
 Layers. Imports flow strictly downward through these layers: a module may import from its own

@@ -30,13 +30,13 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Callable, Mapping, Sequence
 
-import tomllib
-
+from jaxplan.core.io import SAFE_NAME
 from jaxplan.experiments.schema import (
     ConfigError,
     Reader,
@@ -56,7 +56,8 @@ __all__ = [
     "FigureSpec", "PaperValue", "QuickSpec", "Metric", "METRICS", "GENERATORS", "DEPRECATED_GENERATORS",
     "FIGURE_KINDS", "KINDS", "ACCURACY_GAP", "SCENARIO_SOURCES", "SPREADS", "RUN_NAME", "ExperimentFile",
     "ExperimentTable", "MapTable", "InstanceTable", "FigureTable", "PaperTable", "PaperValueTable", "load_config",
-    "parse_config", "default_data_dir", "nav_config", "apply_quick", "applies", "read_maps", "scenario_bound",
+    "parse_config", "read_config_text", "default_data_dir", "nav_config", "apply_quick", "applies", "read_maps",
+    "scenario_bound",
 ]
 
 
@@ -194,8 +195,9 @@ SCENARIO_SOURCES = ("scen", "random", "scene")
 SPREADS = ("first", "even", "random")
 ROBOT_KEYS = ("v_min", "v_max", "omega_max", "accel", "decel", "alpha", "radius")
 """The ``robot`` keys of a navigate planner: `jaxplan.dwa.Unicycle` limits, and ``radius`` for its `Disc`."""
-RUN_NAME = r"[A-Za-z0-9][A-Za-z0-9_.-]*"
-"""What an experiment's or tuning run's name must match: it names the run folder."""
+RUN_NAME = SAFE_NAME
+"""What an experiment's or tuning run's name (and a figure's name) must match: it names the run folder (the
+figure's files), which must stay inside the output folder (`jaxplan.core.io.SAFE_NAME`)."""
 BANDS = ("iqr", "sd", "minmax")
 """The spread bands of convergence and diversity figures (or ``false``: none)."""
 
@@ -489,7 +491,8 @@ class FigureTable:
                         "iteration; box, bar: a metric per planner; sweep: a metric against x; paths, pheromone, "
                         "trajectories, controls (v and omega over time), fan (the DWA rollouts): one trial; tours: "
                         "the best tour over the instance's cities", required=True, choices=FIGURE_KIND_NAMES)
-    name: str = setting("str", None, "file stem; unique", default_text="the kind, then kind_2, ...")
+    name: str = setting("str", None, "file stem; unique", default_text="the kind, then kind_2, ...", pattern=RUN_NAME,
+                        hint="it names the figure's files, inside the figure folder")
     title: str = setting("str", None, "the figure's title", default_text="one made from the kind")
     maps: tuple[str, ...] = setting("strings", None, "only these maps (names)", default_text="all")
     planners: tuple[str, ...] = setting("strings", None, "only these planners (labels)", default_text="all")
@@ -1224,7 +1227,16 @@ def load_config(path: str | os.PathLike, *, data_dir: str | os.PathLike | None =
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"config file not found: {p}")
-    return parse_config(p.read_text(encoding="utf-8"), data_dir=data_dir, source=str(p), path=p.resolve())
+    return parse_config(read_config_text(p), data_dir=data_dir, source=str(p), path=p.resolve())
+
+
+def read_config_text(p: Path) -> str:
+    """The UTF-8 text of config file ``p``; a file that is not text is a `ConfigError` that quotes none of it."""
+    try:
+        return p.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise ConfigError([f"not a TOML config: not UTF-8 text (undecodable byte at offset {e.start})"],
+                          str(p)) from None
 
 
 def apply_quick(cfg: ExperimentConfig) -> ExperimentConfig:

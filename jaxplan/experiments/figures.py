@@ -30,7 +30,13 @@ Kinds (keys besides ``kind name title maps planners format``):
 
 Output: ``OUT/RUN/STEM.png`` and ``.svg`` (``format`` = one of png/svg/pdf writes only that),
 ``OUT/RUN/index.md`` (one section per figure with its caption), and ``OUT/index.md``
-listing every run's index found under ``OUT``.
+listing every run's index found under ``OUT``; every file is written atomically
+(`jaxplan.core.io`), and STEM (a `jaxplan.core.io.SAFE_NAME`) stays inside ``OUT/RUN``.
+
+A figure that needs the arrays of a chunk that are missing, damaged (checked against the SHA-256
+the runner stored) or not computed yet is not drawn: it is listed with the chunk and what to do
+(``jaxplan run CONFIG`` recomputes it). With ``partial=True`` (``jaxplan figures --partial``) it is
+drawn without them and labelled partial: in the figure, its caption and the index.
 """
 
 from __future__ import annotations
@@ -40,11 +46,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
-from jaxplan.core.io import atomic_write
+from jaxplan.core.io import atomic_write, confined
 from jaxplan.experiments import plots
 from jaxplan.experiments.config import FigureSpec
 from jaxplan.experiments.figure_kinds import DRAW
-from jaxplan.experiments.run_data import RunData, load_run
+from jaxplan.experiments.run_data import MissingArrays, RunData, load_run
 
 __all__ = ["Drawn", "RunData", "load_run", "draw_figures", "write_index", "DRAW"]
 
@@ -53,12 +59,14 @@ plt = plots.plt  # the Agg backend is chosen in plots
 
 @dataclass(frozen=True)
 class Drawn:
-    """One written figure: its stem, files (relative to the run's figure folder) and caption."""
+    """One written figure: its stem, files (relative to the run's figure folder) and caption; ``partial`` says
+    which chunks' arrays it lacks (empty for a complete figure)."""
 
     name: str
     kind: str
     files: tuple[str, ...]
     caption: str
+    partial: str = ""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -70,7 +78,8 @@ def write_index(out: Path, run_name: str, title: str, drawn: Sequence[Drawn], pr
     d = out / run_name
     lines = [f"# Figures: {run_name}", "", title, ""]
     for f in drawn:
-        lines += [f"## {f.name} ({f.kind})", "", f"![{f.name}]({f.files[0]})", "", f.caption, "",
+        lines += [f"## {f.name} ({f.kind}{', PARTIAL' if f.partial else ''})", "", f"![{f.name}]({f.files[0]})", "",
+                  f.caption, "",
                   "Files: " + ", ".join(f"[{x}]({x})" for x in f.files), ""]
     if problems:
         lines += ["## Not drawn", ""] + [f"- {p}" for p in problems] + [""]
@@ -86,27 +95,35 @@ def write_index(out: Path, run_name: str, title: str, drawn: Sequence[Drawn], pr
 
 
 def _draw_one(run: RunData, spec: FigureSpec, d: Path) -> Drawn:
-    """Draws and saves one figure into ``d``."""
+    """Draws and saves one figure into ``d`` (labelled partial if it lacks some chunks' arrays)."""
     before = set(plt.get_fignums())
+    run.figure_missing = {}
     try:
         fig, caption = DRAW[spec.kind](run, spec)
     except Exception:
         for num in set(plt.get_fignums()) - before:  # a half-drawn figure would stay open for the whole batch
             plt.close(num)
         raise
+    partial = "; ".join(run.figure_missing.values())
+    if partial:
+        n = len(run.figure_missing)
+        fig.text(0.01, 0.005, f"PARTIAL: drawn without the arrays of {n} chunk{'s' * (n != 1)} (see index.md)",
+                 color="red", fontsize=8, ha="left", va="bottom")
+        caption = f"PARTIAL: drawn without {partial}. {caption}"
     try:
         fmts = [spec.params["format"]] if spec.params.get("format") else ["png", "svg"]
         files = []
         for ext in fmts:
-            plots.save_figure(fig, str(d / f"{spec.name}.{ext}"))
+            plots.save_figure(fig, str(confined(d, spec.name, f".{ext}")))
             files.append(f"{spec.name}.{ext}")
     finally:
         plt.close(fig)
-    return Drawn(spec.name, spec.kind, tuple(files), caption)
+    return Drawn(spec.name, spec.kind, tuple(files), caption, partial)
 
 
 def draw_figures(run_dir: str | os.PathLike, out: str | os.PathLike = "figures", *,
-                 data_dir: str | os.PathLike | None = None, strict: bool = False) -> tuple[list[Drawn], list[str]]:
+                 data_dir: str | os.PathLike | None = None, strict: bool = False,
+                 partial: bool = False) -> tuple[list[Drawn], list[str]]:
     """Draws every ``[[figures]]`` entry of a run folder's config.
 
     Args:
@@ -114,6 +131,8 @@ def draw_figures(run_dir: str | os.PathLike, out: str | os.PathLike = "figures",
       out: figure root; files go to ``out/RUN/`` (RUN = the run folder's name).
       data_dir: where the config's relative map paths resolve (as for `run_experiment`).
       strict: raise on the first figure that cannot be drawn (default: list it, whatever the error, and go on).
+      partial: draw a figure whose chunks' arrays are partly missing or damaged, labelled partial
+        (default: list it as not drawn, naming the chunk).
 
     Returns:
       (the figures written, the problems of those not drawn — one line each).
@@ -121,7 +140,7 @@ def draw_figures(run_dir: str | os.PathLike, out: str | os.PathLike = "figures",
     Raises:
       FileNotFoundError: not a run folder, or nothing finished in it.
     """
-    run = load_run(run_dir, data_dir)
+    run = load_run(run_dir, data_dir, partial=partial)
     run_name = Path(run_dir).resolve().name
     d = Path(out) / run_name
     d.mkdir(parents=True, exist_ok=True)
@@ -132,7 +151,7 @@ def draw_figures(run_dir: str | os.PathLike, out: str | os.PathLike = "figures",
         except Exception as e:  # noqa: BLE001 - one figure's failure (even a bug) must not cost the others
             if strict:
                 raise
-            known = isinstance(e, (ValueError, KeyError, FileNotFoundError))
+            known = isinstance(e, (ValueError, KeyError, FileNotFoundError, MissingArrays))
             problems.append(f"{spec.name} ({spec.kind}): {e if known else f'{type(e).__name__}: {e}'}")
     write_index(Path(out), run_name, run.config.description or run.config.name, drawn, problems)
     return drawn, problems

@@ -26,6 +26,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from jaxplan.experiments.config import METRICS, ConfigError, ExperimentConfig, MapSpec, applies
+from jaxplan.scale import check_memory, table_memory
 
 __all__ = ["ID_COLUMNS", "MapWork", "Unit", "Prepared", "sha256", "load_map_spec", "random_pairs", "spec_scenarios",
            "prepare", "trial_columns", "fingerprint"]
@@ -107,7 +108,9 @@ def load_map_spec(spec: MapSpec):
     factory, is_dc = _generators()[spec.generator]
     params = {k: tuple(v) if isinstance(v, (list, tuple)) else v for k, v in spec.params.items()}
     if is_dc:
-        scene = factory(**params, resolution=spec.resolution)(spec.seed)
+        gen = factory(**params, resolution=spec.resolution)
+        _check_map_size(spec, getattr(gen, "width", None), getattr(gen, "height", None))
+        scene = gen(spec.seed)
     elif spec.generator == "demo_warehouse":
         scene = factory()
     else:
@@ -116,6 +119,22 @@ def load_map_spec(spec: MapSpec):
     arrays = [np.ascontiguousarray(a).tobytes() for a in (grid.free, grid.height, grid.clearance_height, grid.risk,
                                                             grid.turn_rule)]
     return grid, np.asarray(scene.start), np.asarray(scene.goal), sha256(*arrays, repr(grid.resolution).encode())
+
+
+_CELL_BYTES = 64
+"""Bytes per cell of a generated map while it is made: the map's layers (14 bytes) and the generator's and
+the exact distances' temporaries."""
+_PAIR_BYTES = 1024
+"""Bytes per random start-goal pair while they are drawn: four candidate pairs of cells, their distances and the
+exact lengths, and the kept Python lists."""
+
+
+def _check_map_size(spec: MapSpec, width, height) -> None:
+    """The memory guard of a generated map's claimed size, before the generator allocates it."""
+    if isinstance(width, int) and isinstance(height, int) and width > 0 and height > 0:
+        check_memory(table_memory(width * height, {"map layers": _CELL_BYTES}),
+                     f"map {spec.name!r}: a generated {width}x{height} map", unit="cells",
+                     advice="Use a smaller map")
 
 
 def load_instance(spec: MapSpec) -> MapWork:
@@ -152,6 +171,8 @@ def random_pairs(grid, count: int, seed: int, min_distance: float,
     each cell at least ``min_clearance`` m from the nearest blocked square."""
     from jaxplan.search import shortest_lengths
 
+    check_memory(table_memory(count, {"start-goal pairs": _PAIR_BYTES}), f"{count} random scenarios",
+                 unit="scenarios", advice="Ask for fewer scenarios")
     ok_cells = np.asarray(grid.free)
     if min_clearance > 0:
         from jaxplan.grid import clearance_field
@@ -223,6 +244,7 @@ def prepare(cfg: ExperimentConfig) -> Prepared:
     Raises:
       ConfigError: problems only visible with the data (an empty scenario filter,
         scenario rows that do not fit the map, too few connected random pairs), all at once.
+      MemoryLimitError: a generated map or a random scenario count that would not fit in memory.
     """
     problems, maps = [], []
     for i, spec in enumerate(cfg.maps):

@@ -9,25 +9,42 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
 
 from jaxplan.experiments import plots
-from jaxplan.experiments.config import METRICS, ExperimentConfig, FigureSpec, applies, apply_quick, parse_config
+from jaxplan.experiments.config import (
+    METRICS,
+    ExperimentConfig,
+    FigureSpec,
+    applies,
+    apply_quick,
+    parse_config,
+    read_config_text,
+)
 
-__all__ = ["RunData", "load_run", "selected", "panel_grid", "map_layer", "figure_title", "figure_metric",
-           "metric_label", "need_trials", "scenario_of", "scenario_seed", "cell_path_m", "trial_obstacles",
-           "disc_positions"]
+__all__ = ["RunData", "MissingArrays", "load_run", "selected", "panel_grid", "map_layer", "figure_title",
+           "figure_metric", "metric_label", "need_trials", "scenario_of", "scenario_seed", "cell_path_m",
+           "trial_obstacles", "disc_positions"]
 
 plt = plots.plt  # the Agg backend is chosen in plots
 
 
+class MissingArrays(ValueError):
+    """A figure needs a chunk's arrays that are missing, damaged or not computed yet (and ``partial`` is off)."""
+
+
 @dataclass
 class RunData:
-    """A run folder read back: config (quick applied if it ran quick), maps, manifest, trials."""
+    """A run folder read back: config (quick applied if it ran quick), maps, manifest, trials.
+
+    ``partial``: a figure may be drawn without the arrays of chunks that are missing or damaged (they are
+    listed in ``figure_missing`` while it is drawn, then labelled); otherwise such a figure is refused
+    (`MissingArrays`), since a convergence curve that silently drops a planner reads as a result.
+    """
 
     run_dir: Path
     config: ExperimentConfig
@@ -35,33 +52,56 @@ class RunData:
     manifest: dict
     trials: dict | None
     _arrays: dict
+    partial: bool = False
+    _missing: dict = field(default_factory=dict)
+    figure_missing: dict = field(default_factory=dict)
 
     def arrays(self, m: int, p: int, scenario: int) -> tuple[dict, int] | None:
-        """(chunk arrays, row of ``scenario`` in them) for map ``m``, planner ``p``; None if not stored."""
-        from jaxplan.experiments.store import load_chunk_arrays
+        """(chunk arrays, row of ``scenario`` in them) for map ``m``, planner ``p``; None if the run has no such
+        chunk, or (with ``partial``) if its arrays are missing or damaged.
+
+        Raises:
+          MissingArrays: the chunk's arrays are missing, fail their SHA-256 check, cannot be read or were never
+            computed (an unfinished run), and ``partial`` is off.
+        """
+        from jaxplan.experiments.store import CheckpointError, load_chunk_arrays
 
         for u in self.prep.units:
             if u.m == m and u.p == p and u.lo <= scenario < u.hi:
-                if u.uid not in self.manifest.get("chunks", {}):
-                    return None
+                entry = self.manifest.get("chunks", {}).get(u.uid)
                 if u.uid not in self._arrays:
-                    try:
-                        self._arrays[u.uid] = load_chunk_arrays(self.run_dir, u.uid)
-                    except (FileNotFoundError, ValueError):
+                    where = f"[{self.prep.maps[m].spec.name}/{self.config.planners[p].label}, scenarios {u.lo}-" \
+                            f"{u.hi - 1}]"
+                    if entry is None:
+                        self._missing[u.uid] = (f"chunk {u.uid} {where} has not run yet (an unfinished run: "
+                                                f"`jaxplan run CONFIG` resumes it)")
                         self._arrays[u.uid] = None
+                    else:
+                        try:
+                            self._arrays[u.uid] = load_chunk_arrays(self.run_dir, u.uid, entry.get("arrays_sha256"))
+                        except CheckpointError as e:
+                            self._missing[u.uid] = f"{e} {where}; run `jaxplan run CONFIG` again to recompute it"
+                            self._arrays[u.uid] = None
                 a = self._arrays[u.uid]
-                return None if a is None else (a, scenario - u.lo)
+                if a is None:
+                    why = self._missing[u.uid]
+                    if not self.partial:
+                        raise MissingArrays(f"{why} (or draw without it: jaxplan figures --partial)")
+                    self.figure_missing[u.uid] = why
+                    return None
+                return a, scenario - u.lo
         return None
 
 
-def load_run(run_dir: str | os.PathLike, data_dir: str | os.PathLike | None = None) -> RunData:
-    """Reads a run folder written by `run_experiment`.
+def load_run(run_dir: str | os.PathLike, data_dir: str | os.PathLike | None = None, *,
+             partial: bool = False) -> RunData:
+    """Reads a run folder written by `run_experiment` (``partial``: see `RunData`).
 
     Raises:
       FileNotFoundError: not a run folder (no config.toml), or no finished chunk.
     """
     from jaxplan.experiments import stats
-    from jaxplan.experiments.prepare import prepare
+    from jaxplan.experiments.prepare import fingerprint, prepare
     from jaxplan.experiments.store import read_manifest
 
     run_dir = Path(run_dir)
@@ -69,18 +109,24 @@ def load_run(run_dir: str | os.PathLike, data_dir: str | os.PathLike | None = No
     if not cfg_path.is_file():
         raise FileNotFoundError(f"{run_dir} is not a run folder (no config.toml); run `jaxplan run CONFIG` first")
     meta_path = run_dir / "meta.json"
-    meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
-    cfg = parse_config(cfg_path.read_text(), data_dir=data_dir, source=str(cfg_path))
+    try:
+        meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
+    except ValueError:
+        raise ValueError(f"{meta_path} is damaged (not JSON); run `jaxplan run` with the run's config again to "
+                         f"rewrite it") from None
+    meta = meta if isinstance(meta, dict) else {}
+    cfg = parse_config(read_config_text(cfg_path), data_dir=data_dir, source=str(cfg_path))
     if meta.get("quick"):
         cfg = apply_quick(cfg)
     if meta.get("chunk"):
         cfg = cfg.replace(chunk=int(meta["chunk"]))  # `--chunk` may have overridden the config's
-    manifest = read_manifest(run_dir)
+    prep = prepare(cfg)
+    manifest = read_manifest(run_dir, fingerprint(prep))
     if not manifest.get("chunks"):
         raise FileNotFoundError(f"{run_dir} has no finished chunk yet")
     trials_path = run_dir / "trials.csv"
     trials = stats.read_trials(trials_path) if trials_path.is_file() else None
-    return RunData(run_dir, cfg, prepare(cfg), manifest, trials, {})
+    return RunData(run_dir, cfg, prep, manifest, trials, {}, partial)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -5,6 +5,7 @@ The stages, one module each:
 * `jaxplan.experiments.prepare`: the work plan — maps loaded, scenarios chosen, trials cut into
   chunks (one map × one planner × up to ``chunk`` scenarios × every seed), and the fingerprint
   of everything that shapes the trials;
+* `jaxplan.experiments.budget`: the memory guard of every chunk and of the trials, before any work;
 * `jaxplan.experiments.execute`: one compiled batch call per chunk (`jaxplan.plan_batch`,
   `jaxplan.navigate_batch`, the TSP program over the seeds) and its rows of CSV text;
 * `jaxplan.experiments.trial_metrics`: host-side float64 metrics that depend on each trial only;
@@ -19,7 +20,8 @@ mixes with the real one)::
 
     config.toml          the config file, verbatim
     meta.json            versions (jaxplan, jax, numpy, scipy, python), git revision, devices, session start times,
-                         and the whole provenance record
+                         the seeds as ranges, and the whole provenance record
+    .lock                held by the process that works in the folder (a second one is refused)
     trials.csv           one row per (map, planner, scenario, seed); deterministic
     timings.csv          wall-clock times per chunk (compile and run); NOT reproducible, hence apart
     summary.csv/.md      mean ± sd per map × planner × metric, the paper's numbers in `paper_*` columns
@@ -27,10 +29,12 @@ mixes with the real one)::
     report.md            the whole run in one page
     checkpoints/manifest.json       the commit log of finished chunks
     checkpoints/chunks/ID.csv       each finished chunk's rows
+    checkpoints/chunks/ID.json      its record (fingerprint, SHA-256 of rows and arrays): rebuilds a damaged manifest
     checkpoints/arrays/ID/          each chunk's arrays (orbax): convergence histories, paths, tours, trajectories
 
-Restarting with the same config skips every committed chunk; ``trials.csv`` is the header plus
-the chunk files in chunk order, so it comes out byte-identical to an uninterrupted run's.
+Restarting with the same config skips every committed chunk whose rows and arrays still match their
+SHA-256 (a chunk that fails is recomputed); ``trials.csv`` is the header plus the chunk files in chunk
+order, each checked again as it is read, so it comes out byte-identical to an uninterrupted run's.
 """
 
 from __future__ import annotations
@@ -41,13 +45,14 @@ import os
 import sys
 from pathlib import Path
 
-from jaxplan.core.io import atomic_write
+from jaxplan.core.io import atomic_write, confined, folder_lock
 from jaxplan.experiments import report, stats
+from jaxplan.experiments.budget import check_experiment
 from jaxplan.experiments.config import ConfigError, ExperimentConfig, apply_quick, load_config
 from jaxplan.experiments.execute import run_unit
 from jaxplan.experiments.prepare import Prepared, fingerprint, prepare, trial_columns
 from jaxplan.experiments.progress import Progress
-from jaxplan.experiments.store import Store, write_meta
+from jaxplan.experiments.store import CheckpointError, Store, write_meta
 
 __all__ = ["run_experiment", "resolve_config"]
 
@@ -67,6 +72,13 @@ def resolve_config(config: ExperimentConfig | str | os.PathLike, *, quick: bool 
             raise ConfigError([f"chunk: must be an integer >= 1, got {chunk!r}"], "--chunk")
         cfg = cfg.replace(chunk=chunk)
     return cfg
+
+
+def _note(cfg: ExperimentConfig, store: Store, seen: int) -> int:
+    """Prints the store's notes from ``seen`` on (always: they concern the data, not the progress)."""
+    for line in store.notes[seen:]:
+        print(f"{cfg.name}: {line}", file=sys.stderr, flush=True)
+    return len(store.notes)
 
 
 def _run_chunks(prep: Prepared, store: Store, progress: bool, stop_after: int | None) -> bool:
@@ -96,11 +108,11 @@ def _run_chunks(prep: Prepared, store: Store, progress: bool, stop_after: int | 
     return True
 
 
-def _write_results(run_dir: Path, prep: Prepared, store: Store) -> None:
-    """trials.csv (header + the chunk files in run order), timings, summaries, significance tests and reports."""
+def _write_results(run_dir: Path, prep: Prepared, store: Store, trials: bytes) -> None:
+    """trials.csv (``trials``: header + the checked chunk files in run order), timings, summaries, significance
+    tests and reports."""
     cfg = prep.config
-    header = ",".join(trial_columns(cfg)) + "\n"
-    atomic_write(run_dir / "trials.csv", store.merged(prep.units, header))
+    atomic_write(run_dir / "trials.csv", trials)
     timings = [{"uid": u.uid, **store.manifest["chunks"][u.uid]} for u in prep.units]
     stats.write_timings(run_dir / "timings.csv", timings)
     result = stats.analyse(run_dir / "trials.csv", run_dir / "timings.csv", cfg)
@@ -111,10 +123,19 @@ def _write_results(run_dir: Path, prep: Prepared, store: Store) -> None:
     atomic_write(run_dir / "report.md", report.report_markdown(result, cfg, prep, meta))
 
 
+_MERGE_ATTEMPTS = 3
+
+
 def run_experiment(config: ExperimentConfig | str | os.PathLike, out_dir: str | os.PathLike = "runs", *,
                    quick: bool = False, data_dir: str | os.PathLike | None = None, progress: bool = True,
                    chunk: int | None = None, stop_after: int | None = None) -> Path:
     """Runs (or resumes) an experiment and writes its run folder.
+
+    Before any work the config is validated in full and the memory of every chunk and of the trials is
+    checked (`jaxplan.experiments.budget`); the run folder is then locked against a second process
+    (`jaxplan.core.io.folder_lock`). On resume every committed chunk is checked against its SHA-256 and a
+    chunk that fails is recomputed; a damaged manifest is rebuilt from the intact chunks
+    (`jaxplan.experiments.store`). What was found is printed on stderr.
 
     Args:
       config: an `ExperimentConfig` or the path of a TOML config (validated in full first).
@@ -131,16 +152,32 @@ def run_experiment(config: ExperimentConfig | str | os.PathLike, out_dir: str | 
 
     Raises:
       ConfigError: the config or its data has problems (all listed; nothing was run).
+      MemoryLimitError: a chunk or the trials would not fit in memory (nothing was run).
       RunFolderError: the folder holds checkpoints of a different experiment.
+      FolderInUseError: another process works in the run folder.
     """
     cfg = resolve_config(config, quick=quick, data_dir=data_dir, chunk=chunk)
     prep = prepare(cfg)
-    run_dir = Path(out_dir) / (cfg.name + ("-quick" if cfg.is_quick else ""))
+    check_experiment(prep)
+    run_dir = confined(out_dir, cfg.name + ("-quick" if cfg.is_quick else ""))
     run_dir.mkdir(parents=True, exist_ok=True)
-    store = Store(run_dir, fingerprint(prep))
-    started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
-    atomic_write(run_dir / "config.toml", cfg.text.encode())
-    write_meta(run_dir, cfg, store.session, started)
-    if _run_chunks(prep, store, progress, stop_after):
-        _write_results(run_dir, prep, store)
+    with folder_lock(run_dir):
+        store = Store(run_dir, fingerprint(prep))
+        store.verify(prep.units)
+        seen = _note(cfg, store, 0)
+        started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+        atomic_write(run_dir / "config.toml", cfg.text.encode())
+        write_meta(run_dir, cfg, store.session, started)
+        header = ",".join(trial_columns(cfg)) + "\n"
+        for _ in range(_MERGE_ATTEMPTS):
+            if not _run_chunks(prep, store, progress, stop_after):
+                return run_dir
+            trials = store.merged(prep.units, header)
+            seen = _note(cfg, store, seen)
+            if trials is not None:
+                break
+        else:
+            raise CheckpointError(f"{run_dir}: chunk files keep changing while they are merged (another program "
+                                  f"writes to checkpoints/chunks?); run the same command again when it has stopped")
+        _write_results(run_dir, prep, store, trials)
     return run_dir

@@ -43,17 +43,18 @@ from types import MappingProxyType
 from typing import Any, Callable, Iterator, Mapping, Sequence
 
 __all__ = [
-    "TYPES", "UNSET", "MAX_SEED", "ConfigError", "Setting", "setting", "declaration", "settings", "setting_of",
+    "TYPES", "UNSET", "MAX_SEED", "MAX_SEED_COUNT", "ConfigError", "Setting", "setting", "declaration", "settings",
+    "setting_of",
     "extra_setting", "Reader", "check", "frozen", "describe", "did_you_mean", "join", "toml_literal", "markdown",
     "json_schema",
 ]
 
 TYPES = ("int", "float", "str", "bool", "seeds", "strings", "table", "section", "tables", "custom")
 """Setting types: TOML scalars (``int`` refuses booleans, ``float`` takes integers and must be finite);
-``seeds`` a count n (seeds 0..n-1) or a list of distinct integers in [0, 2**32); ``strings`` a list of
-strings; ``table`` a free-form inline table (its keys optionally restricted); ``section`` a nested table
-and ``tables`` an array of tables, both described by another section; ``custom`` a value the section's
-own code checks (the setting gives its doc, Markdown type and JSON Schema)."""
+``seeds`` a count n <= `MAX_SEED_COUNT` (seeds 0..n-1) or a list of distinct integers in [0, 2**32);
+``strings`` a list of strings; ``table`` a free-form inline table (its keys optionally restricted);
+``section`` a nested table and ``tables`` an array of tables, both described by another section; ``custom`` a
+value the section's own code checks (the setting gives its doc, Markdown type and JSON Schema)."""
 
 
 class _Unset:
@@ -68,6 +69,11 @@ UNSET: Any = _Unset()
 
 MAX_SEED = 2**32
 """Seeds are unsigned 32-bit integers."""
+
+MAX_SEED_COUNT = 2**20
+"""The largest seed count a config may give: the seeds are held as a tuple (36 bytes each), so a count near
+2**32 would take the machine's memory before any check could run; a million seeds is far beyond any statistics
+(whether a run's seeds × scenarios fit is the memory guard's to say, `jaxplan.scale.check_memory`)."""
 
 
 class ConfigError(ValueError):
@@ -368,6 +374,9 @@ class Reader:
             if v < 1:
                 self.bad(p, f"must be >= 1, got {v}")
                 return default
+            if v > MAX_SEED_COUNT:
+                self.bad(p, f"a seed count of {v} is more than the {MAX_SEED_COUNT} seeds a run may have")
+                return default
             return tuple(range(v))
         if isinstance(v, list) and v and all(isinstance(x, int) and not isinstance(x, bool) for x in v):
             bad = [x for x in v if not 0 <= x < MAX_SEED]
@@ -615,7 +624,7 @@ def _json_property(s: Setting, ref: Callable[[type], str]) -> dict[str, Any]:
     elif s.type == "bool":
         j = {"type": "boolean"}
     elif s.type == "seeds":
-        j = {"oneOf": [{"type": "integer", "minimum": 1},
+        j = {"oneOf": [{"type": "integer", "minimum": 1, "maximum": MAX_SEED_COUNT},
                        {"type": "array", "minItems": 1, "uniqueItems": True,
                         "items": {"type": "integer", "minimum": 0, "maximum": MAX_SEED - 1}}]}
     elif s.type == "strings":

@@ -15,6 +15,10 @@ Scenario files: a ``version`` line, then tab-separated rows
 ``bucket  map  width  height  start_x  start_y  goal_x  goal_y  optimal_length``.
 The classic Dragon Age files (``*.map.scen``) and the MAPF benchmark files
 (``*-random-*.scen``, ``*-even-*.scen``) share this layout.
+
+A header's claimed size is checked against the rows that follow before the grid is allocated (a
+header claiming a width of 10^12 is an error, not a `MemoryError`), and the first line, which tells
+the format, is never quoted in an error: a config that names the wrong file must not print its content.
 """
 
 from __future__ import annotations
@@ -48,14 +52,19 @@ def _read_text(path: str | os.PathLike, what: str) -> str:
         raise ValueError(f"{p}: not a MovingAI {what} file (non-ASCII byte at offset {e.start})") from None
 
 
+def _quote(text: str, limit: int = 60) -> str:
+    """``repr`` of at most ``limit`` characters of a line (an error shows what is wrong, not a whole file)."""
+    return repr(text if len(text) <= limit else text[:limit] + "…")
+
+
 def _header_int(line: str, key: str, lineno: int, where: str) -> int:
     parts = line.split()
     if len(parts) != 2 or parts[0] != key:
-        raise ValueError(f"{where}:{lineno}: expected '{key} <integer>', got {line!r}")
+        raise ValueError(f"{where}:{lineno}: expected '{key} <integer>', got {_quote(line)}")
     try:
         v = int(parts[1])
     except ValueError:
-        raise ValueError(f"{where}:{lineno}: '{key}' must be an integer, got {parts[1]!r}") from None
+        raise ValueError(f"{where}:{lineno}: '{key}' must be an integer, got {_quote(parts[1])}") from None
     if v < 1:
         raise ValueError(f"{where}:{lineno}: '{key}' must be >= 1, got {v}")
     return v
@@ -82,11 +91,11 @@ def parse_map(text: str, resolution: float = 1.0, where: str = "<map>") -> GridM
     if len(lines) < 4:
         raise ValueError(f"{where}: a map needs 4 header lines (type, height, width, map), found {len(lines)} lines")
     if lines[0].split() != ["type", "octile"]:
-        raise ValueError(f"{where}:1: expected 'type octile', got {lines[0]!r}")
+        raise ValueError(f"{where}:1: expected 'type octile': not a MovingAI map file")
     h = _header_int(lines[1], "height", 2, where)
     w = _header_int(lines[2], "width", 3, where)
     if lines[3].strip() != "map":
-        raise ValueError(f"{where}:4: expected 'map', got {lines[3]!r}")
+        raise ValueError(f"{where}:4: expected 'map', got {_quote(lines[3])}")
     rows = lines[4:]
     while rows and rows[-1].strip() == "":
         rows.pop()
@@ -101,10 +110,11 @@ def parse_map(text: str, resolution: float = 1.0, where: str = "<map>") -> GridM
             )
     if len(rows) != h:
         raise ValueError(f"{where}: header says height {h} but {len(rows)} map rows follow")
-    free = np.zeros((h, w), dtype=bool)
-    for y, row in enumerate(rows):
+    for y, row in enumerate(rows):  # every width before the [h, w] grid is allocated
         if len(row) != w:
             raise ValueError(f"{where}:{y + 5}: row {y} has {len(row)} characters, header says width {w}")
+    free = np.zeros((h, w), dtype=bool)
+    for y, row in enumerate(rows):
         free[y] = np.isin(np.frombuffer(row.encode("ascii"), dtype=np.uint8), _PASSABLE_BYTES)
     return grid_from_array(free, resolution=resolution)
 
@@ -181,14 +191,14 @@ def parse_scenarios(text: str, where: str = "<scen>", grid: GridMap | None = Non
     """
     lines = _lines(text)
     if not lines or not lines[0].strip().lower().startswith("version"):
-        raise ValueError(f"{where}:1: expected a 'version' line first, got {lines[0] if lines else ''!r}")
+        raise ValueError(f"{where}:1: expected a 'version' line first: not a MovingAI scenario file")
     vparts = lines[0].split()
     if len(vparts) != 2:
-        raise ValueError(f"{where}:1: expected 'version <number>', got {lines[0]!r}")
+        raise ValueError(f"{where}:1: expected 'version <number>', got {_quote(lines[0])}")
     try:
         float(vparts[1])
     except ValueError:
-        raise ValueError(f"{where}:1: version must be a number, got {vparts[1]!r}") from None
+        raise ValueError(f"{where}:1: version must be a number, got {_quote(vparts[1])}") from None
     rows: list[tuple] = []
     map_name, size = "", None
     for lineno, line in enumerate(lines[1:], start=2):
@@ -203,9 +213,9 @@ def parse_scenarios(text: str, where: str = "<scen>", grid: GridMap | None = Non
             bucket, w, h, sx, sy, gx, gy = (int(f[i]) for i in (0, 2, 3, 4, 5, 6, 7))
             opt = float(f[8])
         except ValueError:
-            raise ValueError(f"{where}:{lineno}: non-numeric field in {line!r}") from None
+            raise ValueError(f"{where}:{lineno}: non-numeric field in {_quote(line, 120)}") from None
         if not math.isfinite(opt) or opt < 0:
-            raise ValueError(f"{where}:{lineno}: optimal length must be finite and >= 0, got {f[8]!r}")
+            raise ValueError(f"{where}:{lineno}: optimal length must be finite and >= 0, got {_quote(f[8])}")
         if size is None:
             size, map_name = (w, h), f[1]
         elif (w, h) != size:

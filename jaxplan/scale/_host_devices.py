@@ -42,9 +42,13 @@ from jax.sharding import Mesh
 
 from jaxplan.scale._mesh import batch_mesh, check_mesh
 
-__all__ = ["HOST_DEVICES_ENV", "AUTO_MIN_PER_DEVICE", "host_devices_setting", "use_host_devices", "auto_mesh"]
+__all__ = ["HOST_DEVICES_ENV", "MAX_HOST_DEVICES", "AUTO_MIN_PER_DEVICE", "host_devices_setting", "use_host_devices",
+           "auto_mesh"]
 
 HOST_DEVICES_ENV = "JAXPLAN_HOST_DEVICES"
+MAX_HOST_DEVICES = 1024
+"""The most host devices jaxplan asks XLA for: XLA starts them one by one when its backend starts, and a
+count such as 100000 (a typo) hangs that start for hours; beyond the cores there is nothing to gain."""
 
 
 def _cores() -> int:
@@ -67,7 +71,7 @@ def host_devices_setting(value: str | None = None) -> int | None:
     """The host device count asked for by ``value`` (default ``$JAXPLAN_HOST_DEVICES``).
 
     Unset, empty or ``auto`` → the cores of this process's affinity; ``off`` → None (leave
-    JAX's default); a positive integer → that many.
+    JAX's default); a positive integer up to `MAX_HOST_DEVICES` → that many.
 
     Raises:
       ValueError: anything else, naming the variable.
@@ -84,6 +88,9 @@ def host_devices_setting(value: str | None = None) -> int | None:
         n = 0
     if n < 1:
         raise ValueError(f"${HOST_DEVICES_ENV} must be a positive integer, 'auto' or 'off', got {raw!r}")
+    if n > MAX_HOST_DEVICES:
+        raise ValueError(f"${HOST_DEVICES_ENV} = {raw} is more than the {MAX_HOST_DEVICES} host devices jaxplan "
+                         f"starts (this machine has {_cores()} cores); unset it or use 'auto'")
     return n
 
 
@@ -115,7 +122,7 @@ def use_host_devices(n: int | None = None) -> int | None:
       (chosen through the environment, or ``$JAXPLAN_HOST_DEVICES=off``).
 
     Raises:
-      ValueError: ``n`` (or ``$JAXPLAN_HOST_DEVICES``) is not a positive integer.
+      ValueError: ``n`` (or ``$JAXPLAN_HOST_DEVICES``) is not an integer in 1..`MAX_HOST_DEVICES`.
       RuntimeError: JAX's backend already runs with a different number of CPU devices.
     """
     if n is None:
@@ -125,8 +132,8 @@ def use_host_devices(n: int | None = None) -> int | None:
         n = host_devices_setting()
         if n is None:
             return None
-    elif isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise ValueError(f"use_host_devices: n must be a positive integer or None, got {n!r}")
+    elif isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_HOST_DEVICES:
+        raise ValueError(f"use_host_devices: n must be a positive integer up to {MAX_HOST_DEVICES} or None, got {n!r}")
     try:
         jax.config.update("jax_num_cpu_devices", n)
     except RuntimeError:  # JAX refuses once its backend runs; fine if the count is already the one asked for

@@ -3,7 +3,9 @@
 A sweep of thousands of scenarios × seeds fails late and badly when it runs out of memory
 (the kernel kills the process, or XLA aborts mid-run). `plan_batch` therefore estimates the
 working memory of its compiled program from the configuration's sizes before it allocates
-anything, and refuses a batch above the limit with the largest batch that would fit.
+anything, and refuses a batch above the limit with the largest batch that would fit; so do
+`solve_tsp` (`tsp_memory`), a tuning population, and an experiment's chunks (navigation:
+`episode_memory`) and trials (`table_memory`), before their first step.
 
 The estimate counts the arrays that scale with the batch (each with the number of copies the
 compiled program keeps alive at once, read off its buffer assignment) plus the per-map tables;
@@ -18,7 +20,8 @@ import math
 import os
 from typing import NamedTuple
 
-__all__ = ["MemoryEstimate", "MemoryLimitError", "aco_memory", "dwa_memory", "memory_limit", "check_memory"]
+__all__ = ["MemoryEstimate", "MemoryLimitError", "aco_memory", "dwa_memory", "tsp_memory", "episode_memory",
+           "table_memory", "memory_limit", "check_memory"]
 
 _F32 = 4
 _I32 = 4
@@ -29,6 +32,9 @@ _TAU_COPIES = 6
 # The walk's path buffers are produced and consumed inside one iteration; XLA keeps at most
 # two generations alive (this iteration's and the scan carry's best-so-far extraction).
 _PATH_COPIES = 2
+# Floats per rollout pose of a DWA fan while a control step is evaluated (pose, critics, clearances and their
+# temporaries), an upper bound of what navigate_batch's episodes were measured to use (docs/decisions.md).
+_FAN_FLOATS = 7
 
 
 class MemoryEstimate(NamedTuple):
@@ -112,6 +118,61 @@ def dwa_memory(robots: int, samples: int, steps: int, *, keep_rollouts: bool = F
     return MemoryEstimate(total, parts, robots, (total - parts["map tables"]) / max(robots, 1))
 
 
+def tsp_memory(cities: int, colonies: int, ants: int, iterations: int, runs: int = 1, *,
+               local_search: bool = False) -> MemoryEstimate:
+    """Estimated working memory (bytes) of ``runs`` TSP colony runs in one call (`jaxplan.solve_tsp`'s program;
+    an experiment's TSP chunk vmaps it over its seeds).
+
+    Per run: the ``[S, n, n]`` pheromone, its logits, weights and deposits (`_TAU_COPIES` live copies),
+    each ant's ``[n]`` probabilities, prefix sums and visited marks in the construction loop, and with 2-opt
+    local search each ant's ``[n, n]`` move table (about five live copies); per call the ``[n, n]`` distance,
+    log-heuristic and diagonal tables.
+    """
+    n, S, A = cities, colonies, colonies * ants
+    parts = {
+        "pheromone": runs * _TAU_COPIES * S * n * n * _F32,
+        "ant tours": runs * 6 * A * n * _F32,
+        "history": runs * iterations * _F32,
+        "distance tables": 3 * n * n * _F32 + n * n,
+    }
+    if local_search:
+        parts["2-opt move tables"] = runs * 5 * A * n * n * _F32
+    total = int(sum(parts.values()))
+    return MemoryEstimate(total, parts, runs, (total - parts["distance tables"]) / max(runs, 1))
+
+
+def episode_memory(robots: int, steps: int, samples: int, *, rollout_steps: int = 20, discs: int = 0,
+                   waypoints: int = 16, map_cells: int = 0) -> MemoryEstimate:
+    """Estimated working memory (bytes) of ``robots`` navigation episodes of ``steps`` control steps in one
+    call (`jaxplan.navigate_batch`: robots = scenarios × seeds; `navigate_multi`: × robots per team).
+
+    Per robot: the live control step's DWA fan — ``samples`` rollouts of ``rollout_steps`` poses with their
+    critics and clearances (`_FAN_FLOATS` floats per pose; the discs add little) — which dominates; the
+    trajectory (state, control and flags per control step, and the host's float64 copies for the metrics:
+    40 floats per step); the waypoints and the discs' routes. Per call: the map's clearance and planning
+    tables. Against the measured peak RSS rise it is an upper bound, not far above (docs/decisions.md).
+    """
+    fan = samples * (rollout_steps * _FAN_FLOATS + 16 + 4 * discs) * _F32
+    parts = {
+        "dwa fans": robots * fan,
+        "trajectories": robots * (steps + 1) * 40 * _F32,
+        "waypoints and discs": robots * (waypoints * 2 + discs * 64) * _F32,
+        "map tables": 8 * map_cells * _F32,
+    }
+    total = int(sum(parts.values()))
+    return MemoryEstimate(total, parts, robots, (total - parts["map tables"]) / max(robots, 1))
+
+
+def table_memory(runs: int, per_run: dict, fixed: dict | None = None) -> MemoryEstimate:
+    """A `MemoryEstimate` from bytes per batch element (``per_run``: name -> bytes of one element) and bytes
+    that do not grow with the batch (``fixed``): for host-side tables (trials, results) and any batch whose
+    arrays are simple to count."""
+    parts = {k: int(v * runs) for k, v in per_run.items()}
+    parts.update({k: int(v) for k, v in (fixed or {}).items()})
+    total = int(sum(parts.values()))
+    return MemoryEstimate(total, parts, runs, float(sum(per_run.values())))
+
+
 def memory_limit() -> int:
     """The byte limit for one batched call: ``$JAXPLAN_MEMORY_LIMIT`` (bytes, or with a K/M/G/T
     suffix), else 80 % of the memory the system reports available now."""
@@ -149,8 +210,10 @@ def _available_bytes() -> int:
         return 0
 
 
-def check_memory(estimate: MemoryEstimate, what: str, limit: int | None = None, unit: str = "runs") -> None:
-    """Raises `MemoryLimitError` naming the largest batch that fits if ``estimate`` exceeds ``limit``."""
+def check_memory(estimate: MemoryEstimate, what: str, limit: int | None = None, unit: str = "runs",
+                 advice: str = "Split the batch") -> None:
+    """Raises `MemoryLimitError` naming the largest batch that fits if ``estimate`` exceeds ``limit`` (``advice``:
+    what the caller's user can change, before "or raise the limit with JAXPLAN_MEMORY_LIMIT")."""
     limit = memory_limit() if limit is None else int(limit)
     if estimate.total <= limit:
         return
@@ -158,5 +221,5 @@ def check_memory(estimate: MemoryEstimate, what: str, limit: int | None = None, 
     biggest = ", ".join(f"{k} {v / 2**30:.2f} GiB" for k, v in top)
     raise MemoryLimitError(
         f"{what} needs about {estimate.total / 2**30:.2f} GiB ({biggest}) for {estimate.runs} {unit}, above the "
-        f"limit of {limit / 2**30:.2f} GiB; at most {estimate.largest_batch(limit)} {unit} fit. Split the batch, "
+        f"limit of {limit / 2**30:.2f} GiB; at most {estimate.largest_batch(limit)} {unit} fit. {advice}, "
         f"or raise the limit with JAXPLAN_MEMORY_LIMIT (e.g. 16G)")

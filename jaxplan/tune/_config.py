@@ -13,14 +13,21 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping
 
-import tomllib
-
-from jaxplan.experiments.config import RUN_NAME, MapSpec, MapTable, ScenarioSpec, default_data_dir, read_maps
+from jaxplan.experiments.config import (
+    RUN_NAME,
+    MapSpec,
+    MapTable,
+    ScenarioSpec,
+    default_data_dir,
+    read_config_text,
+    read_maps,
+)
 from jaxplan.experiments.schema import ConfigError, Reader, Setting, declaration, frozen, setting, setting_of
 
 __all__ = ["TuneConfig", "load_tune_config", "parse_tune_config", "apply_tune_quick", "KINDS", "TuneFile",
@@ -250,7 +257,7 @@ def load_tune_config(path: str | os.PathLike, *, data_dir: str | os.PathLike | N
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"tuning config not found: {p}")
-    return parse_tune_config(p.read_text(), data_dir=data_dir, source=str(p), path=p.resolve())
+    return parse_tune_config(read_config_text(p), data_dir=data_dir, source=str(p), path=p.resolve())
 
 
 def _default_test_seeds(train_seeds: tuple[int, ...]) -> tuple[int, ...]:

@@ -41,7 +41,15 @@ import jax.numpy as jnp
 import numpy as np
 from jax.sharding import PartitionSpec as P
 
-from jaxplan.scale import BATCH_AXIS, auto_mesh, pad_leading, padded_size
+from jaxplan.scale import (
+    BATCH_AXIS,
+    MemoryEstimate,
+    auto_mesh,
+    check_memory,
+    dwa_memory,
+    pad_leading,
+    padded_size,
+)
 from jaxplan.tune._bounds import Bounds, make_bounds
 
 __all__ = ["Split", "Evaluation", "Objective", "aco_objective", "dwa_objective", "function_objective", "DWAEpisodes",
@@ -119,6 +127,8 @@ class Objective:
       splits: ``{"train": Split, "test": Split}``.
       program: ``program(split_name) -> pure fn(pop [P, D]) -> (per_run cost [P, N, R], metrics {k: [P, N, R]})``.
       base: the planner's full parameter dict (for `params`).
+      memory: ``memory(population, split) -> MemoryEstimate`` of one evaluation (None: not estimated);
+        `evaluate` refuses a population that does not fit before compiling (`check_population`).
       mesh: where `evaluate` runs a population: ``"auto"`` (default: split over every local
         device when there are several and each gets at least 8 members — `jaxplan.scale.auto_mesh`),
         None (one device) or a 1-D `jax.sharding.Mesh`. Members are computed independently:
@@ -137,7 +147,18 @@ class Objective:
     program: Callable[[str], Callable]
     base: Mapping[str, Any]
     mesh: Any = "auto"
+    memory: Callable[[int, str], MemoryEstimate] | None = None
     _compiled: dict = dataclasses.field(default_factory=dict, repr=False)
+
+    def check_population(self, population: int, split: str = "train") -> None:
+        """Refuses (`jaxplan.scale.MemoryLimitError`, naming the largest population that fits) a population
+        whose evaluation on ``split`` would not fit in memory; before anything of it is allocated."""
+        if self.memory is None:
+            return
+        n, R = len(self.splits[split].starts), len(self.splits[split].seeds)
+        check_memory(self.memory(int(population), split),
+                     f"objective {self.name!r} on {n} scenario{'s' * (n != 1)} x {R} seed{'s' * (R != 1)} ({split})",
+                     unit="weight vectors (population)", advice="Use a smaller population, fewer scenarios or seeds")
 
     def with_mesh(self, mesh: Any) -> "Objective":
         """This objective evaluated on ``mesh`` (a `Mesh`, ``"auto"`` or None); compiled programs are not shared."""
@@ -170,6 +191,7 @@ class Objective:
             raise ValueError(f"population has {pop.shape[-1]} columns, the space has {self.bounds.dim} "
                              f"({', '.join(self.bounds.names)})")
         n = pop.shape[0]
+        self.check_population(n, split)
         mesh = auto_mesh(self.mesh, n)
         if mesh is not None:  # copies of the last member, sliced off below
             pop = pad_leading(pop, padded_size(n, mesh))
@@ -327,8 +349,25 @@ def aco_objective(grid, train: Split, test: Split, planner: str = "iaco", space:
 
         return run
 
+    def memory(population: int, split_name: str) -> MemoryEstimate:
+        from jaxplan.aco import plan_memory
+
+        sp = {"train": train, "test": test}[split_name]
+        runs = population * len(sp.starts) * len(sp.seeds)
+        est = plan_memory(grid, planner, runs, **dict(overrides or {}))
+        # The metrics' [P, N, R, L + 1, 2] paths and their geometry and clearance temporaries (int32/f32).
+        return _per_member(est, population, {"objective metrics": runs * (cfg.max_steps + 1) * 2 * 4 * 4})
+
     return Objective(name or f"{planner}_weights", "aco", planner, bounds, defaults, weights,
-                     {"train": train, "test": test}, program, {k: np.asarray(v) for k, v in base.items()})
+                     {"train": train, "test": test}, program, {k: np.asarray(v) for k, v in base.items()},
+                     memory=memory)
+
+
+def _per_member(est: MemoryEstimate, population: int, extra: Mapping[str, int]) -> MemoryEstimate:
+    """``est`` (of all runs of a population) plus ``extra`` bytes, counted per population member."""
+    fixed = est.total - est.per_run * est.runs
+    total = int(est.total + sum(extra.values()))
+    return MemoryEstimate(total, {**est.parts, **extra}, population, (total - fixed) / max(population, 1))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -493,8 +532,15 @@ def dwa_objective(grid, train: Split, test: Split, evaluator: str = "weighted", 
 
         return run
 
+    def memory(population: int, split_name: str) -> MemoryEstimate:
+        sp = {"train": train, "test": test}[split_name]
+        robots = population * len(sp.starts) * len(sp.seeds)
+        est = dwa_memory(robots, config.samples, config.steps, obstacles=n_discs, chunk=None,
+                         map_cells=int(np.asarray(grid.free).size))
+        return _per_member(est, population, {"episode traces": robots * steps * 4 * 4})
+
     obj = Objective(name or f"dwa_{evaluator}_weights", "dwa", evaluator, bounds, defaults, weights,
-                    {"train": train, "test": test}, program, base)
+                    {"train": train, "test": test}, program, base, memory=memory)
     object.__setattr__(obj, "_dwa", dict(table=table, config=config, steps=steps, episodes=eps, slots=slots,
                                           base=base_j, tolerance=tolerance, radius=radius))
     return obj

@@ -13,8 +13,11 @@ Run folder ``OUT/NAME`` (``OUT/NAME-quick`` for quick runs)::
                               fitness values were NaN/inf (counted, then treated as the worst),
                               and the best-so-far weights by name; deterministic (no wall times)
     timings.csv               wall-clock seconds of each generation's compiled evaluation
-    checkpoints/manifest.json the commit log: fingerprint, last checkpointed generation, the rows so far
-    checkpoints/gen_NNNNN/    the strategy state after generation NNNNN (orbax), every k generations
+    checkpoints/manifest.json the commit log: fingerprint, last checkpointed generation, the rows so far, and the
+                              SHA-256 of each kept checkpoint's state
+    checkpoints/gen_NNNNN/    the strategy state after generation NNNNN (orbax), every k generations (the last two
+                              are kept)
+    .lock                     held by the process that works in the folder (`jaxplan.core.io.folder_lock`)
     summary.json              defaults vs best weights on the train and held-out test sets, the
                               seed-to-seed spread (sd over seeds of the per-seed mean cost; null with
                               one seed), NaN count; strict JSON (a NaN or inf number is written null)
@@ -24,7 +27,12 @@ Run folder ``OUT/NAME`` (``OUT/NAME-quick`` for quick runs)::
 A checkpoint commits in two steps — orbax writes the state, then the manifest (temporary
 file, fsync, rename: `jaxplan.core.io.atomic_write`) names it — so a process
 killed at any instant leaves at worst a state the manifest does not name, and the resume
-recomputes those generations.
+recomputes those generations. A resume checks the state it reads against the SHA-256 the manifest
+holds; a checkpoint that is missing, truncated or changed is skipped for the newest intact one
+before it (the generations after it are recomputed, to the same bits), and a damaged manifest
+starts the run afresh — a note on stderr says which. Before anything, `run_tuning` checks that a
+generation's population fits in memory (`Objective.check_population`) and locks the run folder
+against a second process.
 """
 
 from __future__ import annotations
@@ -43,8 +51,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxplan.core.io import atomic_write
-from jaxplan.experiments import RunFolderError, clock
+from jaxplan.core.io import atomic_write, confined, folder_lock
+from jaxplan.experiments import CheckpointError, RunFolderError, clock
 from jaxplan.tune._base import Strategy, sanitize
 from jaxplan.tune._objective import Objective, Split
 from jaxplan.tune._strategies import make_strategy
@@ -71,7 +79,18 @@ def _csv(rows: list[dict], names) -> bytes:
     return buf.getvalue().encode()
 
 
-def _save_state(path: Path, state) -> None:
+def _state_digest(data: dict) -> str:
+    """SHA-256 of a stored state's leaves (names, dtypes, shapes and bytes)."""
+    h = hashlib.sha256()
+    for k in sorted(data):
+        a = np.ascontiguousarray(np.asarray(data[k]))
+        h.update(f"{k}|{a.dtype.str}|{a.shape}|".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def _save_state(path: Path, state) -> str:
+    """Saves ``state`` with orbax; returns its `_state_digest`."""
     import orbax.checkpoint as ocp
 
     leaves = jax.tree_util.tree_leaves(state)
@@ -81,14 +100,35 @@ def _save_state(path: Path, state) -> None:
         if jnp.issubdtype(a.dtype, jax.dtypes.prng_key):
             a = jax.random.key_data(a)  # typed keys are stored as their raw data
         data[f"leaf_{i:04d}"] = np.asarray(a)
-    ocp.PyTreeCheckpointer().save(path.resolve(), data, force=True)
+    try:
+        ocp.PyTreeCheckpointer().save(path.resolve(), data, force=True)
+    except OSError:
+        raise
+    except Exception as e:  # noqa: BLE001 - orbax's and tensorstore's own errors: one clear message
+        raise CheckpointError(f"cannot save the tuning checkpoint {path.resolve()}: {type(e).__name__}; check the "
+                              f"disk, then run the same command to resume") from e
+    return _state_digest(data)
 
 
-def _load_state(path: Path, template):
+def _load_state(path: Path, template, digest: str | None = None):
+    """The state saved at ``path`` (checked against ``digest`` when given).
+
+    Raises:
+      ValueError: the checkpoint is missing, unreadable, of another shape or fails its digest.
+    """
     import orbax.checkpoint as ocp
 
-    data = ocp.PyTreeCheckpointer().restore(path.resolve())
+    if not path.is_dir():
+        raise ValueError("missing")
+    try:
+        data = ocp.PyTreeCheckpointer().restore(path.resolve())
+    except Exception as e:  # noqa: BLE001 - orbax's, tensorstore's and JSON errors of a damaged checkpoint
+        raise ValueError(f"unreadable ({type(e).__name__})") from None
+    if digest is not None and _state_digest(data) != digest:
+        raise ValueError("fails its SHA-256 check")
     leaves, treedef = jax.tree_util.tree_flatten(template)
+    if set(data) != {f"leaf_{i:04d}" for i in range(len(leaves))}:
+        raise ValueError("holds another state")
     out = []
     for i, t in enumerate(leaves):
         a = np.asarray(data[f"leaf_{i:04d}"])
@@ -156,16 +196,16 @@ def tune_loop(objective: Objective, strategy: Strategy, generations: int, run_di
     times: list[str] = []
     g0 = 0
     manifest_path = ck / MANIFEST
-    if resume and manifest_path.is_file():
-        man = json.loads(manifest_path.read_text())
+    digests: dict[str, str] = {}
+    man = _read_tune_manifest(manifest_path, run_dir) if resume else None
+    if man is not None:
         if man.get("fingerprint") != fp:
             raise RunFolderError(f"{run_dir} holds the checkpoints of a different tuning run (config, strategy, "
                                  "space or seed changed); delete that folder, pass another out folder or resume=False")
-        g0 = int(man["generation"])
-        if g0 > 0:
-            state = _load_state(ck / f"gen_{g0:05d}", state)
-            rows = man["rows"][:g0]
-            times = man.get("times", [])[:g0]
+        state, g0 = _resume_state(ck, man, state, run_dir.name)
+        rows = man["rows"][:g0]
+        times = man.get("times", [])[:g0]
+        digests = {k: v for k, v in man.get("digests", {}).items() if int(k) <= g0}
     elif ck.exists():
         shutil.rmtree(ck)
     for p in ck.glob("*.orbax-checkpoint-tmp*") if ck.exists() else ():
@@ -177,11 +217,13 @@ def tune_loop(objective: Objective, strategy: Strategy, generations: int, run_di
     n_bad_total = sum(r["n_bad"] for r in rows)
 
     def commit(g: int) -> None:
-        _save_state(ck / f"gen_{g:05d}", state)
-        man = {"fingerprint": fp, "generation": g, "rows": rows, "times": times}
+        digests[str(g)] = _save_state(ck / f"gen_{g:05d}", state)
+        for k in [k for k in digests if int(k) < g - checkpoint_every]:
+            del digests[k]
+        man = {"fingerprint": fp, "generation": g, "rows": rows, "times": times, "digests": digests}
         atomic_write(manifest_path, json.dumps(man, indent=1).encode())
         for old in ck.glob("gen_*"):  # keep the last two checkpoints
-            if old.is_dir() and int(old.name[4:]) < g - checkpoint_every:
+            if old.is_dir() and old.name[4:].isdigit() and int(old.name[4:]) < g - checkpoint_every:
                 shutil.rmtree(old, ignore_errors=True)
 
     try:
@@ -212,6 +254,44 @@ def tune_loop(objective: Objective, strategy: Strategy, generations: int, run_di
         prog.close()
     return TuneResult(state=state, rows=rows, best_x=np.asarray(state.best_x), best_f=float(state.best_f),
                       n_bad=n_bad_total, evaluations=generations * P, resumed_from=g0)
+
+
+def _note(name: str, text: str) -> None:
+    print(f"{name}: {text}", file=sys.stderr, flush=True)
+
+
+def _read_tune_manifest(path: Path, run_dir: Path) -> dict | None:
+    """The tuning manifest, or None when there is none or it is damaged (then the run starts afresh, noted)."""
+    if not path.is_file():
+        return None
+    try:
+        man = json.loads(path.read_bytes().decode("utf-8"))
+        ok = isinstance(man, dict) and isinstance(man.get("generation"), int) and isinstance(man.get("rows"), list) \
+            and isinstance(man.get("fingerprint"), str) and len(man["rows"]) >= man["generation"] >= 0
+    except (OSError, ValueError):
+        ok = False
+    if not ok:
+        _note(run_dir.name, f"{path} is damaged: starting afresh (the generations come out the same)")
+        return None
+    return man
+
+
+def _resume_state(ck: Path, man: dict, template, name: str):
+    """(state, generation) of the newest intact checkpoint at or before the manifest's generation (a missing,
+    unreadable or changed one is skipped, with a note); (template, 0) if none is intact."""
+    g0 = int(man["generation"])
+    if g0 == 0:
+        return template, 0
+    digests = man.get("digests", {})
+    found = sorted((int(p.name[4:]) for p in ck.glob("gen_*") if p.name[4:].isdigit() and int(p.name[4:]) <= g0),
+                   reverse=True)
+    for g in [g0] + [g for g in found if g != g0]:
+        try:
+            return _load_state(ck / f"gen_{g:05d}", template, digests.get(str(g))), g
+        except ValueError as e:
+            _note(name, f"checkpoint gen_{g:05d} is {e}; falling back to an earlier one")
+    _note(name, "no intact checkpoint: starting from generation 0")
+    return template, 0
 
 
 # ---------------------------------------------------------------------------------------------
@@ -363,9 +443,16 @@ def run_tuning(config_path, out="runs", quick: bool = False, data_dir=None, prog
     cfg = load_tune_config(config_path, data_dir=data_dir)
     if quick:
         cfg = apply_tune_quick(cfg)
-    run_dir = Path(out) / (cfg.name + ("-quick" if cfg.is_quick else ""))
-    run_dir.mkdir(parents=True, exist_ok=True)
     objective = build_objective(cfg)
+    objective.check_population(cfg.population)  # before the strategy allocates its population
+    objective.check_population(2, "test")
+    run_dir = confined(out, cfg.name + ("-quick" if cfg.is_quick else ""))
+    run_dir.mkdir(parents=True, exist_ok=True)
+    with folder_lock(run_dir):
+        return _run_tuning(cfg, objective, run_dir, progress, resume)
+
+
+def _run_tuning(cfg, objective: Objective, run_dir: Path, progress: bool, resume: bool) -> Path:
     strategy = make_strategy(cfg.strategy, cfg.population, cfg.generations, **dict(cfg.options))
     fp = hashlib.sha256(cfg.text.encode() + (b"|quick" if cfg.is_quick else b"")).hexdigest()
     atomic_write(run_dir / "config.toml", cfg.text.encode())
