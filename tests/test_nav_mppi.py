@@ -85,3 +85,42 @@ def test_random_walkers_behaviors():
     np.testing.assert_array_equal(np.asarray(blind.waypoints), np.asarray(social.waypoints))  # the same routes
     with pytest.raises(ValueError, match="walker behavior"):
         jp.random_obstacles(scene, n=3, seed=4, behavior="polite")
+
+
+def test_a_navigation_batch_too_big_for_memory_is_refused_before_any_work(monkeypatch):
+    monkeypatch.setenv("JAXPLAN_MEMORY_LIMIT", "200M")
+    starts = np.tile([[1, 4]], (3000, 1))
+    goals = np.tile([[20, 4]], (3000, 1))
+    with pytest.raises(jp.scale.MemoryLimitError, match="robot episodes"):
+        jp.navigate_batch(OPEN, starts, goals, global_planner="astar", seeds=range(2))
+
+
+def test_mppi_weights_are_tunable_and_the_best_round_trips_into_a_run(tmp_path):
+    """`jaxplan tune` on a kind = "mppi" config: a smoke run writes a best.toml whose [[planners]] entry an
+    experiment config accepts (an MPPI pipeline with MPPI params)."""
+    from pathlib import Path
+
+    from jaxplan.experiments.config import parse_config
+    from jaxplan.tune import run_tuning
+
+    root = Path(__file__).resolve().parents[1]
+    run = run_tuning(root / "configs" / "tune_mppi.toml", out=tmp_path, quick=True, progress=False)
+    best = (run / "best.toml").read_text()
+    assert 'name = "astar_kng_mppi"' in best and "temperature" in best
+    cfg = parse_config('[experiment]\nname = "x"\nseeds = 1\n[[maps]]\nname = "m"\ngenerator = "warehouse"\n'
+                       'params = { width = 14, height = 10 }\n[scenarios]\nsource = "random"\ncount = 1\n' + best)
+    pc = cfg.planners[0]
+    assert pc.name == "astar_kng_mppi" and "temperature" in pc.params and dict(pc.mppi) == {"samples": 96}
+
+
+def test_an_mppi_config_with_dwa_weights_is_refused():
+    from jaxplan.experiments.config import ConfigError, parse_config
+
+    text = ('[experiment]\nname = "x"\nseeds = 1\n[[maps]]\nname = "m"\ngenerator = "warehouse"\n'
+            'params = { width = 14, height = 10 }\n[scenarios]\nsource = "random"\ncount = 1\n'
+            '[[planners]]\nkind = "navigate"\nname = "iaco_mppi"\nparams = { heading = 0.4 }\n'
+            'obstacles = { n = 2, behavior = "social" }\n')
+    with pytest.raises(ConfigError, match="unknown MPPI parameter"):
+        parse_config(text)
+    ok = parse_config(text.replace("heading = 0.4", "dynamic = 2.0"))
+    assert ok.planners[0].obstacles.behavior == "social"

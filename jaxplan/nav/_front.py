@@ -48,7 +48,7 @@ from jaxplan.nav._moving import MovingObstacles, obstacle_state, stack_obstacles
 from jaxplan.nav._pipelines import Pipeline
 from jaxplan.nav._results import Episode, EpisodeBatch
 from jaxplan.nav._state import GOAL, REASONS, EpisodeInputs
-from jaxplan.scale import BATCH_AXIS, auto_mesh, pad_leading
+from jaxplan.scale import BATCH_AXIS, auto_mesh, check_memory, episode_memory, pad_leading
 
 __all__ = ["navigate", "navigate_batch", "navigate_multi", "planning_grid", "CURVATURE_MIN_SPEED", "INFEASIBLE_START",
            "INFEASIBLE_GOAL", "UNREACHABLE", "PLAN_FAILED"]
@@ -325,6 +325,22 @@ def _episode_batch(out: Any, E: int, R: int, N: int, active: np.ndarray, reason:
     )
 
 
+def _check_episode_memory(cfg: NavConfig, grid: GridMap, robots: int, obstacles: Any) -> None:
+    """Refuses, before any planning, a batch of episodes whose working memory exceeds the limit
+    (`jaxplan.scale.episode_memory`: the local planner's samples and rollout points per robot dominate; discs of an
+    obstacle set given as a callable are not known yet and counted as none: they add little)."""
+    if cfg.local == "mppi":
+        mc = cfg.local_mppi()
+        samples, points = mc.samples, mc.points
+    else:
+        samples, points = cfg.dwa.samples, cfg.dwa.steps
+    discs = obstacles.count if isinstance(obstacles, MovingObstacles) else 0
+    est = episode_memory(robots, cfg.steps, samples, rollout_steps=points, discs=discs,
+                         map_cells=int(np.asarray(grid.free).size))
+    check_memory(est, f"navigation ({cfg.local}, {robots} robot episodes of up to {cfg.steps} steps)",
+                 unit="robot episodes (scenarios x seeds x robots)", advice="Use fewer scenarios, seeds or robots")
+
+
 def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | None, global_planner: str | None,
          local_planner: str | None, seeds: Sequence[int], obstacles: Any, config: NavConfig | None,
          params: DWAParams | MPPIParams | Mapping[str, float] | None, time_limit: float | None,
@@ -336,6 +352,7 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
     pipe, cfg, seeds, starts, goals = run_args.pipe, run_args.cfg, run_args.seeds, run_args.starts, run_args.goals
     E, N = starts.shape[:2]
     R = len(seeds)
+    _check_episode_memory(cfg, grid, E * N * R, obstacles)
     res = float(grid.resolution)
     d_safe = float(cfg.dwa.d_safe)
 
