@@ -1,7 +1,7 @@
-"""Two-level navigation: success, collisions and costs of the papers' pipelines, multi-robot, speed.
+"""Two-level navigation: success, contacts and costs of the DWA and MPPI pipelines, multi-robot, speed.
 
 Run:  python benchmarks/bench_nav.py [--data-dir ../shared/benchmarks] [--rows 50] [--seeds 5]
-                                     [--sections maps,pipelines,multi,speed] [--quick]
+                                     [--sections maps,allrows,pipelines,multi,speed] [--local dwa,mppi] [--quick]
 
 Robot: cui2025's (unicycle, 1.2 m/s, 2 rad/s, 0.5 m/s², radius 0.25 m, d_safe 0.3 m, control
 period 0.2 s, DWA 20 x 40 samples over 2 s) on the MovingAI maps at 1.0 m per cell: at
@@ -14,20 +14,27 @@ and the obstacles'). A scenario whose start or goal the footprint inflated to d_
 use, or whose goal it cannot reach, is infeasible: not run, counted apart.
 
 Sections:
-  maps       `iaco_dwa` on every map: static, and with 5 random walkers (discs of 0.25 m at
-             1.0 m/s bouncing along random routes, starting at least 3 m from the robot's start and
-             goal; they do not avoid the robot). Targets:
-             static success >= 99 % of the feasible episodes with zero collisions; moving
-             success >= 97 %. With ``--oracle`` a third row per map runs the walkers with
-             ``NavConfig(prediction="oracle")``: the DWA knows their true routes (an upper
-             bound for any walker predictor, not something a robot can have).
+  maps       `iaco_dwa` and `iaco_mppi` (``--local``) on every map: static, among 5 blind walkers
+             (discs of 0.25 m at 1.0 m/s bouncing along random routes, starting at least 3 m from the
+             robot's start and goal; they do not avoid the robot) and among 5 walkers that see (the
+             same routes, avoiding robots, each other and walls with the social force model).
+             Targets: static 100 %; among walkers that see >= 99 %; among blind walkers with MPPI
+             >= 97 % with active contacts in <= 0.5 % of episodes. With ``--oracle`` a row per map
+             runs the blind walkers with ``NavConfig(prediction="oracle")``: the local planner
+             knows their true routes (an upper bound for any walker predictor, not something a
+             robot can have).
+  allrows    static episodes of `iaco_dwa` and `iaco_mppi` on EVERY row (optimal <= 80 cells) of
+             every scenario file, each failure printed with its scenario row and reason (target:
+             every one arrives).
   pipelines  every pipeline and ablation (`jaxplan.nav.pipelines()`) on the warehouse map
              (``--pipeline-maps`` for others), static and moving.
   multi      li2026's Table 3 set-up: teams of 5 robots on the warehouse map with 5
              random walkers at 1.0 and 1.5 m/s; contacts are counted, not stopped at.
   speed      1,000 static `iaco_dwa` episodes on the warehouse map in one batched call
              (global planning included), and one episode's control steps against real
-             time (target >= 1,000x), with XLA's default threads and pinned to one core.
+             time (target >= 1,000x), with XLA's default threads and pinned to one core; for MPPI, one
+             compiled control step for 1, 64 and 1,024 robots and one `iaco_mppi` episode against real
+             time (targets <= 1 ms per step for one robot inside an episode, >= 500x real time).
 
 Every figure is mean ± sd over seeds of the per-seed mean over episodes (success as a
 rate; time over the successful episodes). Infeasible episodes are excluded and counted.
@@ -72,14 +79,15 @@ def rows(scen, n: int, max_len: float = 80.0) -> np.ndarray:
     return ok[np.unique(np.linspace(0, len(ok) - 1, min(n, len(ok))).round().astype(int))]
 
 
-def walkers(grid, starts, goals, n: int, speed: float):
-    """``f(scenario, seed)``: ``n`` random walkers keeping clear of that scenario's starts and goals."""
+def walkers(grid, starts, goals, n: int, speed: float, behavior: str = "blind"):
+    """``f(scenario, seed)``: ``n`` random walkers keeping clear of that scenario's starts and goals (the same
+    routes for either behavior)."""
     import jaxplan as jp
 
     def make(e: int, seed: int):
         avoid = (np.concatenate([np.atleast_2d(starts[e]), np.atleast_2d(goals[e])]) + 0.5) * grid.resolution
         return jp.random_obstacles(grid, n=n, speed=speed, radius=0.25, seed=10_000 * seed + e, avoid=avoid,
-                                   avoid_radius=AVOID_RADIUS)
+                                   avoid_radius=AVOID_RADIUS, behavior=behavior)
 
     return make
 
@@ -92,15 +100,18 @@ def fmt(mean: float, sd: float, digits: int = 2, pct: bool = False) -> str:
     return f"{mean:.{digits}f} ± {sd:.{digits}f}"
 
 
-HEADER = (f"{'':<28}{'runs':>6}{'infeas':>7} | {'success %':>13}{'collisions':>13}{'time s':>14}{'rmse m':>13}"
-          f"{'max κ 1/m':>13}{'energy J':>15}{'replans':>11}{'wall s':>8}")
+HEADER = (f"{'':<30}{'runs':>6}{'infeas':>7} | {'success %':>13}{'active/ep':>12}{'passive/ep':>12}"
+          f"{'act. ep %':>10}{'time s':>14}{'rmse m':>13}{'max κ 1/m':>13}{'replans':>11}{'wall s':>8}")
 
 
 def row(label: str, b, wall: float) -> str:
     s = b.summary()
-    return (f"{label:<28}{int(s['episodes'][0]):>6}{int(s['infeasible'][0]):>7} | {fmt(*s['success'], pct=True):>13}"
-            f"{fmt(*s['collisions']):>13}{fmt(*s['time_s'], 1):>14}{fmt(*s['rmse']):>13}"
-            f"{fmt(*s['max_curvature']):>13}{fmt(*s['energy'], 0):>15}{fmt(*s['replans'], 1):>11}{wall:>8.0f}")
+    run = b.feasible
+    act_ep = 100 * float(np.mean(b.active_contacts[run] > 0)) if run.any() else float("nan")
+    return (f"{label:<30}{int(s['episodes'][0]):>6}{int(s['infeasible'][0]):>7} | {fmt(*s['success'], pct=True):>13}"
+            f"{s['active_contacts'][0]:>12.3f}{s['passive_contacts'][0]:>12.3f}{act_ep:>10.1f}"
+            f"{fmt(*s['time_s'], 1):>14}{fmt(*s['rmse']):>13}{fmt(*s['max_curvature']):>13}"
+            f"{fmt(*s['replans'], 1):>11}{wall:>8.0f}")
 
 
 def run(grid, starts, goals, pipeline: str, seeds, obstacles=None, config=None):
@@ -112,25 +123,52 @@ def run(grid, starts, goals, pipeline: str, seeds, obstacles=None, config=None):
 
 
 def section_maps(d: Path, args) -> None:
-    print("\n== iaco_dwa on the MovingAI maps (1.0 m per cell) ==")
-    print(HEADER)
-    seeds = list(range(args.seeds))
-    for name in args.maps:
-        grid, scen = load(d, name)
-        sel = rows(scen, args.rows)
-        S, G = scen.starts[sel], scen.goals[sel]
-        moving = walkers(grid, S, G, 5, 1.0)
-        cases = [("static", None, None), ("walkers", moving, None)]
-        if args.oracle:
-            from jaxplan.nav import NavConfig
+    from jaxplan.nav import NavConfig
 
-            cases.append(("walk oracle", moving, NavConfig(prediction="oracle")))
-        for label, obs, cfg in cases:
-            b, wall = run(grid, S, G, "iaco_dwa", seeds, obs, cfg)
-            print(row(f"{name[:16]} {label[:11]}", b, wall), flush=True)
-            if args.verbose:
-                bad = ~b.success & b.feasible
-                print("   failures:", {r: int(np.sum(b.reason[bad] == r)) for r in np.unique(b.reason[bad])})
+    seeds = list(range(args.seeds))
+    for local in args.local:
+        pipe = f"iaco_{local}"
+        print(f"\n== {pipe} on the MovingAI maps (1.0 m per cell) ==")
+        print(HEADER)
+        for name in args.maps:
+            grid, scen = load(d, name)
+            sel = rows(scen, args.rows)
+            S, G = scen.starts[sel], scen.goals[sel]
+            blind = walkers(grid, S, G, 5, 1.0)
+            cases = [("static", None, None), ("blind walkers", blind, None),
+                     ("seeing walkers", walkers(grid, S, G, 5, 1.0, "social"), None)]
+            if args.oracle:
+                cases.append(("blind, oracle", blind, NavConfig(prediction="oracle")))
+            for label, obs, cfg in cases:
+                b, wall = run(grid, S, G, pipe, seeds, obs, cfg)
+                print(row(f"{name[:15]} {label[:14]}", b, wall), flush=True)
+                if args.verbose:
+                    bad = ~b.success & b.feasible
+                    print("   failures:", {r: int(np.sum(b.reason[bad] == r)) for r in np.unique(b.reason[bad])})
+
+
+def section_allrows(d: Path, args) -> None:
+    """Static episodes on every row (optimal <= 80 cells) of every scenario file: every one must arrive."""
+    print("\n== static episodes on every row (optimal <= 80 cells) of every scenario file ==")
+    for local in args.local:
+        pipe = f"iaco_{local}"
+        total = failed = 0
+        t0 = time.perf_counter()
+        for name in MAPS:
+            grid, scen = load(d, name)
+            sel = np.nonzero(scen.optimal <= 80.0)[0][: 20 if args.quick else None]
+            b, wall = run(grid, scen.starts[sel], scen.goals[sel], pipe, [0])
+            ok = b.success[:, 0, 0]
+            ran = b.feasible[:, 0, 0]
+            total += int(ran.sum())
+            bad = np.nonzero(ran & ~ok)[0]
+            failed += len(bad)
+            print(f"{pipe:<12} {name:<24} rows {len(sel):>4}  infeasible {int((~ran).sum()):>3}  arrived "
+                  f"{int((ok & ran).sum()):>4}  failed {len(bad):>3}  ({wall:.0f} s)", flush=True)
+            for i in bad:
+                print(f"    row {int(sel[i])}: {b.reason[i, 0, 0]} after {float(b.steps[i, 0, 0]) * b.period:.1f} s, "
+                      f"contacts {int(b.collisions[i, 0, 0])}")
+        print(f"{pipe}: {total - failed} of {total} feasible rows arrived ({time.perf_counter() - t0:.0f} s)")
 
 
 def section_pipelines(d: Path, args) -> None:
@@ -196,25 +234,14 @@ def section_multi(d: Path, args) -> None:
           " κ: the team's largest; time: mean over arrived robots; energy: team total (EnergyModel proxy, J).")
 
 
-def measure_speed(d: Path, episodes: int) -> dict:
+def _one_episode(grid, scen, sel, pipeline: str) -> dict:
+    """The compiled episode call of one static episode alone, median of repeats: seconds, steps, simulated time."""
     import jax
+    from _timing import median_time
 
     import jaxplan as jp
     from jaxplan.nav import _front as F
 
-    sys.path.insert(0, str(Path(__file__).parent))
-    from _timing import median_time
-
-    grid, scen = load(d, WAREHOUSE)
-    ok = np.nonzero(scen.optimal <= 80)[0]
-    sel = ok[np.arange(episodes) % len(ok)]
-    out: dict = {}
-    t0 = time.perf_counter()
-    b = jp.navigate_batch(grid, scen.starts[sel], scen.goals[sel], pipeline="iaco_dwa", seeds=[0])
-    out["batch_wall"] = time.perf_counter() - t0
-    out.update(episodes=episodes, plan_s=b.plan_time_s * episodes, run_s=b.run_time_s, compile_s=b.compile_s,
-               success=float(b.success.mean()), robot_steps=int(b.steps.sum()), loop_steps=int(b.steps.max()))
-    # One episode: the compiled episode call alone, median of repeats.
     captured = {}
     real = F._compiled_episodes
 
@@ -225,15 +252,81 @@ def measure_speed(d: Path, episodes: int) -> dict:
 
     F._compiled_episodes = spy
     try:
-        one = jp.navigate_batch(grid, scen.starts[sel[:1]], scen.goals[sel[:1]], pipeline="iaco_dwa", seeds=[0])
+        one = jp.navigate_batch(grid, scen.starts[sel[:1]], scen.goals[sel[:1]], pipeline=pipeline, seeds=[0])
     finally:
         F._compiled_episodes = real
     compiled, a = captured["fn"], captured["a"]
-    call = lambda: jax.block_until_ready(compiled(*a))  # noqa: E731
+
+    def call():
+        return jax.block_until_ready(compiled(*a))
+
     call()
     t = median_time(call, 9)
     steps = int(one.steps.sum())
-    out.update(single_s=t, single_steps=steps, single_sim_s=steps * one.period)
+    return dict(single_s=t, single_steps=steps, single_sim_s=steps * one.period, success=bool(one.success.all()))
+
+
+def measure_mppi_speed(d: Path) -> dict:
+    """One compiled MPPI control step for 1, 64 and 1,024 robots on the warehouse map (5 moving discs each), and one
+    static `iaco_mppi` episode's compiled call against real time."""
+    import jax
+    import jax.numpy as jnp
+    from _timing import median_time
+
+    from jaxplan.dwa import DiscObstacles, table_of
+    from jaxplan.mppi import MPPIConfig, default_params, initial_sequence, mppi_control
+
+    grid, scen = load(d, WAREHOUSE)
+    table = table_of(grid)
+    cfg, params = MPPIConfig(), default_params()
+    free = np.argwhere(np.asarray(grid.free))[:, ::-1] + 0.5
+    rng = np.random.default_rng(0)
+    out: dict = {"rows": []}
+    for B in (1, 64, 1024):
+        xy = free[rng.integers(0, len(free), B)]
+        states = jnp.asarray(np.column_stack([xy, rng.uniform(-3, 3, B), rng.uniform(0, 1, B), np.zeros(B)]),
+                             jnp.float32)
+        goals = jnp.asarray(free[rng.integers(0, len(free), B)], jnp.float32)
+        discs = DiscObstacles(jnp.asarray(free[rng.integers(0, len(free), (B, 5))], jnp.float32),
+                              jnp.asarray(rng.uniform(-1, 1, (B, 5, 2)), jnp.float32), jnp.full((B, 5), 0.25))
+        keys = jax.random.split(jax.random.key(0), B)
+
+        def step(s, g, ob, k):
+            return jax.vmap(lambda s1, g1, o1, k1: mppi_control(table, cfg, params, s1, initial_sequence(cfg, s1), k1,
+                                                                g1, obstacles=o1)[0])(s, g, ob, k)
+
+        t0 = time.perf_counter()
+        fn = jax.jit(step).lower(states, goals, discs, keys).compile()
+        compile_s = time.perf_counter() - t0
+
+        def call(fn=fn, a=(states, goals, discs, keys)):
+            return jax.block_until_ready(fn(*a))
+
+        call()
+        s = median_time(call, 15 if B < 1024 else 7)
+        out["rows"].append(dict(robots=B, ms=1e3 * s, compile_s=compile_s,
+                                points_per_s=B * cfg.samples * cfg.points / s))
+    ok = np.nonzero(scen.optimal <= 80)[0]
+    out.update(_one_episode(grid, scen, ok, "iaco_mppi"))
+    return out
+
+
+def measure_speed(d: Path, episodes: int) -> dict:
+
+    import jaxplan as jp
+
+    sys.path.insert(0, str(Path(__file__).parent))
+
+    grid, scen = load(d, WAREHOUSE)
+    ok = np.nonzero(scen.optimal <= 80)[0]
+    sel = ok[np.arange(episodes) % len(ok)]
+    out: dict = {}
+    t0 = time.perf_counter()
+    b = jp.navigate_batch(grid, scen.starts[sel], scen.goals[sel], pipeline="iaco_dwa", seeds=[0])
+    out["batch_wall"] = time.perf_counter() - t0
+    out.update(episodes=episodes, plan_s=b.plan_time_s * episodes, run_s=b.run_time_s, compile_s=b.compile_s,
+               success=float(b.success.mean()), robot_steps=int(b.steps.sum()), loop_steps=int(b.steps.max()))
+    out.update(_one_episode(grid, scen, sel, "iaco_dwa"))
     return out
 
 
@@ -254,6 +347,21 @@ def section_speed(d: Path, args) -> None:
         print(f"   one episode: {r['single_steps']} control steps ({r['single_sim_s']:.1f} s simulated) in "
               f"{1e3 * r['single_s']:.1f} ms = {1e3 * r['single_s'] / r['single_steps']:.3f} ms per step, "
               f"{r['single_sim_s'] / r['single_s']:.0f}x real time (target >= 1000x)", flush=True)
+    if "mppi" in args.local:
+        print(f"\n== speed: MPPI ({WAREHOUSE}; 5 moving discs per robot) ==")
+        for label, prefix in (("XLA default threads", []), ("pinned to 1 core", ["taskset", "-c", "0"])):
+            cmd = prefix + [sys.executable, __file__, "--child-mppi", "--data-dir", str(d)]
+            res = subprocess.run(cmd, capture_output=True, text=True)
+            if res.returncode != 0:
+                print(f"{label}: failed\n{res.stderr[-2000:]}")
+                continue
+            r = json.loads(res.stdout.strip().splitlines()[-1])
+            for x in r["rows"]:
+                print(f"{label}: one compiled MPPI step, {x['robots']:>5} robots: {x['ms']:8.3f} ms "
+                      f"({x['points_per_s'] / 1e6:.0f} M rollout points/s; compile {x['compile_s']:.2f} s)")
+            print(f"   one iaco_mppi episode: {r['single_steps']} control steps ({r['single_sim_s']:.1f} s simulated) "
+                  f"in {1e3 * r['single_s']:.1f} ms = {1e3 * r['single_s'] / r['single_steps']:.3f} ms per step "
+                  f"(target <= 1 ms), {r['single_sim_s'] / r['single_s']:.0f}x real time (target >= 500x)", flush=True)
 
 
 def main() -> None:
@@ -272,12 +380,19 @@ def main() -> None:
     ap.add_argument("--verbose", action="store_true", help="print failure reasons")
     ap.add_argument("--oracle", action="store_true",
                     help="maps: also run the walkers with the DWA knowing their true routes (prediction='oracle')")
+    ap.add_argument("--local", default="dwa,mppi", help="local planners of the maps, allrows and speed sections")
     ap.add_argument("--child-speed", type=int, default=0, help=argparse.SUPPRESS)
+    ap.add_argument("--child-mppi", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     d = data_dir(args.data_dir)
+    sys.path.insert(0, str(Path(__file__).parent))
     if args.child_speed:
         print(json.dumps(measure_speed(d, args.child_speed)))
         return
+    if args.child_mppi:
+        print(json.dumps(measure_mppi_speed(d)))
+        return
+    args.local = [x for x in args.local.split(",") if x]
     if args.quick:
         args.rows, args.seeds, args.teams, args.episodes = 5, 2, 2, 100
         args.maps = f"{WAREHOUSE},random-32-32-20"
@@ -293,8 +408,8 @@ def main() -> None:
     print(f"jax {jax.__version__} on {jax.devices()[0].platform}, {machine_line()}; maps from {d}")
     print(f"{args.rows} rows (optimal <= 80 cells) x {args.seeds} seeds per map")
     for s in args.sections.split(","):
-        sections = {"maps": section_maps, "pipelines": section_pipelines, "multi": section_multi,
-                    "speed": section_speed}
+        sections = {"maps": section_maps, "allrows": section_allrows, "pipelines": section_pipelines,
+                    "multi": section_multi, "speed": section_speed}
         sections[s](d, args)
     print(steal.summary())
 

@@ -36,6 +36,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     "result": ("PlanResult",),
     "dwa": ("Ackermann", "Disc", "DiscObstacles", "DWAConfig", "DWAInfo", "DWAParams", "Rectangle", "Unicycle",
             "dwa_control", "dwa_control_batch", "dwa_step"),
+    "mppi": ("MPPIConfig", "MPPIParams", "mppi_control", "mppi_step"),
     "metrics": ("EnergyModel", "EpisodeTiming", "path_metrics"),
     "smooth": ("Smoothed", "smooth"),
     "nav": ("Episode", "EpisodeBatch", "MovingObstacles", "NavConfig", "crossing_traffic", "head_on",
@@ -50,8 +51,8 @@ _SOURCE = {name: module for module, names in _EXPORTS.items() for name in names}
 _DEPRECATED = {"warehouse_seed003": "warehouse_chen2023", "warehouse_seed004": "warehouse_yu2020"}
 """Names of the previous release (papers by internal number) -> their author-year names; kept for one release."""
 
-_SUBMODULES = ("aco", "cli", "core", "dwa", "experiments", "grid", "metrics", "nav", "papers", "planning", "registry",
-               "result", "scale", "search", "tune")
+_SUBMODULES = ("aco", "cli", "core", "dwa", "experiments", "grid", "metrics", "mppi", "nav", "papers", "planning",
+               "registry", "result", "scale", "search", "tune")
 """Subpackages and modules reachable as attributes (``jp.search.path_cost``), imported on first use (``smooth`` is
 the function; its subpackage is ``import jaxplan.smooth``)."""
 

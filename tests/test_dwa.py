@@ -560,3 +560,46 @@ def test_an_ackermann_robot_never_turns_tighter_than_it_can():
                            params={"temperature": temperature, "velocity": 0.0})
         assert abs(u[1]) <= kappa(car) * abs(u[0]) + 1e-6, (temperature, u)
         assert info.window[2] - 1e-6 <= u[1] <= info.window[3] + 1e-6
+
+
+def _brakes_clear(start, v, w, decel, disc_xy, disc_vel, disc_r, robot_r, t0, dt=0.005):
+    """Brute force: brake from ``start`` (x, y, θ) at speed ``v`` along the curvature ``w/v``; True if the robot
+    stops before its edge meets the disc (constant-velocity prediction from time ``t0``)."""
+    x, y, th = map(float, start)
+    kappa = w / v if v > 1e-3 else 0.0
+    t = 0.0
+    while v > 0:
+        v2 = max(v - decel * dt, 0.0)
+        ds = 0.5 * (v + v2) * dt
+        x, y, th = x + ds * math.cos(th + kappa * ds / 2), y + ds * math.sin(th + kappa * ds / 2), th + kappa * ds
+        v, t = v2, t + dt
+        cx, cy = disc_xy + disc_vel * (t0 + t)
+        if math.hypot(x - cx, y - cy) - disc_r < robot_r - 0.02:  # 2 cm: the check's discrete sampling
+            return False
+    return True
+
+
+def test_admissible_samples_can_brake_before_a_predicted_contact():
+    """A disc coming head-on down an open hall: with ``admissible=True`` every feasible sample — the chosen one
+    included — can still brake to rest before the disc's predicted path reaches it; without, some cannot."""
+    grid = jp.grid_from_array(np.ones((12, 30), bool), resolution=1.0)
+    disc_xy, disc_vel = np.array([11.5, 6.0]), np.array([-1.5, 0.0])
+    obs = DiscObstacles(jnp.asarray([disc_xy], jnp.float32), jnp.asarray([disc_vel], jnp.float32),
+                        jnp.asarray([0.25], jnp.float32))
+    state = np.array([5.0, 6.0, 0.0, 1.0, 0.0], np.float32)
+    seen = {}
+    for admissible in (False, True):
+        config = DWAConfig(n_v=6, n_omega=9, admissible=admissible)
+        u, info = dwa_step(state, np.array([28.0, 6.0]), grid, obstacles=obs, config=config)
+        r = config.robot
+        ends = np.asarray(info.rollouts)[:, -1]
+        samples = np.asarray(info.samples)
+        ok = [_brakes_clear(ends[k], float(samples[k, 0]), float(samples[k, 1]), r.decel, disc_xy, disc_vel, 0.25,
+                            0.25, config.horizon) for k in range(len(samples))]
+        feasible = np.asarray(info.feasible)
+        seen[admissible] = (feasible, np.asarray(ok))
+        if admissible:
+            assert feasible.any() and np.all(np.asarray(ok)[feasible])
+            assert int(info.chosen) < 0 or ok[int(info.chosen)]
+    feasible, ok = seen[False]
+    assert np.any(feasible & ~ok), "the plain DWA keeps samples that cannot stop in time: the option must matter"

@@ -18,9 +18,10 @@ package and from any lower layer, never from a higher one, and there is no impor
     cli                                   command line
     tune                                  objectives and optimisers over scenario batches
     experiments                           configs, runner, statistics, reports, figures
-    nav                                   two-level navigation (global plan -> DWA episodes)
+    nav                                   two-level navigation (global plan -> DWA or MPPI episodes)
     planning                              the front door `plan`/`planners` over every shipped planner
-    aco, smooth, dwa                      colonies (+ TSP), path post-processing, the local planner
+    mppi                                  the MPPI local planner (on the DWA's robot models and clearance)
+    aco, smooth, dwa                      colonies (+ TSP), path post-processing, the DWA local planner
     search                                A*/Dijkstra planners, key-node A*, RRT*/MRBS-RRT*
     registry                              the planner registry (`register_planner`, `resolve`)
     metrics                               path, run and episode metrics (numpy host twins included)

@@ -13,6 +13,7 @@ Pure core, for episodes (`lax.scan` over control steps, `vmap` over episodes)::
     u, info = dwa_control(table, DWAConfig(keep_rollouts=False), default_params(), state, subgoal)
 """
 
+from jaxplan.dwa._brake import braking_clearance
 from jaxplan.dwa._clearance import (
     HYBRID_EXACT_CELLS,
     ClearanceTable,
@@ -25,13 +26,25 @@ from jaxplan.dwa._clearance import (
 from jaxplan.dwa._config import CLEARANCE_MODES, EVALUATORS, SELECTIONS, DWAConfig, DWAParams, default_params
 from jaxplan.dwa._core import DWAInfo, dwa_control, dwa_control_batch, evaluate, trajectory
 from jaxplan.dwa._critics import Critics, critics
+from jaxplan.dwa._fastmath import abs_angle, rotor
 from jaxplan.dwa._fuzzy import fuzzy_evaluate, input_memberships, rule_table
-from jaxplan.dwa._robot import Ackermann, Disc, Rectangle, Unicycle, advance, footprint_offsets, footprint_radius
+from jaxplan.dwa._robot import (
+    Ackermann,
+    Disc,
+    Rectangle,
+    Robot,
+    Unicycle,
+    advance,
+    curvature_limit,
+    footprint_offsets,
+    footprint_radius,
+)
 from jaxplan.dwa._rollout import Rollouts, rollout
-from jaxplan.dwa._step import dwa_step, table_of, validate_config, validate_params
+from jaxplan.dwa._step import as_obstacles, dwa_step, table_of, validate_config, validate_params
 from jaxplan.dwa._window import Window, dynamic_window, sample_controls
 
 __all__ = [
+    "Robot", "abs_angle", "as_obstacles", "braking_clearance", "curvature_limit", "rotor",
     "Ackermann", "CLEARANCE_MODES", "ClearanceTable", "Critics", "DWAConfig", "DWAInfo", "DWAParams", "Disc",
     "DiscObstacles", "EVALUATORS", "HYBRID_EXACT_CELLS", "Rectangle", "Rollouts", "SELECTIONS", "Unicycle", "Window",
     "advance", "clearance_table", "critics", "default_params", "disc_clearance", "dwa_control", "dwa_control_batch",

@@ -221,12 +221,16 @@ def no_obstacles() -> DiscObstacles:
 def disc_clearance(obstacles: DiscObstacles, x: jnp.ndarray, y: jnp.ndarray, t, dt: float | None = None) -> jnp.ndarray:
     """Distance (m) from points ``x, y [...]`` to the nearest disc edge at time ``t`` (s); +inf if M = 0.
 
-    Negative inside a disc. ``dt`` (s) is the spacing of ``obstacles.track``'s samples, needed
+    ``t`` is a scalar, or one time per point (an array of the points' shape). Negative inside a disc.
+    ``dt`` (s) is the spacing of ``obstacles.track``'s samples, needed
     only when a track is given.
     """
     M = obstacles.radii.shape[-1]
     if M == 0:
         return jnp.full(jnp.shape(x), jnp.inf, jnp.result_type(x))
+    if jnp.ndim(t) > 0:  # a time per point (the braking check's runs): each point meets the discs at its time
+        return _disc_clearance_per_point(obstacles, x, y, jnp.broadcast_to(jnp.asarray(t, jnp.float32),
+                                                                           jnp.shape(x)), dt)
     if obstacles.track is not None:
         if dt is None:
             raise ValueError("disc_clearance: obstacles with a track need the track's sample spacing dt")
@@ -245,3 +249,19 @@ def disc_clearance(obstacles: DiscObstacles, x: jnp.ndarray, y: jnp.ndarray, t, 
         d2 = (x[..., None] - cx) ** 2 + (y[..., None] - cy) ** 2
         best = jnp.min(jnp.sqrt(jnp.maximum(d2, _EPS2)) - obstacles.radii, axis=-1)
     return best
+
+
+def _disc_clearance_per_point(obstacles: DiscObstacles, x: jnp.ndarray, y: jnp.ndarray, t: jnp.ndarray,
+                              dt: float | None) -> jnp.ndarray:
+    """`disc_clearance` with a time per point ``t [...]`` (the points' shape)."""
+    if obstacles.track is not None:
+        if dt is None:
+            raise ValueError("disc_clearance: obstacles with a track need the track's sample spacing dt")
+        k = jnp.clip(jnp.round(t / dt), 0, obstacles.track.shape[-2] - 1).astype(jnp.int32)  # [...]
+        c = obstacles.track[:, k]  # [M, ..., 2]
+        cx, cy = jnp.moveaxis(c[..., 0], 0, -1), jnp.moveaxis(c[..., 1], 0, -1)  # [..., M]
+    else:
+        cx = obstacles.positions[:, 0] + obstacles.velocities[:, 0] * t[..., None]  # [..., M]
+        cy = obstacles.positions[:, 1] + obstacles.velocities[:, 1] * t[..., None]
+    d2 = (x[..., None] - cx) ** 2 + (y[..., None] - cy) ** 2
+    return jnp.min(jnp.sqrt(jnp.maximum(d2, _EPS2)) - obstacles.radii, axis=-1)

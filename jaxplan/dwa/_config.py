@@ -77,6 +77,9 @@ class DWAConfig:
         (v, ω) for the next period, as for the others: the straight part is only a promise
         the next steps may keep. Each fraction must leave at least one point on either part.
       n_omega_straight: yaw-rate samples per speed in each ``straighten`` grid (static).
+      admissible: passive motion safety (static): a sample is feasible only if, from its rollout's end, the
+        robot can still brake to rest along its path before any predicted contact (`braking_clearance`).
+      brake_points: points of that braking check (static).
     """
 
     robot: Robot = Unicycle()
@@ -97,6 +100,8 @@ class DWAConfig:
     recovery: str = dataclasses.field(default="rotate", metadata=dict(static=True))
     straighten: tuple[float, ...] = dataclasses.field(default=(), metadata=dict(static=True))
     n_omega_straight: int = dataclasses.field(default=20, metadata=dict(static=True))
+    admissible: bool = dataclasses.field(default=False, metadata=dict(static=True))
+    brake_points: int = dataclasses.field(default=8, metadata=dict(static=True))
 
     @property
     def steps(self) -> int:

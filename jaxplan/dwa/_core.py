@@ -41,10 +41,11 @@ import numpy as np
 from jax import lax
 
 from jaxplan.dwa import _critics as C
+from jaxplan.dwa._brake import braking_clearance
 from jaxplan.dwa._clearance import ClearanceTable, DiscObstacles, disc_clearance, static_clearance
 from jaxplan.dwa._config import DWAConfig, DWAParams
 from jaxplan.dwa._fuzzy import fuzzy_evaluate
-from jaxplan.dwa._robot import Disc, curvature_limit, footprint_offsets
+from jaxplan.dwa._robot import Disc, curvature_limit, footprint_offsets, footprint_radius
 from jaxplan.dwa._rollout import rollout
 from jaxplan.dwa._window import dynamic_window, sample_controls
 
@@ -226,6 +227,15 @@ def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, sta
     if config.escape:
         threshold = jnp.minimum(threshold, _current_clearance(combined, state, robot.footprint) - ESCAPE_SLACK)
     feasible = ro.clearance >= threshold
+    if config.admissible:
+        # The turn-then-straight samples end driving straight: they brake along a straight line.
+        w_end = w if not config.straighten else jnp.concatenate([w[:config.n_v * config.n_omega],
+                                                                 jnp.zeros_like(w[config.n_v * config.n_omega:])])
+        closing = jnp.max(jnp.sqrt(jnp.sum(obstacles.velocities ** 2, axis=-1)), initial=0.0) if moving else 0.0
+        brake = braking_clearance(combined, robot, ro.end[:, 0], ro.end[:, 1],
+                                  lax.complex(ro.end_dir[:, 0], ro.end_dir[:, 1]), v, w_end, steps * dt,
+                                  config.brake_points, closing)
+        feasible = feasible & (brake >= footprint_radius(robot.footprint))
     reach = jnp.maximum(jnp.abs(robot.v_min), robot.v_max) * (steps * dt)
     cr = C.critics(ro.end, ro.clearance, v, state, subgoal, robot, config.d_clip, config.path_clip, reach, path,
                    ro.end_dir)

@@ -117,7 +117,7 @@ def _check_config(config: DWAConfig) -> None:
     if d_clip <= d_safe:
         raise ValueError(f"config.d_clip ({d_clip} m) must exceed d_safe ({d_safe} m)")
     _number("config.path_clip", config.path_clip, positive=True)
-    for field in ("n_v", "n_omega", "unroll", "n_omega_straight"):
+    for field in ("n_v", "n_omega", "unroll", "n_omega_straight", "brake_points"):
         n = getattr(config, field)
         if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 1:
             raise ValueError(f"config.{field} must be a positive integer, got {n!r}")

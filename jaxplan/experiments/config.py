@@ -127,6 +127,8 @@ METRICS: Mapping[str, Metric] = MappingProxyType({m.name: m for m in (
     Metric("converged_iteration", _PT, "", "plan: first iteration within 0.1 % of the final best cost; tsp: first "
                                            "iteration whose best tour is the final best (0-based)"),
     Metric("collisions", _N, "", "contacts with the map or moving discs"),
+    Metric("active_contacts", _N, "", "contacts begun while the robot moved faster than 0.05 m/s", default=False),
+    Metric("passive_contacts", _N, "", "contacts begun with the robot at rest", default=False),
     Metric("time_s", _N, "s", "simulated time to the goal", given_success=True),
     Metric("rmse", _N, "m", "RMS distance of executed positions to the tracked path"),
     Metric("energy", _N, "J", "energy proxy (DESIGN §6)"),
@@ -214,10 +216,20 @@ def _dwa_fields() -> tuple[str, ...]:
     return tuple(f.name for f in dataclasses.fields(DWAConfig) if f.name not in ("robot", "keep_rollouts"))
 
 
+def _mppi_fields() -> tuple[str, ...]:
+    from jaxplan.mppi import MPPIConfig
+
+    # The robot, period and d_safe of an episode are its DWA config's (one robot model per episode).
+    return tuple(f.name for f in dataclasses.fields(MPPIConfig)
+                 if f.name not in ("robot", "period", "d_safe", "keep_rollouts"))
+
+
 def _dwa_weights() -> tuple[str, ...]:
     from jaxplan.dwa import DWAParams
+    from jaxplan.mppi import MPPIParams
 
-    return DWAParams._fields
+    # A DWA pipeline's critic weights, or an MPPI pipeline's (checked against its local planner).
+    return DWAParams._fields + tuple(k for k in MPPIParams._fields if k not in DWAParams._fields)
 
 
 def _smoothers() -> tuple[str, ...]:
@@ -268,6 +280,9 @@ class ObstacleSpec:
     seed: int = setting("int", 0, "mixed into every trial's draw", ge=0)
     avoid_radius: float = setting("float", 1.0, "disc starts keep this far (m, to the disc's edge) from the robot's "
                                   "start and goal", ge=0)
+    behavior: str = setting("str", "blind", "'blind': on their routes regardless of the robot; 'social': the same "
+                            "routes, avoiding robots, each other and walls (social force model)",
+                            choices=("blind", "social"))
 
 
 @dataclass(frozen=True)
@@ -286,9 +301,12 @@ class PlannerConfig:
     dwa: Mapping[str, Any] = setting("table", doc="navigate: `DWAConfig` fields (scalars)", keys=_dwa_fields)
     robot: Mapping[str, Any] = setting("table", doc="navigate: `Unicycle` limits; radius: its `Disc` footprint (m)",
                                        keys=ROBOT_KEYS)
-    params: Mapping[str, Any] = setting("table", doc="navigate: `DWAParams` critic weights", keys=_dwa_weights)
+    params: Mapping[str, Any] = setting("table", doc="navigate: the local planner's weights (`DWAParams`, or "
+                                        "`MPPIParams` for an MPPI pipeline)", keys=_dwa_weights)
     obstacles: ObstacleSpec | None = setting("section", None, "navigate: random moving discs per episode",
                                              section=ObstacleSpec)
+    mppi: Mapping[str, Any] = setting("table", doc="navigate: `MPPIConfig` fields (scalars) of an MPPI pipeline",
+                                      keys=_mppi_fields)
 
     @property
     def global_planner(self) -> str:
@@ -799,17 +817,17 @@ def _read_planners(r: Reader, raw: dict) -> tuple[PlannerConfig, ...]:
             r.bad(join(p, "label"), f"duplicate label {label!r} (also planners[{labels[label]}]); labels name the "
                                     "table columns, give each a unique one")
         labels.setdefault(label, i)
-        nav = dwa = robot = params = {}
+        nav = dwa = robot = params = mppi = {}
         obstacles = None
         if kind == "navigate":
-            nav, dwa, robot, params = (r.value(e, p, setting_of(PlannerConfig, k)) for k in ("nav", "dwa", "robot",
-                                                                                             "params"))
+            nav, dwa, robot, params, mppi = (r.value(e, p, setting_of(PlannerConfig, k))
+                                             for k in ("nav", "dwa", "robot", "params", "mppi"))
             if "obstacles" in e:
                 obstacles = ObstacleSpec(**r.section(e["obstacles"], join(p, "obstacles"), ObstacleSpec))
             if name in pipes:
-                _check_nav(r, p, name, nav, dwa, robot, params)
+                _check_nav(r, p, name, nav, dwa, robot, params, mppi)
         out.append(PlannerConfig(label, kind or "plan", name or "", frozen(overrides), frozen(nav), frozen(dwa),
-                                 frozen(robot), frozen(params), obstacles))
+                                 frozen(robot), frozen(params), obstacles, frozen(mppi)))
     return tuple(out)
 
 
@@ -882,27 +900,34 @@ def nav_config(planner: PlannerConfig):
             changes["footprint"] = Disc(float(radius))
         robot = dataclasses.replace(robot, **changes)
     dwa = base.dwa.replace(robot=robot, **dict(planner.dwa))
-    return base.replace(dwa=dwa, **dict(planner.nav)), dict(planner.params)
+    mppi = base.mppi.replace(**dict(planner.mppi))
+    return base.replace(dwa=dwa, mppi=mppi, **dict(planner.nav)), dict(planner.params)
 
 
 def _check_nav(r: Reader, p: str, pipeline: str, nav: Mapping, dwa: Mapping, robot: Mapping,
-               params: Mapping) -> None:
-    problem = _nav_problem(pipeline, nav, dwa, robot, params)
+               params: Mapping, mppi: Mapping | None = None) -> None:
+    problem = _nav_problem(pipeline, nav, dwa, robot, params, mppi or {})
     if problem is not None:
         r.bad(p, f"navigation settings: {problem}")
 
 
-def _nav_problem(pipeline: str, nav: Mapping, dwa: Mapping, robot: Mapping, params: Mapping) -> str | None:
+def _nav_problem(pipeline: str, nav: Mapping, dwa: Mapping, robot: Mapping, params: Mapping,
+                 mppi: Mapping | None = None) -> str | None:
     """Why pipeline ``pipeline`` would refuse these settings, or None."""
     from jaxplan.dwa import validate_params
+    from jaxplan.mppi import validate_params as validate_mppi_params
     from jaxplan.nav import get_pipeline, resolve_config
 
-    probe = PlannerConfig("probe", "navigate", pipeline, frozen({}), frozen(dict(nav)), frozen(dict(dwa)),
-                          frozen(dict(robot)), frozen(dict(params)))
+    probe = PlannerConfig("probe", "navigate", pipeline, overrides=frozen({}), nav=frozen(dict(nav)),
+                          dwa=frozen(dict(dwa)), robot=frozen(dict(robot)), params=frozen(dict(params)),
+                          mppi=frozen(dict(mppi or {})))
     try:
         cfg, weights = nav_config(probe)
         cfg = resolve_config(cfg, get_pipeline(pipeline), None)
-        validate_params(weights or None, cfg.dwa.evaluator)
+        if cfg.local == "mppi":
+            validate_mppi_params(weights or None)
+        else:
+            validate_params(weights or None, cfg.dwa.evaluator)
     except (ValueError, TypeError) as e:
         return str(e)
     return None
@@ -1137,7 +1162,7 @@ def _check_quick_nav(r: Reader, quick_nav: Mapping, navs: Sequence[PlannerConfig
     for pc in navs:
         if pc.name not in pipelines():
             continue  # reported at its planners[i].name
-        own = (pc.nav, pc.dwa, pc.robot, pc.params)
+        own = (pc.nav, pc.dwa, pc.robot, pc.params, pc.mppi)
         if _nav_problem(pc.name, *own) is not None:
             continue  # reported at its planners[i]; the quick values are not to blame
         found = False

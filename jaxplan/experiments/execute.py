@@ -119,13 +119,14 @@ def obstacle_fn(mw: MapWork, m: int, pc: PlannerConfig, run_idx: np.ndarray) -> 
         s = int(np.random.SeedSequence([o.seed, m, sc, int(seed)]).generate_state(1)[0])
         avoid = (np.stack([mw.starts[sc], mw.goals[sc]]) + 0.5) * res
         return random_obstacles(mw.grid, n=o.n, speed=o.speed, radius=o.radius, seed=s, waypoints=o.waypoints,
-                                avoid=avoid, avoid_radius=o.avoid_radius, loop=o.loop)
+                                avoid=avoid, avoid_radius=o.avoid_radius, loop=o.loop, behavior=o.behavior)
 
     return fn
 
 
-NAV_KEYS = ("success", "collisions", "time_s", "rmse", "max_curvature", "energy", "path_length", "recoveries",
-             "replans")
+NAV_KEYS = ("success", "collisions", "active_contacts", "passive_contacts", "time_s", "rmse", "max_curvature", "energy",
+            "path_length", "recoveries", "replans")
+_INT_NAV = ("success", "collisions", "active_contacts", "passive_contacts", "recoveries", "replans")
 
 
 def _run_navigate(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, seeds: tuple[int, ...], chunk: int,
@@ -144,7 +145,7 @@ def _run_navigate(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, seeds
     for k in NAV_KEYS:
         if k in metrics:
             v = getattr(eb, k)[:n, :, 0]
-            out[k] = v.astype(np.int64) if k in ("success", "collisions", "recoveries", "replans") else \
+            out[k] = v.astype(np.int64) if k in _INT_NAV else \
                 np.asarray(v, np.float64)
     if "hausdorff" in metrics:
         out["hausdorff"] = hausdorff(mw, idx, eb.plans[:n, :, 0], eb.n_plan[:n, :, 0])

@@ -21,7 +21,8 @@ __all__ = ["PATH_KEYS", "LOS_KEYS", "INT_METRICS", "accuracy", "reductions", "lo
 PATH_KEYS = ("length", "optimality_gap", "turns", "sharp_turns", "smoothness", "min_clearance", "mean_clearance",
               "max_curvature")
 LOS_KEYS = ("los_length", "los_turns", "los_length_reduction", "los_turns_reduction")
-INT_METRICS = ("turns", "sharp_turns", "los_turns", "converged_iteration", "collisions", "recoveries", "replans")
+INT_METRICS = ("turns", "sharp_turns", "los_turns", "converged_iteration", "collisions", "active_contacts",
+               "passive_contacts", "recoveries", "replans")
 _GAP_TOL = 1e-9  # a gap of exactly 10 % computes as 0.10000000000000009: count it as within
 
 

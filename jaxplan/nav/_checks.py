@@ -14,6 +14,9 @@ from numpy.typing import ArrayLike
 
 from jaxplan.dwa import DWAParams, footprint_radius, validate_config, validate_params
 from jaxplan.grid import GridMap
+from jaxplan.mppi import MPPIParams
+from jaxplan.mppi import validate_config as validate_mppi_config
+from jaxplan.mppi import validate_params as validate_mppi_params
 from jaxplan.nav._config import LOCAL_PLANNERS, PREDICTIONS, SUBGOAL_MODES, NavConfig
 from jaxplan.nav._moving import MovingObstacles, no_obstacles
 from jaxplan.nav._pipelines import Pipeline, get_pipeline
@@ -58,6 +61,7 @@ def resolve_config(config: NavConfig | None, pipeline: Pipeline, local_planner: 
     evaluator = cfg.evaluator or pipeline.evaluator
     dwa = cfg.dwa.replace(evaluator=evaluator)
     dwa = validate_config(dwa.replace(keep_rollouts=False))
+    validate_mppi_config(cfg.replace(dwa=dwa).local_mppi())
     for f in ("switch_radius", "switch_min", "lookahead", "goal_tolerance", "max_time", "replan_period",
               "replan_deviation", "block_distance", "block_margin", "follow_gain", "threat_distance", "threat_speed",
               "corner_exponent", "recheck_gain"):
@@ -81,7 +85,7 @@ def resolve_config(config: NavConfig | None, pipeline: Pipeline, local_planner: 
     if not isinstance(cfg.replan_group, int) or cfg.replan_group < 0:
         raise ValueError(f"NavConfig.replan_group must be an integer >= 0 (0: the whole batch), "
                          f"got {cfg.replan_group!r}")
-    return cfg.replace(dwa=dwa, local=local, evaluator=evaluator)
+    return cfg.replace(dwa=dwa, mppi=cfg.mppi.replace(keep_rollouts=False), local=local, evaluator=evaluator)
 
 
 def obstacle_sets(obstacles: Any, E: int, R: int, seeds: list[int]) -> list[list[MovingObstacles]]:
@@ -113,20 +117,21 @@ def check_obstacle_starts(pos: np.ndarray, rad: np.ndarray, start_xy: np.ndarray
 
 class RunArgs(NamedTuple):
     """A run's checked arguments: the pipeline, the resolved config, seeds, ``[E, N, 2]`` start and goal cells,
-    the DWA params and the robot's footprint radius (m)."""
+    the local planner's params (`DWAParams`, or `MPPIParams` for ``"mppi"``) and the robot's footprint radius (m)."""
 
     pipe: Pipeline
     cfg: NavConfig
     seeds: list[int]
     starts: np.ndarray
     goals: np.ndarray
-    params: DWAParams
+    params: DWAParams | MPPIParams
     radius: float
 
 
 def checked_run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | None,
                 global_planner: str | None, local_planner: str | None, seeds: Sequence[int],
-                config: NavConfig | None, params: DWAParams | Mapping[str, float] | None, time_limit: float | None,
+                config: NavConfig | None, params: DWAParams | MPPIParams | Mapping[str, float] | None,
+                time_limit: float | None,
                 mesh: Mesh | str | None) -> RunArgs:
     """A navigation call's arguments (``starts, goals [E, N, 2]`` cells), every one checked (``ValueError`` naming
     the problem) before any work, with the pipeline and `NavConfig` resolved."""
@@ -153,7 +158,14 @@ def checked_run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: 
         raise ValueError("a start equals its goal: there is nothing to navigate")
     if time_limit is not None and not (math.isfinite(time_limit) and 0 < time_limit <= cfg.max_time):
         raise ValueError(f"time_limit must be in (0, max_time = {cfg.max_time}] s, got {time_limit!r}")
-    p = validate_params(params, cfg.dwa.evaluator)
+    if cfg.local == "mppi":
+        if isinstance(params, DWAParams):
+            raise ValueError("params are DWAParams but the local planner is 'mppi': give MPPIParams or a dict")
+        p = validate_mppi_params(params)
+    else:
+        if isinstance(params, MPPIParams):
+            raise ValueError(f"params are MPPIParams but the local planner is {cfg.local!r}: give DWAParams or a dict")
+        p = validate_params(params, cfg.dwa.evaluator)
     radius = float(footprint_radius(robot.footprint))
     if N > 1:
         _check_team(starts, goals, float(grid.resolution), radius)

@@ -8,13 +8,14 @@ import math
 import jax
 
 from jaxplan.dwa import DWAConfig
+from jaxplan.mppi import MPPIConfig
 
 __all__ = ["NavConfig", "LOCAL_PLANNERS", "SUBGOAL_MODES", "PREDICTIONS"]
 
-LOCAL_PLANNERS = ("dwa", "follow")
-"""``"dwa"``: the DWA step; ``"follow"``: pure path following without obstacle avoidance (cui2025's
-"without DWA" ablation): turn towards the sub-goal, slow down with the heading error, within
-the robot's dynamic window."""
+LOCAL_PLANNERS = ("dwa", "mppi", "follow")
+"""``"dwa"``: the DWA step; ``"mppi"``: the MPPI step (`jaxplan.mppi`); ``"follow"``: pure path following
+without obstacle avoidance (cui2025's "without DWA" ablation): turn towards the sub-goal, slow down with the
+heading error, within the robot's dynamic window."""
 
 SUBGOAL_MODES = ("key_nodes", "lookahead")
 """``"key_nodes"``: aim at the current waypoint and switch to the next within ``switch_radius``
@@ -48,7 +49,12 @@ class NavConfig:
         side-steps round a walker in a corridor, where a constant arc long enough to pass ends
         at a wall. It helps among walkers on most maps, but a lone robot's control step costs
         several times as long, so it is not the default.
-      local: ``"dwa"``, ``"follow"`` (static; see `LOCAL_PLANNERS`), or None: the pipeline's.
+      mppi: the MPPI local planner's `jaxplan.mppi.MPPIConfig` (samples, horizon, critics' distances,
+        passive-safety option), used when ``local = "mppi"``. The episode's robot, control period
+        and d_safe are ``dwa``'s for every local planner (one robot model per episode): the MPPI
+        step runs with ``mppi.replace(robot=dwa.robot, period=dwa.period, d_safe=dwa.d_safe)``.
+      local: ``"dwa"``, ``"mppi"``, ``"follow"`` (static; see `LOCAL_PLANNERS`), or None: the
+        pipeline's.
       evaluator: the DWA evaluator (``"weighted"``, ``"fuzzy"``, ``"classic"``; static), or
         None: the pipeline's (fuzzy for ``iaco_dwa``, weighted for the others).
       subgoal: ``"key_nodes"`` or ``"lookahead"`` (static; see `SUBGOAL_MODES`).
@@ -173,6 +179,7 @@ class NavConfig:
     """
 
     dwa: DWAConfig = DWAConfig(keep_rollouts=False, recovery="flee", d_clip=0.5)
+    mppi: MPPIConfig = MPPIConfig()
     local: str | None = dataclasses.field(default=None, metadata=dict(static=True))
     evaluator: str | None = dataclasses.field(default=None, metadata=dict(static=True))
     subgoal: str = dataclasses.field(default="key_nodes", metadata=dict(static=True))
@@ -215,6 +222,10 @@ class NavConfig:
         """Control steps of the longest episode, a multiple of ``chunk``."""
         n = math.ceil(self.max_time / self.dwa.period - 1e-9)
         return math.ceil(n / self.chunk) * self.chunk
+
+    def local_mppi(self) -> MPPIConfig:
+        """The MPPI step's config: ``mppi`` with the episode's robot, period and d_safe (``dwa``'s)."""
+        return self.mppi.replace(robot=self.dwa.robot, period=self.dwa.period, d_safe=self.dwa.d_safe)
 
     def replace(self, **changes) -> "NavConfig":
         return dataclasses.replace(self, **changes)

@@ -4,8 +4,9 @@
 single-robot navigation; in multi-robot mode every robot treats the others as moving
 discs) by one control period per step (`_step`), in these stages:
 
-1. `_seen_discs`: moving obstacles are placed on their routes at time ``t`` (`obstacle_state`),
-   and the robots become covering discs for each other;
+1. `_seen_discs`: moving obstacles are placed on their routes at time ``t`` (`obstacle_state`) —
+   walkers that see (`jaxplan.nav._social`) are where the episode's simulation put them — and the
+   robots become covering discs for each other;
 2. `_next_waypoints`: each robot's current waypoint (switching to the next within the switch
    radius, `jaxplan.nav._tracking.subgoal_index`);
 3. `_watch_progress`: the stall and orbit watches (`NavConfig.stall_time`, `NavConfig.orbit_angle`);
@@ -16,9 +17,11 @@ discs) by one control period per step (`_step`), in these stages:
 5. `_subgoal`: the point to steer for, the current waypoint or a look-ahead point on the
    waypoint polyline;
 6. `_local_control`: the local planner picks the control: the DWA step (`dwa_control`, obstacles =
-   moving discs predicted at constant velocity + the other robots) or pure path following, its
-   top speed capped near corners;
-7. `_move_and_contacts`: the robot moves along the exact arc (`advance`), and is checked for contact
+   moving discs predicted at constant velocity + the other robots), the MPPI step (`mppi_control`,
+   the same discs, warm-started from the robot's last sequence, noise keyed by episode, robot and
+   step) or pure path following, its top speed capped near corners;
+7. `_move_and_contacts`: the walkers that see move for the period (the social force model, reacting to
+   where the robots are at its start), the robot moves along the exact arc (`advance`), and is checked for contact
    with the map (clearance below its radius), a moving disc or another robot at
    `NavConfig.contact_checks` evenly spaced times of the period;
 8. `_bookkeeping`: a robot is done at the goal (within the tolerance), at its time limit, or — when
@@ -51,13 +54,27 @@ from jaxplan.dwa import (
     static_clearance,
 )
 from jaxplan.metrics import point_polyline_distance
+from jaxplan.mppi import MPPIParams, initial_sequence, mppi_control, shift
 from jaxplan.nav._config import NavConfig
-from jaxplan.nav._moving import MovingObstacles, obstacle_state
+from jaxplan.nav._moving import MovingObstacles, obstacle_state, route_target
 from jaxplan.nav._replan import path_blocked, replan_slots
-from jaxplan.nav._state import COLLISION, GOAL, RUNNING, TIMEOUT, Carry, EpisodeInputs, EpisodeOutput
+from jaxplan.nav._social import SocialForce, WalkerState, advance_walkers, initial_walkers
+from jaxplan.nav._state import (
+    ACTIVE_SPEED,
+    COLLISION,
+    GOAL,
+    RUNNING,
+    TIMEOUT,
+    Carry,
+    EpisodeInputs,
+    EpisodeOutput,
+)
 from jaxplan.nav._tracking import corner_cap, follow, lookahead_point, rewatch, subgoal_index, threatened
 
 __all__ = ["run_episodes"]
+
+SOCIAL_FORCE = SocialForce()
+"""The walkers' social force parameters (Helbing & Molnár 1995; see `jaxplan.nav._social`)."""
 
 _FAR = 1e6  # metres: where a disc that must not matter is put (finite: keeps gradients finite)
 
@@ -123,13 +140,15 @@ def _centres_at(obs: MovingObstacles, times: jnp.ndarray) -> jnp.ndarray:
 def _oracle_track(obs: MovingObstacles, t: jnp.ndarray, steps: int, dt: float, pos_all: jnp.ndarray,
                   vel_all: jnp.ndarray) -> jnp.ndarray:
     """``[B, N, D, steps + 1, 2]`` centres at ``t, t + dt, …, t + steps·dt``: the obstacles (the first
-    M of the D discs) along their true routes, the other robots at constant velocity."""
+    M of the D discs) along their true routes, the other robots (and walkers that see) at constant velocity."""
     B, N, D = pos_all.shape[:3]
     M = obs.radii.shape[-1]
     taus = jnp.arange(steps + 1, dtype=jnp.float32) * dt
     fut = _centres_at(obs, t + taus)  # [K, B, M, 2]
     fut = jnp.broadcast_to(jnp.moveaxis(fut, 0, 2)[:, None], (B, N, M, steps + 1, 2))
     linear = pos_all[..., None, :] + vel_all[..., None, :] * taus[:, None]  # [B, N, D, K, 2]
+    if obs.reactive is not None:  # a walker that sees has no route to know in advance: constant velocity
+        fut = jnp.where(obs.reactive[:, None, :, None, None], linear[:, :, :M], fut)
     return jnp.concatenate([fut, linear[:, :, M:]], axis=2) if D > M else fut
 
 class _Discs(NamedTuple):
@@ -148,12 +167,23 @@ class _Discs(NamedTuple):
     radius: jnp.ndarray
 
 
-def _seen_discs(robot, obs: MovingObstacles, state: jnp.ndarray, t: jnp.ndarray) -> _Discs:
+def _obstacles_now(obs: MovingObstacles, walkers: WalkerState | None, t: jnp.ndarray):
+    """``(positions, velocities) f32[B, M, 2]`` of the moving obstacles at time ``t``: on their routes, or where the
+    simulation put the walkers that see."""
+    opos, ovel = jax.vmap(obstacle_state, in_axes=(0, None))(obs, t)  # [B, M, 2]
+    if walkers is None:
+        return opos, ovel
+    react = obs.reactive[..., None]
+    return jnp.where(react, walkers.pos, opos), jnp.where(react, walkers.vel, ovel)
+
+
+def _seen_discs(robot, obs: MovingObstacles, state: jnp.ndarray, t: jnp.ndarray,
+                walkers: WalkerState | None = None) -> _Discs:
     """Stage 1: the moving obstacles at time ``t`` (s), and the robots (``state [B, N, 5]``) as discs for each
     other."""
     B, N = state.shape[:2]
     M = obs.radii.shape[-1]
-    opos, ovel = jax.vmap(obstacle_state, in_axes=(0, None))(obs, t)  # [B, M, 2]
+    opos, ovel = _obstacles_now(obs, walkers, t)
     rc, rr = _robot_discs(state, robot)  # [B, N, C, 2]
     C = rc.shape[2]
     rvel = state[..., 3:4] * jnp.stack([jnp.cos(state[..., 2]), jnp.sin(state[..., 2])], axis=-1)  # [B, N, 2]
@@ -271,10 +301,24 @@ def _subgoal(config: NavConfig, c: Carry, pos: jnp.ndarray) -> tuple[jnp.ndarray
     return sub, c._replace(index=seg)
 
 
-def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams, inputs: EpisodeInputs, c: Carry,
-                   pos: jnp.ndarray, sub: jnp.ndarray, discs: _Discs, t: jnp.ndarray) -> tuple:
-    """Stage 6: the local planner's control ``u [B, N, 2]`` (zero once done) and ``recovery bool[B, N]``, its
-    top speed capped near corners (and while creeping) unless a walker closes in."""
+LOCAL_PATH_POINTS = 4
+"""Waypoints ahead (after the one before the current) that the MPPI path-align critic sees."""
+
+
+def _local_path(wp: jnp.ndarray, n: jnp.ndarray, index: jnp.ndarray, origin: jnp.ndarray):
+    """The stretch of one robot's waypoint polyline ``wp [K, 2]`` around its current waypoint: ``[W + 1, 2]`` points
+    (the waypoint before the current one — or the polyline's origin — then up to ``W`` from the current on, the
+    last repeated) and their valid count."""
+    ahead = wp[jnp.minimum(index + jnp.arange(LOCAL_PATH_POINTS), n - 1)]
+    prev = jnp.where(index > 0, wp[jnp.maximum(index - 1, 0)], origin)
+    return jnp.concatenate([prev[None], ahead]), 1 + jnp.minimum(n - index, LOCAL_PATH_POINTS)
+
+
+def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams | MPPIParams, inputs: EpisodeInputs,
+                   c: Carry, pos: jnp.ndarray, sub: jnp.ndarray, discs: _Discs, t: jnp.ndarray) -> tuple:
+    """Stage 6: the local planner's control ``u [B, N, 2]`` (zero once done), ``recovery bool[B, N]`` and the
+    MPPI warm starts ``[B, N, T, 2]``; the top speed is capped near corners (not for MPPI) and while creeping,
+    unless a walker closes in."""
     dwa = config.dwa
     robot = dwa.robot
     obs = inputs.obstacles
@@ -282,27 +326,53 @@ def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams, 
     M = obs.radii.shape[-1]
     pos_all, vel_all, rad_all = discs.pos, discs.vel, discs.rad
     flat = lambda x: x.reshape((B * N,) + x.shape[2:])  # noqa: E731
-    cap = jax.vmap(lambda p_, w_, n_, i_: corner_cap(config, p_, w_, n_, i_, robot.decel))(
-        flat(pos), flat(c.waypoints), flat(c.n_wp), flat(c.index))
-    v_top = jnp.minimum(robot.v_max, jnp.maximum(cap, config.corner_speed))
+    if config.local == "mppi":
+        # MPPI brakes for corners within its own horizon: the caps that keep the DWA's constant-velocity
+        # rollouts from overshooting corners only slowed it (docs/decisions.md, "MPPI in episodes").
+        v_top = jnp.broadcast_to(jnp.asarray(robot.v_max, pos.dtype), (B * N,))
+    else:
+        cap = jax.vmap(lambda p_, w_, n_, i_: corner_cap(config, p_, w_, n_, i_, robot.decel))(
+            flat(pos), flat(c.waypoints), flat(c.n_wp), flat(c.index))
+        v_top = jnp.minimum(robot.v_max, jnp.maximum(cap, config.corner_speed))
     v_top = jnp.where(flat(c.creep), jnp.minimum(v_top, config.stall_speed), v_top)
-    if config.local == "dwa":  # `follow` does not avoid anything: lifting its caps only sends it into walls
+    plan = c.plan
+    if config.local in ("dwa", "mppi"):  # `follow` does not avoid anything: lifting its caps sends it into walls
         # Walkers only: robots avoid each other, and two robots meeting at a corner should slow down.
         threat = threatened(config, pos, pos_all[:, :, :M], vel_all[:, :, :M], rad_all[:, :, :M])
         v_top = jnp.where(flat(threat), robot.v_max, v_top)
         track = None
         if config.prediction == "oracle" and M > 0:
-            track = _oracle_track(obs, t, dwa.steps, dwa.dt, pos_all, vel_all)
+            if config.local == "dwa":
+                track = _oracle_track(obs, t, dwa.steps, dwa.dt, pos_all, vel_all)
+            else:
+                mc = config.local_mppi()
+                track = _oracle_track(obs, t, mc.points, mc.period / mc.substeps, pos_all, vel_all)
         obstacles = DiscObstacles(flat(pos_all), flat(vel_all), flat(rad_all), None if track is None else flat(track))
+        # The run ends in the goal disc: rollouts are checked only until they enter it (a goal at
+        # the end of a dead end is otherwise reached only by rollouts that run on into its end wall).
+        finish = jnp.concatenate([flat(inputs.goal), jnp.full((B * N, 1), config.goal_tolerance, inputs.goal.dtype)],
+                                 axis=-1)
+    if config.local == "mppi":
+        mcfg = config.local_mppi()
+        path, n_path = jax.vmap(_local_path)(flat(c.waypoints), flat(c.n_wp), flat(c.index), flat(c.origin))
+        robot_index = jnp.tile(jnp.arange(N, dtype=jnp.uint32), B)
+        keys = jax.vmap(lambda kd, r: jax.random.fold_in(jax.random.wrap_key_data(kd), c.t.astype(jnp.uint32) * N + r))(
+            jnp.repeat(inputs.key, N, axis=0), robot_index)
+
+        def mppi(state, mean, key, subgoal, goal, d, path_, n_path_, vmax, finish_):
+            cfg = mcfg.replace(robot=dataclasses.replace(mcfg.robot, v_max=vmax))
+            return mppi_control(table, cfg, params, state, mean, key, subgoal, goal, d, path_, n_path_, finish_)
+
+        u, info = jax.vmap(mppi)(flat(c.state), flat(c.plan), keys, flat(sub), flat(inputs.goal), obstacles, path,
+                                 n_path, v_top, finish)
+        recovery = info.recovery.reshape(B, N)
+        plan = jnp.where(c.done[..., None, None], c.plan, shift(info.sequence).reshape(c.plan.shape))
+    elif config.local == "dwa":
 
         def control(state, subgoal, d, wp, vmax, finish):
             cfg = dataclasses.replace(dwa, robot=dataclasses.replace(robot, v_max=vmax))
             return dwa_control(table, cfg, params, state, subgoal, d, wp if config.path_critic else None, finish)
 
-        # The run ends in the goal disc: rollouts are checked only until they enter it (a goal at
-        # the end of a dead end is otherwise reached only by rollouts that run on into its end wall).
-        finish = jnp.concatenate([flat(inputs.goal), jnp.full((B * N, 1), config.goal_tolerance, inputs.goal.dtype)],
-                                 axis=-1)
         u, info = jax.vmap(control)(flat(c.state), flat(sub), obstacles, flat(c.waypoints), v_top, finish)
         recovery = info.recovery.reshape(B, N)
     else:
@@ -311,12 +381,37 @@ def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams, 
         recovery = jnp.zeros((B, N), bool)
     u = u.reshape(B, N, 2)
     u = jnp.where(c.done[..., None], 0.0, u)
-    return u, recovery & ~c.done
+    return u, recovery & ~c.done, plan
+
+
+def _move_walkers(config: NavConfig, table: ClearanceTable, obs: MovingObstacles, c: Carry, discs: _Discs):
+    """Stage 7a: the walkers that see, moved for one period (`advance_walkers`, each episode's robots as they are
+    at its start): their new `WalkerState` ``[B, M]`` and positions ``f32[SUBSTEPS, B, M, 2]`` at the end of each
+    integration step."""
+    B, N = c.state.shape[:2]
+    C = discs.robots.shape[2]
+    rvel = c.state[..., 3:4] * jnp.stack([jnp.cos(c.state[..., 2]), jnp.sin(c.state[..., 2])], axis=-1)
+    robots = discs.robots.reshape(B, N * C, 2)
+    robots_vel = jnp.repeat(rvel, C, axis=1).reshape(B, N * C, 2)
+    # Robots that are done stay where they are, standing: walkers still go round them.
+    robots_vel = jnp.where(jnp.repeat(c.done, C, axis=1)[..., None], 0.0, robots_vel)
+
+    def wall(x, y):
+        return static_clearance(table, x, y, "hybrid")
+
+    def one(w, wp, n, sp, rad, lp, react, rb, rv):
+        return advance_walkers(SOCIAL_FORCE, w, wp, n, sp, rad, lp, react, rb, rv, discs.radius, wall,
+                               config.dwa.period)
+
+    new, path = jax.vmap(one)(c.walkers, obs.waypoints, obs.n_waypoints, obs.speeds, obs.radii, obs.loop,
+                              obs.reactive, robots, robots_vel)
+    return new, jnp.swapaxes(path, 0, 1)
 
 
 def _move_and_contacts(config: NavConfig, table: ClearanceTable, obs: MovingObstacles, c: Carry, u: jnp.ndarray,
-                       t: jnp.ndarray, radius: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray, jnp.ndarray]:
-    """Stage 7: the new states ``[B, N, 5]`` (a done robot stays, at rest), and the contacts during the move:
+                       t: jnp.ndarray, radius: jnp.ndarray, walked: jnp.ndarray | None = None
+                       ) -> tuple[jnp.ndarray, jnp.ndarray, jnp.ndarray]:
+    """Stage 7b: the new states ``[B, N, 5]`` (a done robot stays, at rest), and the contacts during the move:
     ``hit bool[B, N]`` (map, moving disc or robot) and ``pair bool[B, N, N]`` (robot i with robot j)."""
     B, N = c.state.shape[:2]
     M = obs.radii.shape[-1]
@@ -333,6 +428,14 @@ def _move_and_contacts(config: NavConfig, table: ClearanceTable, obs: MovingObst
     each = lambda a: jnp.broadcast_to(a, (K,) + a.shape)  # noqa: E731
     pose = advance(each(c.state), each(u), frac[:, None, None] * period)  # [K, B, N, 5]; a done robot (u = 0) stays
     ocs = _centres_at(obs, t + frac * period)  # [K, B, M, 2]
+    if walked is not None:  # walkers that see: where the simulation moved them, between its integration steps
+        J = walked.shape[0]
+        steps = jnp.concatenate([c.walkers.pos[None], walked])  # [J + 1, B, M, 2] from the period's start
+        at = frac * J
+        lo = jnp.clip(jnp.floor(at).astype(jnp.int32), 0, J - 1)
+        w = (at - lo)[:, None, None, None]
+        sim = steps[lo] * (1.0 - w) + steps[lo + 1] * w  # [K, B, M, 2]
+        ocs = jnp.where(obs.reactive[None, :, :, None], sim, ocs)
     nc, _ = _robot_discs(pose, robot)  # [K, B, N, C, 2]
     clear = static_clearance(table, nc[..., 0], nc[..., 1], "hybrid")  # [K, B, N, C]
     hit_map = jnp.any(clear < radius, axis=(0, 3))
@@ -351,7 +454,7 @@ def _move_and_contacts(config: NavConfig, table: ClearanceTable, obs: MovingObst
 
 
 def _bookkeeping(config: NavConfig, inputs: EpisodeInputs, c: Carry, new: jnp.ndarray, hit: jnp.ndarray,
-                 pair: jnp.ndarray) -> Carry:
+                 pair: jnp.ndarray, u: jnp.ndarray) -> Carry:
     """Stage 8: contact counts (onsets of contact), steps, tracking error, and why a robot is done (goal,
     collision when the config stops on one, time limit); a done robot stays done."""
     period = config.dwa.period
@@ -373,16 +476,17 @@ def _bookkeeping(config: NavConfig, inputs: EpisodeInputs, c: Carry, new: jnp.nd
     return c._replace(
         state=new, done=done, reason=reason, steps=steps, hit=hit, pair_hit=pair,
         collisions=c.collisions + onset.astype(jnp.int32),
+        active_contacts=c.active_contacts + (onset & (jnp.abs(u[..., 0]) > ACTIVE_SPEED)).astype(jnp.int32),
         pair_collisions=c.pair_collisions + pair_onset.astype(jnp.int32), sq_error=sq_error, error=err,
         t=c.t + 1,
     )
 
 
-def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: DWAParams,
+def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: DWAParams | MPPIParams,
           inputs: EpisodeInputs, c: Carry):
     """One control period of every robot: the stages in the order of the module docstring."""
     t = c.t.astype(jnp.float32) * config.dwa.period
-    discs = _seen_discs(config.dwa.robot, inputs.obstacles, c.state, t)
+    discs = _seen_discs(config.dwa.robot, inputs.obstacles, c.state, t, c.walkers)
     pos = c.state[..., :2]
     c = _next_waypoints(config, table, c, pos)
     crowded = _crowded(config, discs, pos)
@@ -390,14 +494,38 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
     if config.replan:
         c = _replanning(config, free, table.resolution, inputs, c, pos, discs, crowded)
     sub, c = _subgoal(config, c, pos)
-    u, recovery = _local_control(config, table, params, inputs, c, pos, sub, discs, t)
-    new, hit, pair = _move_and_contacts(config, table, inputs.obstacles, c, u, t, discs.radius)
-    c = _bookkeeping(config, inputs, c, new, hit, pair)
-    return c, (new, u, recovery)
+    u, recovery, plan = _local_control(config, table, params, inputs, c, pos, sub, discs, t)
+    c = c._replace(plan=plan)
+    walked = None
+    if c.walkers is not None:
+        walkers, walked = _move_walkers(config, table, inputs.obstacles, c, discs)
+    new, hit, pair = _move_and_contacts(config, table, inputs.obstacles, c, u, t, discs.radius, walked)
+    if c.walkers is not None:
+        c = c._replace(walkers=walkers)
+    c = _bookkeeping(config, inputs, c, new, hit, pair, u)
+    seen = None if c.walkers is None else _obstacles_now(inputs.obstacles, c.walkers, t + config.dwa.period)[0]
+    return c, (new, u, recovery, seen)
 
 
-def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp.ndarray, params: DWAParams,
-                 inputs: EpisodeInputs) -> EpisodeOutput:
+def _initial_walkers(obs: MovingObstacles) -> WalkerState | None:
+    """The walkers that see at ``t = 0`` (``[B, M]``), placed as the blind model places them; None if none sees."""
+    if obs.reactive is None:
+        return None
+    pos, vel = jax.vmap(obstacle_state, in_axes=(0, None))(obs, 0.0)
+    target, forward = jax.vmap(route_target, in_axes=(0, None))(obs, 0.0)
+    return initial_walkers(pos, vel, target, forward)
+
+
+def _initial_plans(config: NavConfig, start: jnp.ndarray) -> jnp.ndarray:
+    """``f32[B, N, T, 2]``: each robot's first MPPI warm start (its start velocity held); ``T = 0`` unless MPPI."""
+    if config.local != "mppi":
+        return jnp.zeros(start.shape[:2] + (0, 2), start.dtype)
+    mc = config.local_mppi()
+    return jax.vmap(jax.vmap(lambda s: initial_sequence(mc, s)))(start).astype(start.dtype)
+
+
+def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp.ndarray,
+                 params: DWAParams | MPPIParams, inputs: EpisodeInputs) -> EpisodeOutput:
     """Runs ``B`` episodes of ``N`` robots (pure; jit with ``config`` and ``steps`` static).
 
     Args:
@@ -405,7 +533,7 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
       steps: ``S``, the buffer length in control steps (static, a multiple of ``config.chunk``).
       table: the map's `ClearanceTable` (collision and DWA clearance).
       free: ``bool[H, W]`` the planning map (inflated) used when re-planning.
-      params: `DWAParams`.
+      params: `DWAParams` (`MPPIParams` when ``config.local == "mppi"``).
       inputs: `EpisodeInputs`.
     """
     B, N = inputs.start.shape[:2]
@@ -414,32 +542,39 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
     carry = Carry(
         state=inputs.start, waypoints=inputs.waypoints, n_wp=inputs.n_waypoints, index=zeros, done=~inputs.active,
         reason=zeros, steps=zeros, hit=jnp.zeros((B, N), bool), pair_hit=jnp.zeros((B, N, N), bool),
-        collisions=zeros, pair_collisions=jnp.zeros((B, N, N), jnp.int32), replans=zeros,
+        collisions=zeros, active_contacts=zeros, pair_collisions=jnp.zeros((B, N, N), jnp.int32), replans=zeros,
         last_replan=zeros - 10**6, origin=inputs.start[..., :2], sq_error=jnp.zeros((B, N), inputs.start.dtype),
         error=jnp.zeros((B, N), inputs.start.dtype), watch=jnp.full((B, N, 2), jnp.nan, inputs.start.dtype),
         closest=jnp.zeros((B, N), inputs.start.dtype), progress_t=zeros, creep=jnp.zeros((B, N), bool),
         spin=jnp.zeros((B, N), inputs.start.dtype),
         goal_best=jnp.sqrt(jnp.sum(lax.stop_gradient(inputs.goal - inputs.start[..., :2]) ** 2, axis=-1)),
         stall_replan=jnp.zeros((B, N), bool), detour=jnp.zeros((B, N), bool),
+        plan=_initial_plans(config, inputs.start), walkers=_initial_walkers(inputs.obstacles),
         t=jnp.asarray(0, jnp.int32),
     )
     states = jnp.broadcast_to(inputs.start[None], (steps + 1, B, N, 5))
     controls = jnp.zeros((steps, B, N, 2), inputs.start.dtype)
     recov = jnp.zeros((steps, B, N), bool)
+    walked = None if carry.walkers is None else jnp.broadcast_to(carry.walkers.pos[None],
+                                                                  (steps + 1,) + carry.walkers.pos.shape)
 
     def body(loop):
-        c, st, ct, rc, k = loop
-        c, (s, u, r) = lax.scan(lambda cc, _: _step(config, table, free, params, inputs, cc), c, None, length=chunk)
+        c, st, ct, rc, wk, k = loop
+        c, (s, u, r, w) = lax.scan(lambda cc, _: _step(config, table, free, params, inputs, cc), c, None,
+                                   length=chunk)
         st = lax.dynamic_update_slice(st, s, (k * chunk + 1, 0, 0, 0))
         ct = lax.dynamic_update_slice(ct, u, (k * chunk, 0, 0, 0))
         rc = lax.dynamic_update_slice(rc, r, (k * chunk, 0, 0))
-        return c, st, ct, rc, k + 1
+        if wk is not None:
+            wk = lax.dynamic_update_slice(wk, w, (k * chunk + 1, 0, 0, 0))
+        return c, st, ct, rc, wk, k + 1
 
     def cond(loop):
-        c, _, _, _, k = loop
+        c, _, _, _, _, k = loop
         return (k * chunk < steps) & ~jnp.all(c.done)
 
-    c, states, controls, recov, k = lax.while_loop(cond, body, (carry, states, controls, recov, jnp.asarray(0)))
+    c, states, controls, recov, walked, k = lax.while_loop(
+        cond, body, (carry, states, controls, recov, walked, jnp.asarray(0)))
     # Rows after a robot's last step hold its final pose at rest, whether the loop reached them
     # (a done robot is set to v = omega = 0) or stopped first (on a mesh, once its device was done).
     rows = jnp.arange(steps + 1)[:, None, None]
@@ -447,7 +582,11 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
     sw = lambda x: jnp.swapaxes(x, 0, 1)  # noqa: E731  [S, B, ...] -> [B, S, ...]
     return EpisodeOutput(
         states=sw(states), controls=sw(controls), recovery=sw(recov), steps=c.steps, reason=c.reason,
-        collisions=c.collisions, pair_collisions=c.pair_collisions, replans=c.replans,
+        collisions=c.collisions, active_contacts=c.active_contacts, pair_collisions=c.pair_collisions,
+        replans=c.replans,
         rmse=jnp.sqrt(c.sq_error / jnp.where(c.steps > 0, c.steps, jnp.nan)), waypoints=c.waypoints,
         n_waypoints=c.n_wp, executed=jnp.broadcast_to(k * chunk, (B,)),
+        walkers=None if walked is None else jnp.where(  # rows after the loop stopped: where they were then
+            (jnp.arange(steps + 1) <= k * chunk)[:, None, None, None], walked,
+            walked[jnp.minimum(k * chunk, steps)][None]).swapaxes(0, 1),
     )

@@ -40,6 +40,7 @@ from jaxplan.core.cache import Built, memoize
 from jaxplan.dwa import DWAParams, table_of
 from jaxplan.grid import GridMap, clearance_field, shortest_lengths
 from jaxplan.metrics import EnergyModel, energy
+from jaxplan.mppi import MPPIParams
 from jaxplan.nav._checks import check_obstacle_starts, checked_run, obstacle_sets
 from jaxplan.nav._config import NavConfig
 from jaxplan.nav._episode import run_episodes
@@ -47,7 +48,7 @@ from jaxplan.nav._moving import MovingObstacles, obstacle_state, stack_obstacles
 from jaxplan.nav._pipelines import Pipeline
 from jaxplan.nav._results import Episode, EpisodeBatch
 from jaxplan.nav._state import GOAL, REASONS, EpisodeInputs
-from jaxplan.scale import BATCH_AXIS, auto_mesh, pad_leading
+from jaxplan.scale import BATCH_AXIS, auto_mesh, check_memory, episode_memory, pad_leading
 
 __all__ = ["navigate", "navigate_batch", "navigate_multi", "planning_grid", "CURVATURE_MIN_SPEED", "INFEASIBLE_START",
            "INFEASIBLE_GOAL", "UNREACHABLE", "PLAN_FAILED"]
@@ -242,8 +243,8 @@ def _to_episodes(x: ArrayLike, E: int, N: int, R: int) -> np.ndarray:
     return x.reshape((E, N, R) + x.shape[2:]).swapaxes(1, 2).reshape((E * R, N) + x.shape[2:])
 
 
-def _execute(cfg: NavConfig, grid: GridMap, plan_free: np.ndarray, params: DWAParams, inputs: EpisodeInputs,
-             mesh: Mesh | str | None) -> tuple[Any, float, float]:
+def _execute(cfg: NavConfig, grid: GridMap, plan_free: np.ndarray, params: DWAParams | MPPIParams,
+             inputs: EpisodeInputs, mesh: Mesh | str | None) -> tuple[Any, float, float]:
     """Step 4: the episode program on the ``B`` episodes of ``inputs``, split over a mesh when results do not
     depend on it; returns its outputs (numpy, ``[B, ...]``), compile and run seconds."""
     steps = cfg.steps
@@ -310,7 +311,8 @@ def _episode_batch(out: Any, E: int, R: int, N: int, active: np.ndarray, reason:
     return EpisodeBatch(
         states=states, steps=n_steps, controls=controls, recovery=recovery, reason=reason_txt,
         feasible=back(to_b(~np.isin(reason, (INFEASIBLE_START, INFEASIBLE_GOAL, UNREACHABLE)))),
-        success=success, collisions=coll, pair_collisions=back(out.pair_collisions), time_s=t_s * nan,
+        success=success, collisions=coll, active_contacts=back(out.active_contacts),
+        passive_contacts=coll - back(out.active_contacts), pair_collisions=back(out.pair_collisions), time_s=t_s * nan,
         rmse=rm * nan, max_curvature=kappa * nan, energy=en * nan, path_length=length * nan,
         recoveries=np.sum(recovery & live, axis=-1), replans=back(out.replans),
         plans=back(to_b(plans)), n_plan=back(to_b(n_plan)), waypoints=back(to_b(wp_m)),
@@ -318,12 +320,30 @@ def _episode_batch(out: Any, E: int, R: int, N: int, active: np.ndarray, reason:
         obstacles=jax.tree_util.tree_map(lambda x: np.asarray(x).reshape((E, R) + x.shape[1:]), obs),
         plan_time_s=plan_time / max(E * R * N, 1), step_time_s=run_s / robot_steps, run_time_s=run_s,
         compile_s=compile_s, period=period, pipeline=pipeline, resolution=res,
+        obstacle_positions=None if out.walkers is None else np.asarray(out.walkers).reshape(
+            (E, R) + out.walkers.shape[1:]),
     )
+
+
+def _check_episode_memory(cfg: NavConfig, grid: GridMap, robots: int, obstacles: Any) -> None:
+    """Refuses, before any planning, a batch of episodes whose working memory exceeds the limit
+    (`jaxplan.scale.episode_memory`: the local planner's samples and rollout points per robot dominate; discs of an
+    obstacle set given as a callable are not known yet and counted as none: they add little)."""
+    if cfg.local == "mppi":
+        mc = cfg.local_mppi()
+        samples, points = mc.samples, mc.points
+    else:
+        samples, points = cfg.dwa.samples, cfg.dwa.steps
+    discs = obstacles.count if isinstance(obstacles, MovingObstacles) else 0
+    est = episode_memory(robots, cfg.steps, samples, rollout_steps=points, discs=discs,
+                         map_cells=int(np.asarray(grid.free).size))
+    check_memory(est, f"navigation ({cfg.local}, {robots} robot episodes of up to {cfg.steps} steps)",
+                 unit="robot episodes (scenarios x seeds x robots)", advice="Use fewer scenarios, seeds or robots")
 
 
 def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | None, global_planner: str | None,
          local_planner: str | None, seeds: Sequence[int], obstacles: Any, config: NavConfig | None,
-         params: DWAParams | Mapping[str, float] | None, time_limit: float | None,
+         params: DWAParams | MPPIParams | Mapping[str, float] | None, time_limit: float | None,
          overrides: Mapping[str, Any], mesh: Mesh | str | None = "auto") -> EpisodeBatch:
     """The steps of the module docstring for ``starts, goals [E, N, 2]`` (cells) × seeds: an `EpisodeBatch`
     ``[E, R, N]``."""
@@ -332,6 +352,7 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
     pipe, cfg, seeds, starts, goals = run_args.pipe, run_args.cfg, run_args.seeds, run_args.starts, run_args.goals
     E, N = starts.shape[:2]
     R = len(seeds)
+    _check_episode_memory(cfg, grid, E * N * R, obstacles)
     res = float(grid.resolution)
     d_safe = float(cfg.dwa.d_safe)
 
@@ -363,6 +384,8 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
         goal_cell=jnp.asarray(to_b(np.broadcast_to(g_flat[:, None], (E * N, R, 2))).astype(np.int32)),
         waypoints=jnp.asarray(to_b(wp_m)), n_waypoints=jnp.asarray(to_b(n_wp).astype(np.int32)),
         time_limit=jnp.asarray(to_b(limit).astype(np.float32)), obstacles=obs, active=jnp.asarray(active),
+        # Episode (scenario e, seed s) draws its MPPI noise from the key data (s, e).
+        key=jnp.asarray(np.array([[s, e] for e in range(E) for s in seeds], np.uint32).reshape(E * R, 2)),
     )
     out, compile_s, run_s = _execute(cfg, grid, pf, run_args.params, inputs, mesh)
 
@@ -378,7 +401,7 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
 def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: str | None = None,
              local_planner: str | None = None, seed: int = 0, obstacles: MovingObstacles | None = None, *,
              pipeline: str | None = None, config: NavConfig | None = None,
-             params: DWAParams | Mapping[str, float] | None = None, time_limit: float | None = None,
+             params: DWAParams | MPPIParams | Mapping[str, float] | None = None, time_limit: float | None = None,
              **overrides: Any) -> Episode:
     """One two-level navigation episode (DESIGN §3).
 
@@ -387,11 +410,12 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: s
       start, goal: cells ``(x, y)``.
       global_planner: a registry planner (default ``"iaco"``), tracked through key nodes by a
         weighted DWA — or give ``pipeline`` (e.g. ``"iaco_dwa"``) for a seed's system.
-      local_planner: ``"dwa"`` (default) or ``"follow"``.
+      local_planner: ``"dwa"`` (default), ``"mppi"`` or ``"follow"``.
       seed: the global planner's seed.
       obstacles: `MovingObstacles` (e.g. `jaxplan.random_obstacles`).
       config: `NavConfig` (robot, DWA settings, tolerances, re-planning).
-      params: DWA critic weights (`DWAParams` or a dict of overrides).
+      params: the local planner's weights: `DWAParams`, `MPPIParams` (``local_planner="mppi"``) or a dict of
+        overrides.
       time_limit: seconds (default: 60 s + 3 × the waypoint polyline's length at v_max, capped
         at ``config.max_time``).
       **overrides: the global planner's parameters (as for `jaxplan.plan`).
@@ -410,7 +434,7 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: s
 def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline: str | None = "iaco_dwa",
                    seeds: Sequence[int] = range(1), obstacles: Any = None, *, global_planner: str | None = None,
                    local_planner: str | None = None, config: NavConfig | None = None,
-                   params: DWAParams | Mapping[str, float] | None = None, time_limit: float | None = None,
+                   params: DWAParams | MPPIParams | Mapping[str, float] | None = None, time_limit: float | None = None,
                    mesh: Mesh | str | None = "auto", **overrides: Any) -> EpisodeBatch:
     """Scenarios × seeds single-robot episodes in one compiled global-planning call and one episode call.
 
@@ -445,7 +469,7 @@ def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline:
 def navigate_multi(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline: str | None = "iaco_dwa",
                    seeds: Sequence[int] = range(1), obstacles: Any = None, *, global_planner: str | None = None,
                    local_planner: str | None = None, config: NavConfig | None = None,
-                   params: DWAParams | Mapping[str, float] | None = None, time_limit: float | None = None,
+                   params: DWAParams | MPPIParams | Mapping[str, float] | None = None, time_limit: float | None = None,
                    mesh: Mesh | str | None = "auto", **overrides: Any) -> EpisodeBatch:
     """Multi-robot episodes: ``starts, goals int[N, 2]`` (one team) or ``[E, N, 2]`` (E teams).
 

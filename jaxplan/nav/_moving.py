@@ -53,7 +53,8 @@ from numpy.typing import ArrayLike
 from jaxplan.dwa import DiscObstacles
 
 __all__ = [
-    "MovingObstacles", "obstacle_state", "discs_at", "trajectories", "route_lengths", "no_obstacles",
+    "MovingObstacles", "obstacle_state", "route_target", "with_reactive", "discs_at", "trajectories", "route_lengths",
+    "no_obstacles",
     "pad_obstacles", "concat_obstacles", "stack_obstacles", "moving_obstacles", "per_obstacle", "FAR",
     "FAR_SPACING",
 ]
@@ -80,6 +81,9 @@ class MovingObstacles(NamedTuple):
       loop: ``bool[..., M]`` True: after the last vertex straight back to the first, and
         repeat; False: bounce (back along the route, ping-pong).
       offsets: ``f32[..., M]`` arc length (m) already travelled at ``t = 0`` (the phase).
+      reactive: ``bool[..., M]`` walkers that see (`jaxplan.nav._social`: they keep to their route but avoid
+        the robots, each other and the walls, simulated in the episode), or None: every disc blind, on its
+        route by time. None keeps a set of blind walkers' episode program free of the simulation.
 
     Build with `moving_obstacles` or a generator; the module docstring gives the model.
     """
@@ -90,6 +94,7 @@ class MovingObstacles(NamedTuple):
     radii: jnp.ndarray
     loop: jnp.ndarray
     offsets: jnp.ndarray
+    reactive: jnp.ndarray | None = None
 
     @property
     def count(self) -> int:
@@ -141,6 +146,27 @@ def obstacle_state(obs: MovingObstacles, t) -> tuple[jnp.ndarray, jnp.ndarray]:
     Returns:
       ``(positions f32[..., M, 2] (m), velocities f32[..., M, 2] (m/s))``.
     """
+    positions, velocities, _, _ = _placement(obs, t)
+    return positions, velocities
+
+
+def route_target(obs: MovingObstacles, t) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """The route vertex each disc heads for at time ``t``, and whether it travels its route forwards.
+
+    Returns:
+      ``(target i32[..., M] (a route vertex index), forward bool[..., M])``: what a reactive walker
+      (`jaxplan.nav._social`) starts from.
+    """
+    _, _, idx, back = _placement(obs, t)
+    n = jnp.clip(jnp.asarray(obs.n_waypoints, jnp.int32), 1, None)
+    nxt = jnp.where(back, idx, idx + 1)
+    loop = jnp.asarray(obs.loop, bool)
+    nxt = jnp.where(nxt >= n, jnp.where(loop, 0, n - 1), nxt)
+    return nxt.astype(jnp.int32), ~back
+
+
+def _placement(obs: MovingObstacles, t):
+    """Positions, velocities, the travelled segment's index and whether on a bounce's way back, at time ``t``."""
     verts = _travelled(obs)  # [..., M, K + 1, 2]
     d = verts[..., 1:, :] - verts[..., :-1, :]  # [..., M, K, 2] segment vectors
     seg = _safe_norm(d)  # [..., M, K]
@@ -172,7 +198,7 @@ def obstacle_state(obs: MovingObstacles, t) -> tuple[jnp.ndarray, jnp.ndarray]:
     positions = start + unit * along[..., None]
     sign = jnp.where(back, -1.0, 1.0)
     velocities = (sign * jnp.asarray(obs.speeds, jnp.float32))[..., None] * unit
-    return positions, velocities
+    return positions, velocities, idx[..., 0], back
 
 
 def discs_at(obs: MovingObstacles, t) -> DiscObstacles:
@@ -262,11 +288,20 @@ def pad_obstacles(obs: MovingObstacles, m: int, k: int | None = None) -> MovingO
     return concat_obstacles(obs, extra)
 
 
+def with_reactive(obs: MovingObstacles) -> MovingObstacles:
+    """``obs`` with an explicit ``reactive`` array (all blind where it was None)."""
+    if obs.reactive is not None:
+        return obs
+    return obs._replace(reactive=jnp.zeros(obs.radii.shape, bool))
+
+
 def concat_obstacles(a: MovingObstacles, b: MovingObstacles) -> MovingObstacles:
     """The slots of ``a`` then those of ``b`` (routes padded to the longer ``K``; same batch axes)."""
     k = max(a.waypoints.shape[-2], b.waypoints.shape[-2])
     a, b = _pad_k(a, k), _pad_k(b, k)
-    axes = MovingObstacles(-3, -1, -1, -1, -1, -1)  # the M axis of each field
+    if (a.reactive is None) != (b.reactive is None):
+        a, b = with_reactive(a), with_reactive(b)
+    axes = MovingObstacles(-3, -1, -1, -1, -1, -1, None if a.reactive is None else -1)  # each field's M axis
     out = jax.tree_util.tree_map(
         lambda x, y, ax: jnp.concatenate([jnp.asarray(x), jnp.asarray(y).astype(jnp.asarray(x).dtype)], axis=ax),
         a, b, axes,
@@ -281,6 +316,8 @@ def stack_obstacles(sets: Sequence[MovingObstacles]) -> MovingObstacles:
         raise ValueError("stack_obstacles needs at least one obstacle set")
     m = max(o.count for o in sets)
     k = max(o.waypoints.shape[-2] for o in sets)
+    if any(o.reactive is not None for o in sets):
+        sets = [with_reactive(o) for o in sets]
     padded = [_PAD(o, m, k) for o in sets]
     return jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *padded)
 
@@ -309,7 +346,7 @@ def per_obstacle(name: str, value: Any, m: int, *, nonneg: bool = True) -> np.nd
 
 
 def moving_obstacles(routes: Sequence[ArrayLike], speeds: Any, radii: Any, loop: Any = False,
-                     offsets: Any = 0.0) -> MovingObstacles:
+                     offsets: Any = 0.0, reactive: Any = None) -> MovingObstacles:
     """Builds validated `MovingObstacles` from host data.
 
     Args:
@@ -318,6 +355,7 @@ def moving_obstacles(routes: Sequence[ArrayLike], speeds: Any, radii: Any, loop:
       radii: disc radii (m), >= 0: a scalar or ``[M]``.
       loop: bool, scalar or ``[M]`` (True: loop, False: bounce).
       offsets: arc length (m) travelled at ``t = 0``, any finite value: a scalar or ``[M]``.
+      reactive: None (every disc blind), or a bool scalar or ``[M]``: walkers that see (`jaxplan.nav._social`).
 
     Returns:
       `MovingObstacles` with ``K = max k_i`` (shorter routes repeat their last vertex).
@@ -352,6 +390,13 @@ def moving_obstacles(routes: Sequence[ArrayLike], speeds: Any, radii: Any, loop:
         lp = np.full(m, bool(lp))
     elif lp.shape != (m,):
         raise ValueError(f"loop must be a scalar or have one entry per obstacle ({m}), got shape {lp.shape}")
+    react = None
+    if reactive is not None:
+        react = np.asarray(reactive)
+        if react.ndim == 0:
+            react = np.full(m, bool(react))
+        elif react.shape != (m,):
+            raise ValueError(f"reactive must be None, a bool or one entry per obstacle ({m}), got shape {react.shape}")
     if m == 0:
         return no_obstacles(0)
     K = max(len(a) for a in pts)
@@ -363,4 +408,5 @@ def moving_obstacles(routes: Sequence[ArrayLike], speeds: Any, radii: Any, loop:
         radii=jnp.asarray(rad, jnp.float32),
         loop=jnp.asarray(lp.astype(bool)),
         offsets=jnp.asarray(off, jnp.float32),
+        reactive=None if react is None else jnp.asarray(react.astype(bool)),
     )

@@ -2,7 +2,7 @@
 
 A pipeline is a global planner (a registry name and overrides), the reduction of its path
 to waypoints (smoothers of `jaxplan.smooth`, run with the robot's d_safe as clearance),
-and a local planner (DWA with an evaluator, or pure path following).
+and a local planner (DWA with an evaluator, MPPI, or pure path following).
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ class Pipeline:
       global_planner: a `jaxplan.planners()` name.
       planner_overrides: overrides of the global planner's defaults.
       waypoints: smoothers applied to the global path, in order (`jaxplan.smooth` names).
-      local: ``"dwa"`` or ``"follow"``.
-      evaluator: the DWA evaluator (``"weighted"``, ``"fuzzy"``, ``"classic"``).
+      local: ``"dwa"``, ``"mppi"`` or ``"follow"``.
+      evaluator: the DWA evaluator (``"weighted"``, ``"fuzzy"``, ``"classic"``; unused by MPPI).
       description: one line, citing the seed.
     """
 
@@ -56,6 +56,11 @@ PIPELINES: Mapping[str, Pipeline] = MappingProxyType({p.name: p for p in (
     _p("rrt_star_dwa", "rrt_star", ["key_nodes"], "weighted", "li2026's RRT* baseline tracked by weighted DWA"),
     _p("mrbs_rrt_dwa", "mrbs_rrt", ["key_nodes"], "weighted",
        "li2026 MRBS: multi-region biased RRT*, key nodes, weighted DWA"),
+    # Beyond DWA: the same global plans tracked by MPPI (Williams et al. 2017; Nav2's default controller).
+    _p("iaco_mppi", "iaco", _KEY, "weighted", "IACO (cui2025) and key nodes, tracked by the MPPI local planner",
+       local="mppi"),
+    _p("astar_kng_mppi", "astar", ["key_nodes"], "weighted",
+       "A*-KNG (li2026), tracked by the MPPI local planner", local="mppi"),
     # cui2025 Table 1 ablations of IACO-DWA.
     _p("iaco_dwa_no_elite", "iaco", _KEY, "fuzzy",
        "cui2025 Table 1 B: IACO-DWA without elite reinforcement (delta = 0)", delta=0.0),

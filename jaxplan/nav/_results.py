@@ -24,7 +24,8 @@ class Episode(NamedTuple):
       times: ``f32[T + 1]`` seconds of the trajectory samples.
       success: goal reached within tolerance, without collision, within the time limit.
       reason: ``"goal"``, ``"collision"``, ``"time limit"`` or why it was not run (infeasible).
-      collisions: contacts with the map, moving discs or other robots.
+      collisions: contacts with the map, moving discs or other robots: ``active_contacts +
+        passive_contacts`` (active: begun while the robot moved faster than 0.05 m/s; passive: at rest).
       time_s: simulated time until the robot stopped (s).
       metrics: the DESIGN §6 episode metrics (see `EpisodeBatch.METRICS`).
       plan: global path ``f64[L, 2]`` in cell coordinates (empty if the planner failed).
@@ -45,6 +46,8 @@ class Episode(NamedTuple):
     final_waypoints: np.ndarray
     obstacles: MovingObstacles
     obstacle_positions: np.ndarray
+    active_contacts: int = 0
+    passive_contacts: int = 0
 
 
 class EpisodeBatch(NamedTuple):
@@ -54,7 +57,8 @@ class EpisodeBatch(NamedTuple):
       states: ``f32[E, R, N, S + 1, 5]``; ``steps [E, R, N]`` valid control steps each.
       controls: ``f32[E, R, N, S, 2]``; ``recovery bool[E, R, N, S]``.
       reason: ``object[E, R, N]`` strings; ``feasible bool[E, R, N]`` (infeasible episodes
-        were not run); ``success``, ``collisions``, ``pair_collisions [E, R, N, N]``,
+        were not run); ``success``, ``collisions`` (= ``active_contacts + passive_contacts``: contacts begun
+        while the robot moved faster than 0.05 m/s, or at rest), ``pair_collisions [E, R, N, N]``,
         ``time_s`` (simulated), ``rmse``, ``max_curvature``, ``energy``, ``path_length``
         (executed, m), ``recoveries``, ``replans``: ``[E, R, N]``.
       plans: ``f64[E, R, N, P, 2]`` global paths in cell coordinates (grid paths, or a sampling
@@ -62,6 +66,8 @@ class EpisodeBatch(NamedTuple):
       waypoints: ``f32[E, R, N, K, 2]`` (m) with ``n_waypoints``; ``final_waypoints`` /
         ``n_final_waypoints`` after re-plans.
       obstacles: `MovingObstacles` with leaves ``[E, R, M, …]``.
+      obstacle_positions: ``f32[E, R, S + 1, M, 2]`` where the obstacles were after each step when some walkers
+        see (simulated, not on their routes), or None (positions follow from the routes).
       plan_time_s: global planning wall time per episode (s, compilation excluded).
       step_time_s: wall time per control step of one robot (s): the episode call's time
         over the robot-steps it ran (compilation excluded).
@@ -77,6 +83,8 @@ class EpisodeBatch(NamedTuple):
     feasible: np.ndarray
     success: np.ndarray
     collisions: np.ndarray
+    active_contacts: np.ndarray
+    passive_contacts: np.ndarray
     pair_collisions: np.ndarray
     time_s: np.ndarray
     rmse: np.ndarray
@@ -99,9 +107,10 @@ class EpisodeBatch(NamedTuple):
     period: float
     pipeline: str
     resolution: float
+    obstacle_positions: np.ndarray | None = None
 
-    METRICS = ("success", "collisions", "time_s", "rmse", "max_curvature", "energy", "path_length", "recoveries",
-               "replans")
+    METRICS = ("success", "collisions", "active_contacts", "passive_contacts", "time_s", "rmse", "max_curvature",
+               "energy", "path_length", "recoveries", "replans")
 
     def episode(self, e: int = 0, r: int = 0, i: int = 0) -> Episode:
         """Scenario ``e``, seed ``r``, robot ``i`` as an `Episode`."""
@@ -111,8 +120,12 @@ class EpisodeBatch(NamedTuple):
         obs = jax.tree_util.tree_map(lambda x: np.asarray(x[e, r]), self.obstacles)
         # Over the batch's full step range, so every episode of a batch shares one compiled shape.
         every = np.arange(self.states.shape[3], dtype=np.float32) * self.period
-        opos = np.asarray(trajectories(obs, every))[: T + 1] if obs.radii.shape[-1] else \
-            np.zeros((T + 1, 0, 2), np.float32)
+        if self.obstacle_positions is not None:
+            opos = np.asarray(self.obstacle_positions[e, r, : T + 1])
+        elif obs.radii.shape[-1]:
+            opos = np.asarray(trajectories(obs, every))[: T + 1]
+        else:
+            opos = np.zeros((T + 1, 0, 2), np.float32)
         m = {k: getattr(self, k)[e, r, i].item() for k in self.METRICS}
         m["plan_time_s"], m["step_time_s"] = self.plan_time_s, self.step_time_s
         return Episode(
@@ -122,7 +135,8 @@ class EpisodeBatch(NamedTuple):
             plan=self.plans[e, r, i, : self.n_plan[e, r, i]],
             waypoints=self.waypoints[e, r, i, : self.n_waypoints[e, r, i]],
             final_waypoints=self.final_waypoints[e, r, i, : self.n_final_waypoints[e, r, i]],
-            obstacles=obs, obstacle_positions=opos,
+            obstacles=obs, obstacle_positions=opos, active_contacts=int(self.active_contacts[e, r, i]),
+            passive_contacts=int(self.passive_contacts[e, r, i]),
         )
 
     def summary(self, where: np.ndarray | None = None) -> dict[str, tuple[float, float]]:

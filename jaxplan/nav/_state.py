@@ -3,17 +3,22 @@ shared by its stages (`jaxplan.nav._episode`) and the in-episode re-planner (`ja
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import jax.numpy as jnp
 
 from jaxplan.nav._moving import MovingObstacles
 
-__all__ = ["RUNNING", "GOAL", "COLLISION", "TIMEOUT", "REASONS", "EpisodeInputs", "EpisodeOutput", "Carry"]
+__all__ = ["RUNNING", "GOAL", "COLLISION", "TIMEOUT", "REASONS", "ACTIVE_SPEED", "EpisodeInputs", "EpisodeOutput",
+           "Carry"]
 
 RUNNING, GOAL, COLLISION, TIMEOUT = 0, 1, 2, 3
 REASONS = ("running", "goal", "collision", "time limit")
 """Why a robot stopped, indexed by the codes above."""
+
+ACTIVE_SPEED = 0.05
+"""m/s: a contact is active when the robot moves faster than this as it begins (DESIGN §9), else passive —
+the robot was at rest and was hit (passive motion safety asks only that no contact be active)."""
 
 
 class EpisodeInputs(NamedTuple):
@@ -30,6 +35,8 @@ class EpisodeInputs(NamedTuple):
       obstacles: `MovingObstacles` with leaves ``[B, M, …]`` (``M`` may be 0).
       active: ``bool[B, N]`` robots that run; the others stand still at their start from step 0
         (an infeasible scenario), still present as discs for the rest.
+      key: ``u32[B, 2]`` each episode's PRNG key data (`jax.random.key_data`): the MPPI step's noise
+        (its robot and step folded in); unused by the other local planners.
     """
 
     start: jnp.ndarray
@@ -40,6 +47,7 @@ class EpisodeInputs(NamedTuple):
     time_limit: jnp.ndarray
     obstacles: MovingObstacles
     active: jnp.ndarray
+    key: jnp.ndarray
 
 
 class EpisodeOutput(NamedTuple):
@@ -53,6 +61,8 @@ class EpisodeOutput(NamedTuple):
       steps: ``i32[B, N]`` control steps the robot took (its episode time = steps · period).
       reason: ``i32[B, N]`` `REASONS` code.
       collisions: ``i32[B, N]`` contacts (runs of colliding steps) with map, discs or robots.
+      active_contacts: ``i32[B, N]`` those that began while the robot moved faster than `ACTIVE_SPEED`
+        (its command during the period in which the contact began); the rest are passive (at rest).
       pair_collisions: ``i32[B, N, N]`` contacts between robots i and j (symmetric).
       replans: ``i32[B, N]`` successful re-plans.
       rmse: ``f32[B, N]`` RMS distance (m) of the positions after each step to the polyline
@@ -61,6 +71,9 @@ class EpisodeOutput(NamedTuple):
       waypoints: ``f32[B, N, K, 2]`` and ``n_waypoints [B, N]``: the final waypoint lists.
       executed: ``i32[B]`` control steps the loop ran (a multiple of the chunk; the loop stops
         once every robot of the batch — on a mesh, of the device's share — is done).
+      walkers: ``f32[B, S + 1, M, 2]`` where the moving obstacles were after each step when some walkers see
+        (their own simulation; the blind ones on their routes as well), or None when every disc is blind
+        (their positions follow from the routes).
     """
 
     states: jnp.ndarray
@@ -69,12 +82,14 @@ class EpisodeOutput(NamedTuple):
     steps: jnp.ndarray
     reason: jnp.ndarray
     collisions: jnp.ndarray
+    active_contacts: jnp.ndarray
     pair_collisions: jnp.ndarray
     replans: jnp.ndarray
     rmse: jnp.ndarray
     waypoints: jnp.ndarray
     n_waypoints: jnp.ndarray
     executed: jnp.ndarray
+    walkers: jnp.ndarray | None = None
 
 
 class Carry(NamedTuple):
@@ -90,6 +105,7 @@ class Carry(NamedTuple):
     hit: jnp.ndarray  # [B, N] in contact after the last step
     pair_hit: jnp.ndarray  # [B, N, N]
     collisions: jnp.ndarray  # [B, N]
+    active_contacts: jnp.ndarray  # [B, N] contacts begun while moving faster than ACTIVE_SPEED
     pair_collisions: jnp.ndarray  # [B, N, N]
     replans: jnp.ndarray  # [B, N]
     last_replan: jnp.ndarray  # [B, N] step of the last re-plan attempt
@@ -104,4 +120,6 @@ class Carry(NamedTuple):
     goal_best: jnp.ndarray  # [B, N] that approach: closest distance to the goal so far (m)
     stall_replan: jnp.ndarray  # [B, N] started creeping, its re-plan not attempted yet (no free slot)
     detour: jnp.ndarray  # [B, N] tracking a path planned around discs: re-checked every NavConfig.recheck_period
+    plan: jnp.ndarray  # [B, N, T, 2] the MPPI step's warm start (T = 0 for the other local planners)
+    walkers: Any  # WalkerState [B, M] of the walkers that see, or None when every disc is blind
     t: jnp.ndarray  # scalar step counter

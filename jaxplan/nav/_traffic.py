@@ -30,7 +30,7 @@ from jaxplan.grid import TOUCH, GridMap, clearance_field, grid_from_array
 from jaxplan.nav._moving import MovingObstacles, moving_obstacles, no_obstacles, per_obstacle
 from jaxplan.search import astar
 
-__all__ = ["random_obstacles", "crossing_traffic", "head_on"]
+__all__ = ["BEHAVIORS", "random_obstacles", "crossing_traffic", "head_on"]
 
 
 def _as_grid(grid: Any) -> GridMap:
@@ -196,9 +196,15 @@ def _phase(rng: np.random.Generator, route: np.ndarray, loop: bool, av: np.ndarr
     return 0.0
 
 
+BEHAVIORS = ("blind", "social")
+"""How random walkers move: ``"blind"`` on their routes by time, regardless of anything (the walkers of the first
+release); ``"social"`` along the same routes but avoiding the robots, each other and the walls with the social force
+model (Helbing & Molnár 1995; `jaxplan.nav._social`)."""
+
+
 def random_obstacles(grid: Any, n: int = 5, speed: Any = 1.0, radius: Any = 0.25, seed: int = 0, *,
                      waypoints: int = 4, avoid: ArrayLike | None = None, avoid_radius: float = 1.0,
-                     loop: bool = False, tries: int = 20) -> MovingObstacles:
+                     loop: bool = False, tries: int = 20, behavior: str = "blind") -> MovingObstacles:
     """Random walkers: discs bouncing (or looping) along short polylines through random free points.
 
     Each route joins ``waypoints`` random cells by exact A* paths (8-connected, no corner
@@ -225,15 +231,19 @@ def random_obstacles(grid: Any, n: int = 5, speed: Any = 1.0, radius: Any = 0.25
       loop: True: loop routes; False (default): bounce.
       tries: attempts per obstacle before giving up (a route is redrawn only if the exact
         check fails, which the inflation makes rare).
+      behavior: ``"blind"`` (default) or ``"social"`` (`BEHAVIORS`): the same routes and phases either way,
+        so the two kinds of walker can be compared scenario by scenario.
 
     Returns:
-      `MovingObstacles` with ``M = n``.
+      `MovingObstacles` with ``M = n`` (``reactive`` all True for ``"social"``, None for ``"blind"``).
 
     Raises:
       ValueError: bad arguments, or no free cell where a disc of the radius can start.
     """
     g = _as_grid(grid)
     rng = _rng(seed)
+    if behavior not in BEHAVIORS:
+        raise ValueError(f"unknown walker behavior {behavior!r}; choose from {BEHAVIORS}")
     if not isinstance(n, (int, np.integer)) or n < 0:
         raise ValueError(f"n must be an integer >= 0, got {n!r}")
     if not isinstance(waypoints, (int, np.integer)) or waypoints < 1:
@@ -271,7 +281,8 @@ def random_obstacles(grid: Any, n: int = 5, speed: Any = 1.0, radius: Any = 0.25
         routes.append(route)
         offsets.append(offset)
         placed.append((_np_position(route, offset, loop), r))
-    return moving_obstacles(routes, speeds, radii, loop=loop, offsets=offsets)
+    return moving_obstacles(routes, speeds, radii, loop=loop, offsets=offsets,
+                            reactive=True if behavior == "social" else None)
 
 
 def _as_path(path: ArrayLike, name: str = "path") -> np.ndarray:

@@ -33,8 +33,9 @@ from jaxplan.experiments.schema import ConfigError, Reader, Setting, declaration
 __all__ = ["TuneConfig", "load_tune_config", "parse_tune_config", "apply_tune_quick", "KINDS", "TuneFile",
            "TuneTable", "TuneQuickTable"]
 
-KINDS = ("aco", "dwa")
+KINDS = ("aco", "dwa", "mppi")
 _DWA_PLANNERS = ("weighted", "fuzzy")
+_MPPI_PLANNERS = ("mppi",)
 
 
 def _aco_planners() -> tuple[str, ...]:
@@ -44,7 +45,7 @@ def _aco_planners() -> tuple[str, ...]:
 
 
 def _planners() -> tuple[str, ...]:
-    return _aco_planners() + _DWA_PLANNERS
+    return _aco_planners() + _DWA_PLANNERS + _MPPI_PLANNERS
 
 
 def _strategies() -> tuple[str, ...]:
@@ -56,10 +57,12 @@ def _strategies() -> tuple[str, ...]:
 def _metrics(kind: str | None = None) -> tuple[str, ...]:
     from jaxplan.tune._objective import ACO_METRICS, DWA_METRICS
 
-    return {"aco": ACO_METRICS, "dwa": DWA_METRICS}.get(kind, tuple(dict.fromkeys(ACO_METRICS + DWA_METRICS)))
+    return {"aco": ACO_METRICS, "dwa": DWA_METRICS, "mppi": DWA_METRICS}.get(
+        kind, tuple(dict.fromkeys(ACO_METRICS + DWA_METRICS)))
 
 
-_DEFAULT_WEIGHTS = {"aco": {"gap": 1.0, "failure": 1.0}, "dwa": {"time": 1.0, "failure": 1.0}}
+_DEFAULT_WEIGHTS = {"aco": {"gap": 1.0, "failure": 1.0}, "dwa": {"time": 1.0, "failure": 1.0},
+                    "mppi": {"time": 1.0, "failure": 1.0}}
 _SPACE_JSON = {
     "type": "object", "minProperties": 1,
     "additionalProperties": {"oneOf": [
@@ -91,10 +94,10 @@ class TuneTable:
     name: str = setting("str", None, "the run folder OUT/NAME", required=True, pattern=RUN_NAME,
                         hint="it names the run folder")
     description: str = setting("str", "", "one line for the summary")
-    kind: str = setting("str", "aco", "aco: a colony planner's weights; dwa: DWA critic weights", required=True,
-                        choices=KINDS)
-    planner: str = setting("str", None, "aco: a colony planner; dwa: the DWA evaluator (weighted or fuzzy)",
-                           choices=_planners, default_text='`"iaco"`; dwa: `"weighted"`')
+    kind: str = setting("str", "aco", "aco: a colony planner's weights; dwa: DWA critic weights; mppi: MPPI critic "
+                        "weights, temperature and noise", required=True, choices=KINDS)
+    planner: str = setting("str", None, "aco: a colony planner; dwa: the DWA evaluator (weighted or fuzzy); mppi: "
+                           "mppi", choices=_planners, default_text='`"iaco"`; dwa: `"weighted"`; mppi: `"mppi"`')
     strategy: str = setting("str", "cma_es", "the search strategy (`jaxplan.tune.STRATEGIES`)", choices=_strategies)
     population: int = setting("int", 16, "weight vectors per generation", ge=2)
     generations: int = setting("int", 10, "generations", ge=1)
@@ -111,12 +114,12 @@ class TuneTable:
                                            default_text="aco: `{ gap = 1.0, failure = 1.0 }`; dwa: "
                                                         "`{ time = 1.0, failure = 1.0 }`")
     overrides: Mapping[str, Any] = setting("table", doc="aco: planner settings; dwa: `DWAConfig` fields (n_v, "
-                                           "n_omega, ...)")
+                                           "n_omega, ...); mppi: `MPPIConfig` fields (samples, steps, ...)")
     options: Mapping[str, Any] = setting("table", doc="the strategy's own options")
     max_time: float = setting("float", 20.0, "dwa: episode length (s)", gt=0)
     discs: int = setting("int", 2, "dwa: moving discs per episode", ge=0)
-    pipeline: str = setting("str", None, "dwa: the navigate pipeline the best-weights fragment names",
-                            default_text='`"astar_kng_dwa"`; fuzzy planner: `"iaco_dwa"`')
+    pipeline: str = setting("str", None, "dwa, mppi: the navigate pipeline the best-weights fragment names",
+                            default_text='`"astar_kng_dwa"`; fuzzy planner: `"iaco_dwa"`; mppi: `"astar_kng_mppi"`')
     space: Any = setting("custom", None, "the search box: name = [low, high], a vector weight one pair per "
                          "component (e.g. lambdas = [[0.0, 1.0], [0.0, 1.0], [0.0, 1.0]])", required=True,
                          type_text="table of [low, high] pairs", json=_SPACE_JSON)
@@ -202,8 +205,9 @@ def parse_tune_config(text: str, *, data_dir: str | os.PathLike | None = None, s
                   skip=("planner", "test_seeds", "weights", "pipeline"))
     kind = t["kind"]
     planner = r.value(tt, "tune", dataclasses.replace(
-        setting_of(TuneTable, "planner"), choices=_aco_planners() if kind == "aco" else _DWA_PLANNERS),
-        "iaco" if kind == "aco" else "weighted")
+        setting_of(TuneTable, "planner"),
+        choices=_aco_planners() if kind == "aco" else _MPPI_PLANNERS if kind == "mppi" else _DWA_PLANNERS),
+        "iaco" if kind == "aco" else "mppi" if kind == "mppi" else "weighted")
     train_seeds = t["train_seeds"]
     test_seeds = r.value(tt, "tune", setting_of(TuneTable, "test_seeds")) or _default_test_seeds(train_seeds)
     if set(train_seeds) & set(test_seeds):

@@ -52,8 +52,8 @@ from jaxplan.scale import (
 )
 from jaxplan.tune._bounds import Bounds, make_bounds
 
-__all__ = ["Split", "Evaluation", "Objective", "aco_objective", "dwa_objective", "function_objective", "DWAEpisodes",
-           "dwa_episodes", "dwa_scenarios", "ACO_METRICS", "DWA_METRICS", "FAIL_GAP"]
+__all__ = ["Split", "Evaluation", "Objective", "aco_objective", "dwa_objective", "mppi_objective", "function_objective",
+           "DWAEpisodes", "dwa_episodes", "mppi_episodes", "dwa_scenarios", "ACO_METRICS", "DWA_METRICS", "FAIL_GAP"]
 
 ACO_METRICS = ("gap", "failure", "turns", "roughness", "clearance")
 DWA_METRICS = ("time", "failure", "collision", "clearance")
@@ -544,6 +544,107 @@ def dwa_objective(grid, train: Split, test: Split, evaluator: str = "weighted", 
     object.__setattr__(obj, "_dwa", dict(table=table, config=config, steps=steps, episodes=eps, slots=slots,
                                           base=base_j, tolerance=tolerance, radius=radius))
     return obj
+
+
+def mppi_episodes(table, config, params, episodes: DWAEpisodes, steps: int, tolerance: float = 0.5,
+                  key: jax.Array | None = None) -> EpisodeTrace:
+    """``steps`` MPPI control steps (period ``config.period``) of E robots driving to their goals, as `dwa_episodes`.
+
+    Each robot's sequence is warm-started from its last one; episode ``e`` draws the noise of step ``k`` from
+    ``fold_in(fold_in(key, e), k)``, so the trace is a smooth function of the critic weights and λ (the softmax).
+    """
+    from jaxplan.dwa import DiscObstacles, advance, disc_clearance, static_clearance
+    from jaxplan.mppi import initial_sequence, mppi_control, shift
+
+    period = config.period
+    key = jax.random.key(0) if key is None else key
+
+    def one(start, goal, ob, e):
+        k_e = jax.random.fold_in(key, e)
+
+        def step(carry, k):
+            state, mean, done = carry
+            t = k * period
+            now = DiscObstacles(ob.positions + ob.velocities * t, ob.velocities, ob.radii)
+            u, info = mppi_control(table, config, params, state, mean, jax.random.fold_in(k_e, k.astype(jnp.int32)),
+                                   goal, obstacles=now)
+            new = jnp.where(done, state, advance(state, u, period))
+            c = jnp.minimum(static_clearance(table, new[0:1], new[1:2], config.clearance)[0],
+                            disc_clearance(ob, new[0:1], new[1:2], t + period)[0])
+            d = jnp.sqrt(jnp.sum((new[:2] - goal) ** 2) + 1e-12)
+            done2 = done | (d < tolerance)
+            return (new, shift(info.sequence), done2), (d, c, done2, ~done)
+
+        init = (start, initial_sequence(config, start), jnp.asarray(False))
+        _, (d, c, dn, mv) = jax.lax.scan(step, init, jnp.arange(steps, dtype=start.dtype))
+        return EpisodeTrace(d, c, dn, mv)
+
+    E = episodes.start.shape[0]
+    return jax.vmap(one)(episodes.start, episodes.goal, episodes.obstacles, jnp.arange(E))
+
+
+def mppi_objective(grid, train: Split, test: Split, space: Mapping | None = None,
+                   weights: Mapping[str, float] | None = None, mppi: Mapping[str, Any] | None = None,
+                   max_time: float = 20.0, n_discs: int = 2, tolerance: float = 0.5,
+                   name: str | None = None) -> Objective:
+    """The objective of the MPPI critic weights, temperature and noise: `mppi_episodes` from each split's scenarios,
+    discs drawn per seed (`dwa_scenarios`), metrics and arguments as `dwa_objective`.
+
+    Args:
+      space: default the obstacle, dynamic, path-follow and goal-heading weights in [0.05, 5] and the temperature in
+        [0.005, 0.2]; any `MPPIParams` field may be tuned.
+      mppi: `MPPIConfig` fields (static counts, distances); default 128 samples.
+    """
+    from jaxplan.dwa import clearance_table
+    from jaxplan.grid import collision_map
+    from jaxplan.mppi import MPPIConfig, MPPIParams, default_params
+
+    space = space or {"obstacle": (0.05, 5.0), "dynamic": (0.05, 5.0), "path_follow": (0.05, 5.0),
+                      "goal_heading": (0.05, 5.0), "temperature": (0.005, 0.2)}
+    weights = _metric_weights("mppi_objective", weights, DWA_METRICS, {"time": 1.0, "failure": 1.0})
+    bounds = space if isinstance(space, Bounds) else make_bounds(space)
+    base = {k: np.asarray(v) for k, v in default_params()._asdict().items()}
+    _check_names(bounds, base, "mppi_objective")
+    _check_sign(bounds, "mppi_objective")
+    if bounds.names and any(n in ("temperature", "noise_v", "noise_omega") and lo <= 0
+                            for n, lo in zip(bounds.names, bounds.low, strict=True)):
+        raise ValueError("mppi_objective: temperature and noise must stay > 0 (their lower bounds)")
+    config = MPPIConfig(**{**dict(samples=128), **dict(mppi or {})})
+    steps = int(math.ceil(max_time / config.period))
+    slots = _slots(bounds)
+    defaults = np.clip(np.array([float(base[n]) for n, _ in slots], np.float32), bounds.low, bounds.high)
+    table = clearance_table(collision_map(grid))
+    radius = float(config.robot.footprint.radius) if hasattr(config.robot.footprint, "radius") else 0.25
+    eps = {k: dwa_scenarios(grid, sp.starts, sp.goals, sp.seeds, n_discs) for k, sp in
+           (("train", train), ("test", test))}
+    base_j = {k: jnp.asarray(v, jnp.float32) for k, v in base.items()}
+
+    def program(split_name: str):
+        ep = eps[split_name]
+        sp = dict(train=train, test=test)[split_name]
+        N, R = len(sp.starts), len(sp.seeds)
+
+        def run(pop):
+            def one(x):
+                p = MPPIParams(**_scatter(base_j, slots, x))
+                tr = mppi_episodes(table, config, p, ep, steps, tolerance)
+                return _episode_metrics(tr, steps, config.period, radius)
+
+            metrics = {k: v.reshape(pop.shape[0], N, R) for k, v in jax.vmap(one)(pop).items()}
+            cost = sum(w * metrics[k] for k, w in weights.items())
+            return cost, metrics
+
+        return run
+
+    def memory(population: int, split_name: str) -> MemoryEstimate:
+        sp = {"train": train, "test": test}[split_name]
+        robots = population * len(sp.starts) * len(sp.seeds)
+        est = dwa_memory(robots, config.samples, config.points, obstacles=n_discs, chunk=None,
+                         map_cells=int(np.asarray(grid.free).size))
+        return _per_member(est, population, {"episode traces": robots * steps * 4 * 4})
+
+    return Objective(name or "mppi_weights", "mppi", "mppi", bounds, defaults, weights,
+                     {"train": train, "test": test}, program, base, memory=memory)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -330,10 +330,11 @@ def fragment_toml(objective: Objective, x, *, label: str, overrides: dict | None
         ov = {**dict(overrides or {}), **p}
         return (f"{head}[[planners]]\nlabel = {_toml_value(label)}\nkind = \"plan\"\n"
                 f"name = {_toml_value(objective.planner)}\noverrides = {_inline(ov)}\n")
+    local = "mppi" if objective.kind == "mppi" else "dwa"
     body = (f"{head}[[planners]]\nlabel = {_toml_value(label)}\nkind = \"navigate\"\n"
-            f"name = {_toml_value(pipeline or 'astar_kng_dwa')}\nparams = {_inline(p)}\n")
+            f"name = {_toml_value(pipeline or f'astar_kng_{local}')}\nparams = {_inline(p)}\n")
     if overrides:
-        body += f"dwa = {_inline(dict(overrides))}\n"
+        body += f"{local} = {_inline(dict(overrides))}\n"
     return body
 
 
@@ -376,7 +377,7 @@ def _splits(cfg, grid, starts, goals, optimal) -> tuple[Split, Split]:
 def build_objective(cfg) -> Objective:
     """The `Objective` of a `TuneConfig` (map loaded, scenarios chosen and split)."""
     from jaxplan.experiments import load_map_spec, spec_scenarios
-    from jaxplan.tune._objective import aco_objective, dwa_objective
+    from jaxplan.tune._objective import aco_objective, dwa_objective, mppi_objective
 
     grid, s0, g0, _ = load_map_spec(cfg.map)
     starts, goals, optimal, _ = spec_scenarios(cfg.map, grid, s0, g0)
@@ -385,6 +386,9 @@ def build_objective(cfg) -> Objective:
     if cfg.kind == "aco":
         return aco_objective(grid, train, test, cfg.planner, space, dict(cfg.weights), dict(cfg.overrides),
                              name=cfg.name)
+    if cfg.kind == "mppi":
+        return mppi_objective(grid, train, test, space, dict(cfg.weights), dict(cfg.overrides), max_time=cfg.max_time,
+                              n_discs=cfg.discs, name=cfg.name)
     return dwa_objective(grid, train, test, cfg.planner, space, dict(cfg.weights), dict(cfg.overrides),
                          max_time=cfg.max_time, n_discs=cfg.discs, name=cfg.name)
 
@@ -476,7 +480,8 @@ def _run_tuning(cfg, objective: Objective, run_dir: Path, progress: bool, resume
     te = summary["test"]
     comment = (f"best weights of tuning run {cfg.name} ({cfg.strategy}, {res['evaluations']} evaluations)\n"
                f"held-out test objective: tuned {te['tuned']['objective']:.6g} ± {_sd_text(te['tuned']['seed_sd'])}, "
-               f"paper defaults {te['defaults']['objective']:.6g} ± {_sd_text(te['defaults']['seed_sd'])} "
+               f"{'defaults' if cfg.kind == 'mppi' else 'paper defaults'} {te['defaults']['objective']:.6g} ± "
+               f"{_sd_text(te['defaults']['seed_sd'])} "
                f"(sd over {len(cfg.test_seeds)} seed{'s' if len(cfg.test_seeds) != 1 else ''})")
     frag = fragment_toml(objective, best, label=f"{cfg.planner}-tuned", overrides=dict(cfg.overrides),
                          pipeline=cfg.pipeline, comment=comment)

@@ -1,0 +1,126 @@
+"""Validation of MPPI configs and parameters, and the host front `mppi_step` for scripts that step one robot.
+
+`mppi_control` is pure and cannot raise; everything a user hands in is checked here first, with a
+`ValueError` naming the problem. `mppi_step` is the one-robot front (like `jaxplan.dwa.dwa_step`): it
+validates, looks up the map's clearance table (cached per map), and runs one compiled step; the caller
+keeps the returned sequence and passes it back as the next call's ``sequence`` (it is shifted here).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Mapping
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from numpy.typing import ArrayLike
+
+from jaxplan.core.cache import lru_cache
+from jaxplan.dwa import CLEARANCE_MODES, DWAConfig, as_obstacles, table_of
+from jaxplan.dwa import validate_config as validate_dwa_config
+from jaxplan.grid import GridMap
+from jaxplan.mppi._config import MPPIConfig, MPPIParams, default_params
+from jaxplan.mppi._core import MPPIInfo, initial_sequence, mppi_control, shift
+
+__all__ = ["validate_config", "validate_params", "mppi_step"]
+
+
+def validate_config(config: MPPIConfig) -> MPPIConfig:
+    """Checks an `MPPIConfig` and its robot; raises ValueError naming the first problem. Returns ``config``."""
+    if not isinstance(config, MPPIConfig):
+        raise ValueError(f"config must be an MPPIConfig, got {type(config).__name__}")
+    # The robot, period and d_safe are the DWA's checks (one robot model for both local planners).
+    validate_dwa_config(DWAConfig(robot=config.robot, period=config.period, d_safe=config.d_safe))
+    for name in ("samples", "steps", "substeps", "iterations", "brake_points"):
+        v = getattr(config, name)
+        if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < 1:
+            raise ValueError(f"MPPIConfig.{name} must be a positive integer, got {v!r}")
+    if config.samples < 3:
+        raise ValueError(f"MPPIConfig.samples must be >= 3 (two fixed candidates and at least one noisy "
+                         f"sequence), got {config.samples}")
+    for name in ("d_clip", "disc_clip", "path_clip", "goal_radius"):
+        v = getattr(config, name)
+        if not (isinstance(v, (int, float, np.floating)) and math.isfinite(v) and v > 0):
+            raise ValueError(f"MPPIConfig.{name} must be a finite number > 0, got {v!r}")
+    if config.clearance not in CLEARANCE_MODES:
+        raise ValueError(f"unknown clearance mode {config.clearance!r}; choose from {CLEARANCE_MODES}")
+    for name in ("admissible", "escape", "keep_rollouts"):
+        if not isinstance(getattr(config, name), bool):
+            raise ValueError(f"MPPIConfig.{name} must be True or False, got {getattr(config, name)!r}")
+    return config
+
+
+def validate_params(params: MPPIParams | Mapping[str, float] | None) -> MPPIParams:
+    """`MPPIParams` from None (the defaults), a mapping of overrides or `MPPIParams`; every value checked."""
+    if params is None:
+        return default_params()
+    if isinstance(params, Mapping):
+        return default_params(**params)
+    if not isinstance(params, MPPIParams):
+        raise ValueError(f"params must be MPPIParams, a dict of overrides or None, got {type(params).__name__}")
+    values = {}
+    for name, x in params._asdict().items():
+        a = np.asarray(x, dtype=np.float64)
+        if a.shape != ():
+            raise ValueError(f"params.{name} must be a scalar, got shape {a.shape}")
+        values[name] = float(a)
+    return default_params(**values)
+
+
+@lru_cache(maxsize=16)
+def _program(config: MPPIConfig, with_obstacles: bool, with_path: bool):
+    def step(table, params, state, mean, key, subgoal, goal, obstacles, path):
+        return mppi_control(table, config, params, state, shift(mean), key, subgoal, goal,
+                            obstacles if with_obstacles else None, path if with_path else None)
+
+    return jax.jit(step)
+
+
+def mppi_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, *, sequence: ArrayLike | None = None,
+              key: Any = 0, goal: ArrayLike | None = None, obstacles: Any = None, path: ArrayLike | None = None,
+              config: MPPIConfig | None = None, params: MPPIParams | Mapping[str, float] | None = None
+              ) -> tuple[np.ndarray, MPPIInfo]:
+    """One MPPI step for one robot from Python.
+
+    Args:
+      state: ``[5]`` (x, y, θ, v, ω) in m, rad, m/s, rad/s.
+      subgoal: ``[2]`` (m) the point to head for now.
+      grid: the map.
+      sequence: the previous call's ``info.sequence`` ``[T, 2]`` (warm start; shifted here), or None.
+      key: an int seed or a JAX PRNG key for this step's noise (same key, same control).
+      goal: ``[2]`` (m) the goal (default: the sub-goal).
+      obstacles: moving discs as for `jaxplan.dwa.dwa_step` (`DiscObstacles` or (positions, velocities, radii)).
+      path: ``[L, 2]`` (m) the stretch of the global path ahead, or None.
+      config, params: `MPPIConfig` (default: `MPPIConfig()`), `MPPIParams` or a dict of overrides.
+
+    Returns:
+      ``(control (v, ω) as numpy f32[2], MPPIInfo)``.
+    """
+    config = validate_config(MPPIConfig() if config is None else config)
+    p = validate_params(params)
+    state = np.asarray(state, np.float32)
+    if state.shape != (5,) or not np.all(np.isfinite(state)):
+        raise ValueError(f"state must be 5 finite numbers (x, y, theta, v, omega), got {state.tolist()}")
+    sub = np.asarray(subgoal, np.float32)
+    if sub.shape != (2,) or not np.all(np.isfinite(sub)):
+        raise ValueError(f"subgoal must be 2 finite numbers (m), got {np.asarray(subgoal).tolist()}")
+    g = sub if goal is None else np.asarray(goal, np.float32)
+    if g.shape != (2,) or not np.all(np.isfinite(g)):
+        raise ValueError(f"goal must be 2 finite numbers (m), got {np.asarray(goal).tolist()}")
+    if sequence is None:
+        # `_program` shifts its input: a held-velocity sequence shifts to itself
+        mean = np.asarray(initial_sequence(config, jnp.asarray(state)))
+    else:
+        mean = np.asarray(sequence, np.float32)
+        if mean.shape != (config.steps, 2) or not np.all(np.isfinite(mean)):
+            raise ValueError(f"sequence must be the previous step's [{config.steps}, 2] finite sequence, "
+                             f"got shape {mean.shape}")
+    obs = as_obstacles(obstacles, None)
+    pa = None if path is None else np.asarray(path, np.float32)
+    if pa is not None and (pa.ndim != 2 or pa.shape[1] != 2 or pa.shape[0] < 1 or not np.all(np.isfinite(pa))):
+        raise ValueError(f"path must be [L, 2] finite points (m), got shape {pa.shape}")
+    k = jax.random.key(int(key)) if isinstance(key, (int, np.integer)) else key
+    fn = _program(config, obs is not None, pa is not None)
+    u, info = fn(table_of(grid), p, state, mean, k, sub, g, obs, pa)
+    return np.asarray(u), info
