@@ -10,6 +10,8 @@ tails cut at the table's last quantile (±3.6σ): exploration noise, not a stati
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -19,7 +21,17 @@ __all__ = ["gaussian", "TABLE_SIZE"]
 
 TABLE_SIZE = 4096
 
-_TABLE = np.asarray(ndtri((np.arange(TABLE_SIZE + 1, dtype=np.float64) + 0.5) / (TABLE_SIZE + 1)), np.float32)
+
+@functools.cache
+def _table() -> np.ndarray:
+    """``f32[TABLE_SIZE + 1]`` standard-normal quantiles at the midpoints of the table's cells.
+
+    Built on first use, not at import: computing it starts JAX's backend, which importing a config
+    reader must not do (it would allocate the backend under a caller's memory limit).
+    """
+    with jax.ensure_compile_time_eval():
+        q = ndtri((np.arange(TABLE_SIZE + 1, dtype=np.float64) + 0.5) / (TABLE_SIZE + 1))
+    return np.asarray(q, np.float32)
 
 
 def _mix(x: jnp.ndarray) -> jnp.ndarray:
@@ -43,6 +55,6 @@ def gaussian(key: jax.Array, shape: tuple[int, ...]) -> jnp.ndarray:
     x = _mix(_mix(jnp.arange(n, dtype=jnp.uint32) + _seed(key)))
     i = (x >> 20).astype(jnp.int32)  # 12 bits: the table entry
     frac = ((x >> 8) & jnp.uint32(0xFFF)).astype(jnp.float32) * jnp.float32(1.0 / 4096)  # the next 12
-    table = jnp.asarray(_TABLE)
+    table = jnp.asarray(_table())
     lo = table[i]
     return (lo + frac * (table[i + 1] - lo)).reshape(shape)
