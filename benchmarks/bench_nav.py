@@ -22,7 +22,8 @@ Sections:
              >= 97 % with active contacts in <= 0.5 % of episodes. With ``--oracle`` a row per map
              runs the blind walkers with ``NavConfig(prediction="oracle")``: the local planner
              knows their true routes (an upper bound for any walker predictor, not something a
-             robot can have).
+             robot can have). With ``--admissible`` a row runs the blind walkers with the local
+             planner's passive-safety admissibility on; ``--cases`` picks among static, blind, seeing.
   allrows    static episodes of `iaco_dwa` and `iaco_mppi` on EVERY row (optimal <= 80 cells) of
              every scenario file, each failure printed with its scenario row and reason (target:
              every one arrives).
@@ -135,10 +136,18 @@ def section_maps(d: Path, args) -> None:
             sel = rows(scen, args.rows)
             S, G = scen.starts[sel], scen.goals[sel]
             blind = walkers(grid, S, G, 5, 1.0)
-            cases = [("static", None, None), ("blind walkers", blind, None),
-                     ("seeing walkers", walkers(grid, S, G, 5, 1.0, "social"), None)]
+            cases = [("static", None, None)] if "static" in args.cases else []
+            if "blind" in args.cases:
+                cases.append(("blind walkers", blind, None))
+            if "seeing" in args.cases:
+                cases.append(("seeing walkers", walkers(grid, S, G, 5, 1.0, "social"), None))
             if args.oracle:
                 cases.append(("blind, oracle", blind, NavConfig(prediction="oracle")))
+            if args.admissible:
+                base = NavConfig()
+                safe = (base.replace(mppi=base.mppi.replace(admissible=True)) if local == "mppi"
+                        else base.replace(dwa=base.dwa.replace(admissible=True)))
+                cases.append(("blind, admissible", blind, safe))
             for label, obs, cfg in cases:
                 b, wall = run(grid, S, G, pipe, seeds, obs, cfg)
                 print(row(f"{name[:15]} {label[:14]}", b, wall), flush=True)
@@ -380,6 +389,10 @@ def main() -> None:
     ap.add_argument("--verbose", action="store_true", help="print failure reasons")
     ap.add_argument("--oracle", action="store_true",
                     help="maps: also run the walkers with the DWA knowing their true routes (prediction='oracle')")
+    ap.add_argument("--admissible", action="store_true",
+                    help="maps: also run the blind walkers with the local planner's passive-safety admissibility on")
+    ap.add_argument("--cases", default="static,blind,seeing",
+                    help="maps: which of static, blind, seeing to run (--oracle and --admissible add theirs)")
     ap.add_argument("--local", default="dwa,mppi", help="local planners of the maps, allrows and speed sections")
     ap.add_argument("--child-speed", type=int, default=0, help=argparse.SUPPRESS)
     ap.add_argument("--child-mppi", action="store_true", help=argparse.SUPPRESS)
@@ -393,6 +406,10 @@ def main() -> None:
         print(json.dumps(measure_mppi_speed(d)))
         return
     args.local = [x for x in args.local.split(",") if x]
+    args.cases = [x for x in args.cases.split(",") if x]
+    bad = sorted(set(args.cases) - {"static", "blind", "seeing"})
+    if bad:
+        ap.error(f"unknown --cases {bad}; choose among static, blind, seeing")
     if args.quick:
         args.rows, args.seeds, args.teams, args.episodes = 5, 2, 2, 100
         args.maps = f"{WAREHOUSE},random-32-32-20"
