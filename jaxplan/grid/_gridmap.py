@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+import jax
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -25,7 +26,9 @@ ZERO_ORIGIN = (0.0, 0.0)
 
 
 class GridMap(NamedTuple):
-    """An occupancy grid and its terrain layers. A pytree (every field is a leaf).
+    """An occupancy grid and its terrain layers. A pytree: the layers and the resolution are leaves (and
+    ``speed_limit`` when there is one); ``origin`` is static data (it never enters a computation, see the
+    module docstring), so a map without a speed limit has the same six leaves as before either existed.
 
     Attributes:
       free: ``bool[H, W]``, True where a robot may stand.
@@ -136,6 +139,17 @@ class GridMap(NamedTuple):
             origin=d["origin"],
             speed_limit=d["speed_limit"],
         )
+
+
+def _flatten(g: GridMap):
+    return (g.free, g.height, g.clearance_height, g.risk, g.turn_rule, g.resolution, g.speed_limit), g.origin
+
+
+def _unflatten(origin, leaves) -> GridMap:
+    return GridMap(*leaves[:6], origin=origin, speed_limit=leaves[6])
+
+
+jax.tree_util.register_pytree_node(GridMap, _flatten, _unflatten)
 
 
 def _layer(name: str, value: ArrayLike | None, shape: tuple[int, int], dtype, default,
