@@ -66,7 +66,7 @@ def test_shared_maps_load_with_their_size_resolution_origin_and_hand_counted_blo
 
 def test_warehouse_blocked_counts_by_pixel_value(warehouse, warehouse_masked, ros):
     _, _, px = _hand_pixels(ros / "warehouse.pgm")
-    values = dict(zip(*np.unique(px, return_counts=True)))
+    values = dict(zip(*np.unique(px, return_counts=True), strict=True))
     assert {int(k): int(v) for k, v in values.items()} == {0: 30951, 205: 230801, 254: 1318485, 255: 103807}
     assert int((~warehouse.free).sum()) == 30951 + 230801 == 261752  # black walls + grey unknown
     unknown_free = jp.load_map(ros / "warehouse.yaml", unknown="free")
@@ -397,3 +397,74 @@ def test_without_a_speed_layer_episodes_are_bit_identical_to_a_map_without_the_f
     e1 = jp.navigate(ones, (3, 8), (36, 8), global_planner="astar", time_limit=30.0)
     # A layer of ones caps nothing: the same trajectory (the no-layer program is the unchanged one).
     np.testing.assert_array_equal(e0.trajectory, e1.trajectory)
+
+
+# ---------------------------------------------------------------------------------------------
+# Fuzzing: any YAML or PGM edit gives a map or a one-line ValueError naming the file
+
+
+_FUZZ_YAML = _YAML.format(neg=0, mode="trinary")
+_FUZZ_PGM = b"P5\n# c\n4 3\n255\n" + bytes([0, 254, 205, 254] * 3)
+
+
+def _fuzzed():
+    from hypothesis import strategies as st
+
+    @st.composite
+    def case(draw):
+        lines = _FUZZ_YAML.splitlines()
+        for _ in range(draw(st.integers(0, 3))):
+            i = draw(st.integers(0, len(lines)))
+            op = draw(st.sampled_from(["number", "drop", "dup", "junk", "cut"]))
+            j = min(i, len(lines) - 1)
+            if op == "number" and lines:
+                key = lines[j].split(":")[0]
+                lines[j] = f"{key}: {draw(st.sampled_from(['1e999', '-3', 'nan', 'x', '[1, 2]', '[1,2,3,4]', '']))}"
+            elif op == "drop" and lines:
+                del lines[j]
+            elif op == "dup" and lines:
+                lines.insert(i, lines[j])
+            elif op == "junk":
+                lines.insert(i, draw(st.text(max_size=20)))
+            elif op == "cut" and lines:
+                lines[j] = lines[j][: draw(st.integers(0, len(lines[j])))]
+        pgm = bytearray(_FUZZ_PGM)
+        for _ in range(draw(st.integers(0, 3))):
+            k = draw(st.integers(0, len(pgm) - 1))
+            op = draw(st.sampled_from(["byte", "cut", "digits"]))
+            if op == "byte":
+                pgm[k] = draw(st.integers(0, 255))
+            elif op == "cut":
+                del pgm[k:]
+                if not pgm:
+                    break
+            else:
+                pgm[k:k] = draw(st.sampled_from([b"999999999", b"0", b"65536", b"-1"]))
+        return "\n".join(lines) + "\n", bytes(pgm)
+
+    return case()
+
+
+def test_fuzz_ros_map_parser(tmp_path_factory):
+    from hypothesis import HealthCheck, given, settings
+
+    folder = tmp_path_factory.mktemp("fuzz")
+    seen = {"ok": 0, "ValueError": 0}
+
+    @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @given(_fuzzed())
+    def run(case):
+        yaml, pgm = case
+        (folder / "m.yaml").write_bytes(yaml.encode("utf-8", "surrogatepass"))
+        (folder / "m.pgm").write_bytes(pgm)
+        try:
+            g = jp.load_map(folder / "m.yaml")
+        except (ValueError, FileNotFoundError) as e:
+            assert str(e) and "\n" not in str(e) and str(folder) in str(e)
+            seen["ValueError"] += 1
+        else:
+            assert g.free.ndim == 2
+            seen["ok"] += 1
+
+    run()
+    assert seen["ok"] > 0 and seen["ValueError"] > 0

@@ -244,8 +244,9 @@ def _check_on_free_cells(grid: GridMap, states: np.ndarray, single: bool) -> Non
     if not ok.all():
         i = int(np.argmin(ok))
         where = "outside the map" if not inside[i] else f"on the blocked cell {cell[i].tolist()}"
+        x, y = grid.to_world(states[i, :2])  # the world coordinates the caller gave
         raise ValueError(f"state{'' if single else f'[{i}]'} puts the robot {where} "
-                         f"(x, y = {states[i, 0]:.4g}, {states[i, 1]:.4g} m)")
+                         f"(x, y = {x:.4g}, {y:.4g} m)")
 
 
 def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any = None,

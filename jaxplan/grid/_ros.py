@@ -217,6 +217,8 @@ def read_pgm(path: str | os.PathLike) -> tuple[np.ndarray, int]:
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"PGM image not found: {p}")
+    if p.is_dir():
+        raise _fail(p, "is a directory, not a PGM image")
     data = p.read_bytes()
     magic, w, h, maxval, off = _pgm_header(data, p)
     if w * h > MAX_CELLS:
@@ -259,6 +261,8 @@ def _read_png(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
         raise _fail(path, "reading a PNG map needs Pillow (pip install pillow), or convert it to PGM") from None
     if not path.exists():
         raise FileNotFoundError(f"PNG image not found: {path}")
+    if path.is_dir():
+        raise _fail(path, "is a directory, not a PNG image")
     try:
         with Image.open(path) as im:
             if im.format != "PNG":
@@ -267,14 +271,13 @@ def _read_png(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
             if w * h > MAX_CELLS:
                 raise _fail(path, f"PNG claims {w}x{h} = {w * h} pixels, more than the {MAX_CELLS} a map may have")
             mode = im.mode
-            if mode in ("I;16", "I;16B", "I"):
-                a = np.asarray(im, dtype=np.float64)
-                return a / (65535.0 if a.max(initial=0) > 255 or mode != "I" else 255.0), None
+            if mode.startswith("I"):  # 16-bit grey (Pillow's I;16 variants, or I for a 16-bit PNG)
+                return np.asarray(im, dtype=np.float64) / 65535.0, None
             if mode in ("P", "PA"):
                 im = im.convert("RGBA")
                 mode = "RGBA"
             a = np.asarray(im)
-    except (OSError, SyntaxError) as e:
+    except (OSError, SyntaxError, Image.DecompressionBombError) as e:
         raise _fail(path, f"not a readable PNG image ({type(e).__name__})") from None
     if a.ndim == 2:
         return a.astype(np.float64) / (1.0 if mode == "1" else 255.0), None
