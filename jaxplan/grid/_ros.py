@@ -396,7 +396,7 @@ def save_ros_map(grid: GridMap, path: str | os.PathLike, speed_filter: tuple[int
     0 blocked, trinary, ``free_thresh`` 0.196, ``occupied_thresh`` 0.65); with a speed limit, also the speed
     mask ``<stem>_speed.yaml``/``.pgm`` (scale mode, for the same ``speed_filter``, type 1). Each file is
     written atomically. `load_ros_map` of the files gives ``grid``'s occupancy, resolution and origin back
-    (and its speed limit, to 1/100 of the top speed, from the mask), bit for bit.
+    (and its speed limit, to 1/100 of the top speed, between 1 % and 99 %, from the mask), bit for bit.
 
     Returns:
       The files written.
@@ -415,7 +415,8 @@ def save_ros_map(grid: GridMap, path: str | os.PathLike, speed_filter: tuple[int
             raise ValueError("save_map writes percent speed masks (speed_filter type 1, non-zero multiplier)")
         frac = np.asarray(grid.speed_limit, np.float64)[::-1]
         m = np.rint((100.0 * frac - base) / mult)
-        m = np.where(frac >= 1.0, 0, np.clip(m, 0, 100))  # 0: no limit
+        # 0 means "no limit" and 100 a limit of 0 % (also none, in Nav2): a limit below 1 % is written as 1 %.
+        m = np.where(frac >= 1.0, 0, np.clip(m, 1, 99))
         pixels = np.rint(255.0 * (1.0 - m / 100.0)).astype(np.uint8)
         written.append(atomic_write(p.with_name(stem + "_speed.pgm"), _pgm_bytes(pixels)))
         written.append(atomic_write(p.with_name(stem + "_speed.yaml"),
