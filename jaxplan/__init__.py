@@ -25,7 +25,8 @@ from typing import Any
 _EXPORTS: dict[str, tuple[str, ...]] = {
     "grid": (
         "GridMap", "Neighbours", "Scenarios", "clearance_field", "goal_distance_field", "grid_from_array", "load_map",
-        "load_scenarios", "neighbour_table", "passable", "save_map", "MountainGenerator", "RandomMapGenerator",
+        "load_scenarios", "neighbour_table", "passable", "resample", "save_map", "MountainGenerator",
+        "RandomMapGenerator",
         "Scene", "UrbanGenerator", "WarehouseGenerator", "demo_warehouse", "poisson_risk", "warehouse_chen2023",
         "warehouse_yu2020",
     ),

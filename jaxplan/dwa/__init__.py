@@ -21,6 +21,7 @@ from jaxplan.dwa._clearance import (
     clearance_table,
     disc_clearance,
     no_obstacles,
+    speed_cap,
     static_clearance,
 )
 from jaxplan.dwa._config import CLEARANCE_MODES, EVALUATORS, SELECTIONS, DWAConfig, DWAParams, default_params
@@ -40,7 +41,14 @@ from jaxplan.dwa._robot import (
     footprint_radius,
 )
 from jaxplan.dwa._rollout import Rollouts, rollout
-from jaxplan.dwa._step import as_obstacles, dwa_step, table_of, validate_config, validate_params
+from jaxplan.dwa._step import (
+    as_obstacles,
+    dwa_step,
+    obstacles_to_local,
+    table_of,
+    validate_config,
+    validate_params,
+)
 from jaxplan.dwa._window import Window, dynamic_window, sample_controls
 
 __all__ = [
@@ -49,6 +57,7 @@ __all__ = [
     "DiscObstacles", "EVALUATORS", "HYBRID_EXACT_CELLS", "Rectangle", "Rollouts", "SELECTIONS", "Unicycle", "Window",
     "advance", "clearance_table", "critics", "default_params", "disc_clearance", "dwa_control", "dwa_control_batch",
     "dwa_step", "dynamic_window", "evaluate", "footprint_offsets", "footprint_radius", "fuzzy_evaluate",
-    "input_memberships", "no_obstacles", "rollout", "rule_table", "sample_controls", "static_clearance", "table_of",
+    "input_memberships", "no_obstacles", "rollout", "rule_table", "sample_controls",
+    "obstacles_to_local", "speed_cap", "static_clearance", "table_of",
     "trajectory", "validate_config", "validate_params",
 ]

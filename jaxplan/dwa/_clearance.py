@@ -76,12 +76,16 @@ class ClearanceTable(NamedTuple):
       resolution: metres per cell (f32 scalar).
       inv_resolution: cells per metre (f32 scalar; precomputed so that the compiled step
         needs no division kernel of its own).
+      speed_limit: None, or ``f32[H, W]`` the map's `jaxplan.grid.GridMap.speed_limit` (fraction of the
+        top speed per cell): `dwa_control` and `jaxplan.mppi.mppi_control` then cap their top speed at
+        the robot's cell (`speed_cap`). None (the default) leaves the pytree, and every result, as before.
     """
 
     quads: jnp.ndarray
     cmap: CollisionMap
     resolution: jnp.ndarray
     inv_resolution: jnp.ndarray
+    speed_limit: jnp.ndarray | None = None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -114,6 +118,17 @@ def clearance_table(cmap: CollisionMap) -> ClearanceTable:
     res = float(cmap.resolution)
     return ClearanceTable(jnp.asarray(np.stack(quads)), cmap, jnp.asarray(res, jnp.float32),
                           jnp.asarray(1.0 / res, jnp.float32))
+
+
+def speed_cap(table: ClearanceTable, xy: jnp.ndarray, v_max) -> jnp.ndarray:
+    """The top speed allowed at the cell of point ``xy [..., 2]`` (m, the map's frame): ``v_max`` times the
+    table's speed limit there (a point off the map reads the nearest cell); ``v_max`` if the table has none."""
+    if table.speed_limit is None:
+        return jnp.asarray(v_max)
+    H, W = table.shape
+    cx = jnp.clip(jnp.floor(xy[..., 0] * table.inv_resolution), 0, W - 1).astype(jnp.int32)
+    cy = jnp.clip(jnp.floor(xy[..., 1] * table.inv_resolution), 0, H - 1).astype(jnp.int32)
+    return jnp.minimum(v_max, v_max * table.speed_limit[cy, cx])
 
 
 def _lookup(table: ClearanceTable, u: jnp.ndarray, v: jnp.ndarray):

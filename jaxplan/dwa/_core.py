@@ -32,6 +32,7 @@ control stays admissible). ``DWAInfo.stuck`` flags it.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import NamedTuple
 
@@ -42,7 +43,7 @@ from jax import lax
 
 from jaxplan.dwa import _critics as C
 from jaxplan.dwa._brake import braking_clearance
-from jaxplan.dwa._clearance import ClearanceTable, DiscObstacles, disc_clearance, static_clearance
+from jaxplan.dwa._clearance import ClearanceTable, DiscObstacles, disc_clearance, speed_cap, static_clearance
 from jaxplan.dwa._config import DWAConfig, DWAParams
 from jaxplan.dwa._fuzzy import fuzzy_evaluate
 from jaxplan.dwa._robot import Disc, curvature_limit, footprint_offsets, footprint_radius
@@ -189,7 +190,13 @@ def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, sta
 
     Returns:
       ``(control f32[2] = (v, omega), DWAInfo)``.
+
+    With a speed limit layer in ``table`` (a map's Nav2 speed mask), the window's top speed is capped at the
+    value of the robot's cell (`speed_cap`).
     """
+    if table.speed_limit is not None:
+        config = config.replace(robot=dataclasses.replace(
+            config.robot, v_max=speed_cap(table, state[:2], config.robot.v_max)))
     robot = config.robot
     steps, dt = config.steps, config.dt
     window = dynamic_window(robot, state, config.period)

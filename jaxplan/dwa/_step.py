@@ -14,6 +14,7 @@ import math
 from typing import Any, Mapping
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -33,7 +34,7 @@ from jaxplan.dwa._fastmath import MAX_ROTOR_ANGLE
 from jaxplan.dwa._robot import Ackermann, Disc, Rectangle, Unicycle, footprint_radius
 from jaxplan.grid import GridMap, collision_map
 
-__all__ = ["dwa_step", "table_of", "validate_config", "validate_params", "as_obstacles"]
+__all__ = ["dwa_step", "table_of", "validate_config", "validate_params", "as_obstacles", "obstacles_to_local"]
 
 CHUNK = 128
 """Robots per vectorised chunk of a batched step (see `dwa_control_batch`)."""
@@ -43,8 +44,12 @@ _batch = jax.jit(dwa_control_batch, static_argnames=("chunk",))
 
 
 def table_of(grid: GridMap) -> ClearanceTable:
-    """The `ClearanceTable` of ``grid``, built once per map object (a few maps are kept)."""
-    return _table(grid)[1]
+    """The `ClearanceTable` of ``grid``, built once per map object (a few maps are kept); with the grid's
+    speed limit layer if it has one."""
+    table = _table(grid)[1]
+    if grid.speed_limit is not None:
+        table = table._replace(speed_limit=jnp.asarray(grid.speed_limit, jnp.float32))
+    return table
 
 
 # Keyed by the identity of the free-cell array, as `dwa_step` calls this on every step (a content digest of a
@@ -239,8 +244,9 @@ def _check_on_free_cells(grid: GridMap, states: np.ndarray, single: bool) -> Non
     if not ok.all():
         i = int(np.argmin(ok))
         where = "outside the map" if not inside[i] else f"on the blocked cell {cell[i].tolist()}"
+        x, y = grid.to_world(states[i, :2])  # the world coordinates the caller gave
         raise ValueError(f"state{'' if single else f'[{i}]'} puts the robot {where} "
-                         f"(x, y = {states[i, 0]:.4g}, {states[i, 1]:.4g} m)")
+                         f"(x, y = {x:.4g}, {y:.4g} m)")
 
 
 def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any = None,
@@ -310,6 +316,10 @@ def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any
         pa = pa.astype(np.float32)
     if not isinstance(grid, GridMap):
         raise ValueError(f"grid must be a GridMap, got {type(grid).__name__}")
+    if grid.has_origin:  # world -> the map's frame, where the tables are; rollouts go back below
+        st2, sg = grid.to_local(st2), grid.to_local(sg)
+        st = st2[0] if single else st2
+        obs, pa = obstacles_to_local(obs, grid), None if pa is None else grid.to_local(pa)
     _check_on_free_cells(grid, st2, single)
     table = table_of(grid)
     if single:
@@ -330,4 +340,15 @@ def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any
         if Bp > B:
             out = jax.tree_util.tree_map(lambda a: a[:B], out)
     u, info = jax.device_get(out)
-    return np.asarray(u), DWAInfo(*(None if a is None else np.asarray(a) for a in info))
+    info = DWAInfo(*(None if a is None else np.asarray(a) for a in info))
+    if grid.has_origin and info.rollouts is not None:
+        info = info._replace(rollouts=grid.to_world(info.rollouts))
+    return np.asarray(u), info
+
+
+def obstacles_to_local(obs: DiscObstacles | None, grid: GridMap) -> DiscObstacles | None:
+    """Disc obstacles given in world coordinates, moved into ``grid``'s frame (its origin subtracted)."""
+    if obs is None or not grid.has_origin:
+        return obs
+    return obs._replace(positions=grid.to_local(obs.positions).astype(np.float32),
+                        track=None if obs.track is None else grid.to_local(obs.track).astype(np.float32))

@@ -1,5 +1,5 @@
-"""Maps: the `GridMap` pytree, MovingAI I/O, neighbourhoods, the move graph and exact distances on it,
-distance fields, the exact collision geometry of cells (`CollisionMap`) and generators."""
+"""Maps: the `GridMap` pytree, MovingAI and ROS map_server I/O, resampling, neighbourhoods, the move graph and
+exact distances on it, distance fields, the exact collision geometry of cells (`CollisionMap`) and generators."""
 
 from jaxplan.grid._collision import (
     PAD,
@@ -15,6 +15,7 @@ from jaxplan.grid._collision import (
     segment_window,
 )
 from jaxplan.grid._fields import clearance_field, goal_distance_field
+from jaxplan.grid._files import is_ros_map, load_map, save_map
 from jaxplan.grid._generators import (
     MountainGenerator,
     RandomMapGenerator,
@@ -29,7 +30,14 @@ from jaxplan.grid._generators import (
 )
 from jaxplan.grid._graph import SearchGraph, distance_from, search_graph, shortest_lengths, shortest_path
 from jaxplan.grid._gridmap import GridMap, check_cell, check_cells, grid_from_array, passable
-from jaxplan.grid._movingai import Scenarios, load_map, load_scenarios, parse_map, parse_scenarios, save_map
+from jaxplan.grid._movingai import (
+    Scenarios,
+    load_movingai_map,
+    load_scenarios,
+    parse_map,
+    parse_scenarios,
+    save_movingai_map,
+)
 from jaxplan.grid._neighbours import (
     CONNECTIVITIES,
     Neighbours,
@@ -38,6 +46,8 @@ from jaxplan.grid._neighbours import (
     offsets,
     segment_cells,
 )
+from jaxplan.grid._resample import resample, resampled_shape
+from jaxplan.grid._ros import load_ros_map, occupancy_values, read_pgm, read_ros_yaml, save_ros_map
 
 __all__ = [
     "CONNECTIVITIES", "GridMap", "Neighbours", "Scenarios", "check_cell", "check_cells", "check_connectivity",
@@ -48,4 +58,6 @@ __all__ = [
     "polyline_free", "segment_clearance", "segment_free", "segment_window",
     "MountainGenerator", "RandomMapGenerator", "Scene", "UrbanGenerator", "WarehouseGenerator", "as_rng",
     "demo_warehouse", "poisson_risk", "warehouse_chen2023", "warehouse_yu2020",
+    "is_ros_map", "load_movingai_map", "save_movingai_map", "load_ros_map", "save_ros_map", "read_ros_yaml",
+    "read_pgm", "occupancy_values", "resample", "resampled_shape",
 ]

@@ -2,21 +2,33 @@
 
 Conventions (DESIGN §2): cells are ``(x, y)`` = (column, row), row 0 at the top;
 flat index ``i = y * W + x``; the centre of cell ``(x, y)`` lies at
-``((x + 0.5) * res, (y + 0.5) * res)`` metres.
+``origin + ((x + 0.5) * res, (y + 0.5) * res)`` metres, with ``origin`` ``(0, 0)`` unless the map
+says otherwise (a ROS map's YAML does: see `jaxplan.grid.load_ros_map`).
+
+The origin is a translation: every planner, rollout and metric computes in the map's own frame
+(metres from the corner of cell ``(0, 0)``), which differs from the world frame by ``origin`` only,
+so no result depends on it. It is added where metres leave the library (`GridMap.centre`,
+`GridMap.to_world`, episodes' trajectories and waypoints, `dwa_step`/`mppi_step` rollouts) and
+subtracted where they enter (`GridMap.cell_at`, `GridMap.to_local`, obstacle routes, DWA/MPPI states).
 """
 
 from __future__ import annotations
 
 from typing import NamedTuple
 
+import jax
 import numpy as np
 from numpy.typing import ArrayLike
 
 __all__ = ["GridMap", "grid_from_array", "passable", "check_cell", "check_cells"]
 
+ZERO_ORIGIN = (0.0, 0.0)
+
 
 class GridMap(NamedTuple):
-    """An occupancy grid and its terrain layers. A pytree (every field is a leaf).
+    """An occupancy grid and its terrain layers. A pytree: the layers and the resolution are leaves (and
+    ``speed_limit`` when there is one); ``origin`` is static data (it never enters a computation, see the
+    module docstring), so a map without a speed limit has the same six leaves as before either existed.
 
     Attributes:
       free: ``bool[H, W]``, True where a robot may stand.
@@ -26,6 +38,11 @@ class GridMap(NamedTuple):
       risk: ``f32[H, W]`` intensity of chen2023's "unknown factors" (>= 0), 0 by default.
       turn_rule: ``i8[H, W]`` 0 = no rule, 1 = right turn required (chu2024's urban map).
       resolution: metres per cell (a scalar leaf, so maps of several resolutions can be batched).
+      origin: ``(x, y)`` world coordinates in metres of the outer corner of cell ``(0, 0)``
+        (``(0, 0)`` by default; a ROS map's ``origin``). Two float leaves.
+      speed_limit: ``None`` (no limit, the default) or ``f32[H, W]`` in ``(0, 1]``: the fraction of the
+        robot's top speed allowed in each cell (a Nav2 speed filter mask, `jaxplan.grid.load_ros_map`);
+        the DWA and MPPI windows cap their top speed at the value of the robot's cell.
 
     Example:
       >>> import numpy as np, jaxplan as jp
@@ -40,6 +57,8 @@ class GridMap(NamedTuple):
     risk: np.ndarray
     turn_rule: np.ndarray
     resolution: float
+    origin: tuple[float, float] = ZERO_ORIGIN
+    speed_limit: np.ndarray | None = None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -68,9 +87,43 @@ class GridMap(NamedTuple):
         f = np.asarray(flat)
         return np.stack([f % self.width, f // self.width], axis=-1)
 
+    @property
+    def has_origin(self) -> bool:
+        """True if the origin is not ``(0, 0)`` (world and map frame differ)."""
+        return tuple(float(v) for v in self.origin) != ZERO_ORIGIN
+
     def centre(self, cells: ArrayLike) -> np.ndarray:
-        """``int[..., 2]`` cells -> ``f64[..., 2]`` world coordinates of their centres (m)."""
-        return (np.asarray(cells, dtype=np.float64) + 0.5) * float(self.resolution)
+        """``int[..., 2]`` cells -> ``f64[..., 2]`` world coordinates of their centres (m), origin included."""
+        return self.to_world((np.asarray(cells, dtype=np.float64) + 0.5) * float(self.resolution))
+
+    def cell_at(self, points: ArrayLike) -> np.ndarray:
+        """``f[..., 2]`` world points (m) -> ``int64[..., 2]`` cells ``(x, y)`` that contain them.
+
+        ``floor((p - origin) / res)``; a point outside the map gives a cell outside it (check with
+        `check_cells`), a point on a cell edge belongs to the cell above/right of it.
+        """
+        p = np.asarray(points, dtype=np.float64) - np.asarray(self.origin, np.float64)
+        return np.floor(p / float(self.resolution)).astype(np.int64)
+
+    def to_world(self, local: ArrayLike) -> np.ndarray:
+        """``f[..., 2+]`` points in the map's frame (m from the corner of cell (0, 0)) -> world frame: adds
+        ``origin`` to the first two columns (``(x, y, theta, ...)`` rows keep their other columns). With the
+        default origin the input comes back unchanged (the same bits)."""
+        a = np.asarray(local)
+        if not self.has_origin:
+            return a
+        out = np.array(a, dtype=np.result_type(a.dtype, np.float32), copy=True)
+        out[..., :2] = out[..., :2] + np.asarray(self.origin, np.float64).astype(out.dtype)
+        return out
+
+    def to_local(self, world: ArrayLike) -> np.ndarray:
+        """The inverse of `to_world`: subtracts ``origin`` from the first two columns."""
+        a = np.asarray(world)
+        if not self.has_origin:
+            return a
+        out = np.array(a, dtype=np.result_type(a.dtype, np.float32), copy=True)
+        out[..., :2] = out[..., :2] - np.asarray(self.origin, np.float64).astype(out.dtype)
+        return out
 
     def replace(self, **fields) -> "GridMap":
         """A copy with some layers replaced (validated like `grid_from_array`)."""
@@ -83,7 +136,20 @@ class GridMap(NamedTuple):
             clearance_height=d["clearance_height"],
             risk=d["risk"],
             turn_rule=d["turn_rule"],
+            origin=d["origin"],
+            speed_limit=d["speed_limit"],
         )
+
+
+def _flatten(g: GridMap):
+    return (g.free, g.height, g.clearance_height, g.risk, g.turn_rule, g.resolution, g.speed_limit), g.origin
+
+
+def _unflatten(origin, leaves) -> GridMap:
+    return GridMap(*leaves[:6], origin=origin, speed_limit=leaves[6])
+
+
+jax.tree_util.register_pytree_node(GridMap, _flatten, _unflatten)
 
 
 def _layer(name: str, value: ArrayLike | None, shape: tuple[int, int], dtype, default,
@@ -112,6 +178,8 @@ def grid_from_array(
     risk: ArrayLike | None = None,
     clearance_height: ArrayLike | None = None,
     turn_rule: ArrayLike | None = None,
+    origin: ArrayLike = ZERO_ORIGIN,
+    speed_limit: ArrayLike | None = None,
 ) -> GridMap:
     """Builds a validated `GridMap` from a boolean occupancy array.
 
@@ -120,10 +188,13 @@ def grid_from_array(
       resolution: metres per cell, finite and > 0.
       height, risk, clearance_height, turn_rule: optional ``[H, W]`` layers (see `GridMap`);
         height and risk finite, clearance_height ``+inf`` where there is no roof.
+      origin: ``(x, y)`` world metres of the outer corner of cell ``(0, 0)`` (finite).
+      speed_limit: optional ``[H, W]`` fraction of the top speed allowed per cell, in ``(0, 1]``.
 
     Raises:
       ValueError: naming the layer, for a wrong shape, NaN, an infinite height or risk,
-        a negative risk or clearance height, or a turn rule other than 0/1.
+        a negative risk or clearance height, a turn rule other than 0/1, a speed limit outside
+        ``(0, 1]`` or an origin that is not two finite numbers.
 
     Returns:
       A `GridMap` holding numpy arrays (convert with ``jax.numpy.asarray`` inside programs).
@@ -149,6 +220,18 @@ def grid_from_array(
     tr = _layer("turn_rule", turn_rule, shape, np.int8, 0)
     if not np.isin(tr, (0, 1)).all():
         raise ValueError("layer 'turn_rule' must hold 0 (none) or 1 (right turn required)")
+    try:
+        o = tuple(float(v) for v in np.asarray(origin, dtype=np.float64).reshape(-1))
+    except (TypeError, ValueError):
+        raise ValueError(f"origin must be two numbers (x, y) in metres, got {origin!r}") from None
+    if len(o) != 2 or not all(np.isfinite(o)):
+        raise ValueError(f"origin must be two finite numbers (x, y) in metres, got {origin!r}")
+    o = (o[0] + 0.0, o[1] + 0.0)  # -0.0 -> 0.0: the origin (0, 0) has one spelling
+    sl = None
+    if speed_limit is not None:
+        sl = _layer("speed_limit", speed_limit, shape, np.float32, 1.0, finite=True)
+        if not ((sl > 0) & (sl <= 1)).all():
+            raise ValueError("layer 'speed_limit' must hold fractions of the top speed in (0, 1]")
     return GridMap(
         free=f.copy(),
         height=_layer("height", height, shape, np.float32, 0.0, finite=True),
@@ -156,6 +239,8 @@ def grid_from_array(
         risk=r,
         turn_rule=tr,
         resolution=res,
+        origin=o,
+        speed_limit=sl,
     )
 
 

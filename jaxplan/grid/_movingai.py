@@ -33,7 +33,7 @@ import numpy as np
 from jaxplan.core.io import atomic_write
 from jaxplan.grid._gridmap import GridMap, grid_from_array
 
-__all__ = ["load_map", "save_map", "parse_map", "load_scenarios", "parse_scenarios", "Scenarios"]
+__all__ = ["load_movingai_map", "save_movingai_map", "parse_map", "load_scenarios", "parse_scenarios", "Scenarios"]
 
 PASSABLE = frozenset(".GS")
 BLOCKED = frozenset("@OTW")
@@ -119,7 +119,7 @@ def parse_map(text: str, resolution: float = 1.0, where: str = "<map>") -> GridM
     return grid_from_array(free, resolution=resolution)
 
 
-def load_map(path: str | os.PathLike, resolution: float = 1.0) -> GridMap:
+def load_movingai_map(path: str | os.PathLike, resolution: float = 1.0) -> GridMap:
     """Reads a MovingAI ``.map`` file.
 
     Args:
@@ -132,7 +132,7 @@ def load_map(path: str | os.PathLike, resolution: float = 1.0) -> GridMap:
     return parse_map(_read_text(path, "map"), resolution=resolution, where=str(path))
 
 
-def save_map(grid: GridMap, path: str | os.PathLike) -> None:
+def save_movingai_map(grid: GridMap, path: str | os.PathLike) -> None:
     """Writes ``grid.free`` as a MovingAI ``.map`` file (``.`` free, ``@`` blocked).
 
     Only occupancy is stored: the format has no place for the other layers. The

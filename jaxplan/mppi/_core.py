@@ -22,12 +22,13 @@ from an explicit key), like the softmax-relaxed DWA.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 
-from jaxplan.dwa import ClearanceTable, DiscObstacles, curvature_limit, disc_clearance, static_clearance
+from jaxplan.dwa import ClearanceTable, DiscObstacles, curvature_limit, disc_clearance, speed_cap, static_clearance
 from jaxplan.mppi import _critics as C
 from jaxplan.mppi._config import MPPIConfig, MPPIParams
 from jaxplan.mppi._noise import gaussian
@@ -161,8 +162,14 @@ def mppi_control(table: ClearanceTable, config: MPPIConfig, params: MPPIParams, 
 
     Returns:
       ``(control f32[2] = (v, ω), MPPIInfo)``; ``info.sequence`` is the new mean (its row 0 the control).
+
+    With a speed limit layer in ``table`` (a map's Nav2 speed mask), the top speed of every sampled sequence
+    is capped at the value of the robot's cell (`jaxplan.dwa.speed_cap`).
     """
     state = jnp.asarray(state, jnp.float32)
+    if table.speed_limit is not None:
+        config = config.replace(robot=dataclasses.replace(
+            config.robot, v_max=speed_cap(table, state[:2], config.robot.v_max)))
     goal = subgoal if goal is None else goal
     if path is None:
         path, n_path = jnp.zeros((2, 2), jnp.float32), jnp.asarray(0, jnp.int32)

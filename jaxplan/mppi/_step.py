@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from jaxplan.core.cache import lru_cache
-from jaxplan.dwa import CLEARANCE_MODES, DWAConfig, as_obstacles, table_of
+from jaxplan.dwa import CLEARANCE_MODES, DWAConfig, as_obstacles, obstacles_to_local, table_of
 from jaxplan.dwa import validate_config as validate_dwa_config
 from jaxplan.grid import GridMap
 from jaxplan.mppi._config import MPPIConfig, MPPIParams, default_params
@@ -121,6 +121,12 @@ def mppi_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, *, sequence: 
     if pa is not None and (pa.ndim != 2 or pa.shape[1] != 2 or pa.shape[0] < 1 or not np.all(np.isfinite(pa))):
         raise ValueError(f"path must be [L, 2] finite points (m), got shape {pa.shape}")
     k = jax.random.key(int(key)) if isinstance(key, (int, np.integer)) else key
+    if grid.has_origin:  # world -> the map's frame, where the tables are; rollout points go back below
+        state, sub, g = (grid.to_local(a).astype(np.float32) for a in (state, sub, g))
+        obs = obstacles_to_local(obs, grid)
+        pa = None if pa is None else grid.to_local(pa).astype(np.float32)
     fn = _program(config, obs is not None, pa is not None)
     u, info = fn(table_of(grid), p, state, mean, k, sub, g, obs, pa)
+    if grid.has_origin and info.points is not None:
+        info = info._replace(points=jnp.asarray(grid.to_world(np.asarray(info.points))))
     return np.asarray(u), info

@@ -51,6 +51,7 @@ from jaxplan.dwa import (
     dwa_control,
     footprint_offsets,
     footprint_radius,
+    speed_cap,
     static_clearance,
 )
 from jaxplan.metrics import point_polyline_distance
@@ -352,6 +353,9 @@ def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams |
         # the end of a dead end is otherwise reached only by rollouts that run on into its end wall).
         finish = jnp.concatenate([flat(inputs.goal), jnp.full((B * N, 1), config.goal_tolerance, inputs.goal.dtype)],
                                  axis=-1)
+    if table.speed_limit is not None:  # the map's speed limit at each robot's cell, of the robot's top speed
+        v_top = jnp.minimum(v_top, speed_cap(table, flat(pos), robot.v_max))
+        table = table._replace(speed_limit=None)  # applied: the local planners must not scale v_top again
     if config.local == "mppi":
         mcfg = config.local_mppi()
         path, n_path = jax.vmap(_local_path)(flat(c.waypoints), flat(c.n_wp), flat(c.index), flat(c.origin))

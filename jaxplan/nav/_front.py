@@ -216,10 +216,16 @@ def _initial_states(cfg: NavConfig, start_xy: np.ndarray, wp_m: np.ndarray,
     return state0, limit
 
 
+def _shift_obstacles(obs: MovingObstacles, delta: np.ndarray) -> MovingObstacles:
+    """``obs`` with its routes moved by ``delta [2]`` metres (between the world and the map's frame)."""
+    return obs._replace(waypoints=jnp.asarray(np.asarray(obs.waypoints) + delta.astype(np.float32)))
+
+
 def _episode_obstacles(obstacles: Any, E: int, N: int, seeds: list[int], start_xy: np.ndarray,
-                       radius: float) -> MovingObstacles:
+                       radius: float, origin: np.ndarray | None = None) -> MovingObstacles:
     """Step 4: the obstacle sets of the ``E × R`` episodes stacked (``[E*R, M, ...]``); none may start inside a
-    robot (``start_xy [E*N, 2]``)."""
+    robot (``start_xy [E*N, 2]``). Routes come in world coordinates; with a map ``origin`` they are moved into the
+    map's frame, where the episodes run."""
     R = len(seeds)
     sets = obstacle_sets(obstacles, E, R, seeds)
     for e in range(E):
@@ -227,6 +233,8 @@ def _episode_obstacles(obstacles: Any, E: int, N: int, seeds: list[int], start_x
             if not isinstance(sets[e][r], MovingObstacles):
                 raise ValueError(f"obstacles for scenario {e}, seed {seeds[r]} must be MovingObstacles")
     obs = stack_obstacles([sets[e][r] for e in range(E) for r in range(R)])  # [E*R, M, ...]
+    if origin is not None:
+        obs = _shift_obstacles(obs, -origin)
     if obs.count:
         # Positions at t = 0 of every set in one compiled call (padding slots are parked far away).
         pos0, rad0 = np.asarray(_STATE(obs, 0.0)[0]), np.asarray(obs.radii)
@@ -376,7 +384,8 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
     state0, limit = _initial_states(cfg, start_xy, wp_m, time_limit)
 
     # 4. Obstacles per episode [E][R] (none may start inside a robot), and the episodes.
-    obs = _episode_obstacles(obstacles, E, N, seeds, start_xy, run_args.radius)
+    origin = np.asarray(grid.origin, np.float64) if grid.has_origin else None
+    obs = _episode_obstacles(obstacles, E, N, seeds, start_xy, run_args.radius, origin)
     to_b = functools.partial(_to_episodes, E=E, N=N, R=R)
     active = to_b(run)
     inputs = EpisodeInputs(
@@ -389,9 +398,27 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
     )
     out, compile_s, run_s = _execute(cfg, grid, pf, run_args.params, inputs, mesh)
 
-    # 5. Metrics, back to [E, R, N, ...].
-    return _episode_batch(out, E, R, N, active, reason, plans, n_plan, wp_m, n_wp, obs, float(cfg.dwa.period),
-                          (plan_time, compile_s, run_s), pipe.name, res)
+    # 5. Metrics, back to [E, R, N, ...]; metres in world coordinates (the map's origin added).
+    batch = _episode_batch(out, E, R, N, active, reason, plans, n_plan, wp_m, n_wp, obs, float(cfg.dwa.period),
+                           (plan_time, compile_s, run_s), pipe.name, res)
+    return batch if origin is None else _batch_to_world(batch, origin)
+
+
+def _batch_to_world(batch: EpisodeBatch, origin: np.ndarray) -> EpisodeBatch:
+    """``batch`` with every position (states, waypoints, obstacle routes and positions) moved from the map's
+    frame to the world by adding ``origin [2]`` (m); metrics are distances and stay as they are."""
+    o = origin.astype(np.float32)
+
+    def shift(a, cols=2):
+        if a is None:
+            return None
+        a = np.array(a, copy=True)
+        a[..., :cols] = a[..., :cols] + o.astype(a.dtype)
+        return a
+
+    return batch._replace(
+        states=shift(batch.states), waypoints=shift(batch.waypoints), final_waypoints=shift(batch.final_waypoints),
+        obstacles=_shift_obstacles(batch.obstacles, origin), obstacle_positions=shift(batch.obstacle_positions))
 
 
 # ---------------------------------------------------------------------------------------------

@@ -255,6 +255,7 @@ def random_obstacles(grid: Any, n: int = 5, speed: Any = 1.0, radius: Any = 0.25
     av = np.zeros((0, 2)) if avoid is None else np.asarray(avoid, np.float64).reshape(-1, 2)
     if not np.isfinite(av).all():
         raise ValueError("avoid contains a non-finite coordinate")
+    av = g.to_local(av)  # world -> the map's frame (the origin, if any, subtracted); routes go back below
     if n == 0:
         return no_obstacles(0)
     res = float(g.resolution)
@@ -281,7 +282,7 @@ def random_obstacles(grid: Any, n: int = 5, speed: Any = 1.0, radius: Any = 0.25
         routes.append(route)
         offsets.append(offset)
         placed.append((_np_position(route, offset, loop), r))
-    return moving_obstacles(routes, speeds, radii, loop=loop, offsets=offsets,
+    return moving_obstacles([g.to_world(r) for r in routes], speeds, radii, loop=loop, offsets=offsets,
                             reactive=True if behavior == "social" else None)
 
 
@@ -356,7 +357,7 @@ def crossing_traffic(grid: Any, path: ArrayLike, n: int = 3, speed: Any = 1.0, r
         raise ValueError(f"jitter must be finite and >= 0, got {jitter}")
     if robot_speed is not None and (not np.isfinite(robot_speed) or robot_speed <= 0):
         raise ValueError(f"robot_speed must be a finite number of m/s > 0, got {robot_speed}")
-    p = _as_path(path)
+    p = g.to_local(_as_path(path))  # world -> the map's frame; routes go back below
     speeds = per_obstacle("speed", speed, n)
     radii = per_obstacle("radius", radius, n)
     seg_vec = np.diff(p, axis=0)
@@ -406,7 +407,7 @@ def crossing_traffic(grid: Any, path: ArrayLike, n: int = 3, speed: Any = 1.0, r
             offset = e_plus  # standing still on the crossing point
         routes.append(route)
         offsets.append(offset)
-    return moving_obstacles(routes, speeds, radii, loop=False, offsets=offsets)
+    return moving_obstacles([g.to_world(r) for r in routes], speeds, radii, loop=False, offsets=offsets)
 
 
 def head_on(path: ArrayLike, speed: float = 1.0, radius: float = 0.25, *, delay: float = 0.0) -> MovingObstacles:
