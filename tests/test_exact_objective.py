@@ -64,11 +64,11 @@ def _simple_paths(free: np.ndarray, start, goal, conn: int, rule=None):
 def _reference_cost(path, grid, planner, p) -> float:
     """The planner's cost of ``path`` from its definition (DESIGN §4), in float64."""
     res = float(grid.resolution)
-    steps = [(b[0] - a[0], b[1] - a[1]) for a, b in zip(path[:-1], path[1:])]
+    steps = [(b[0] - a[0], b[1] - a[1]) for a, b in zip(path[:-1], path[1:], strict=True)]
     L = sum(math.hypot(*s) for s in steps) * res
     heads = [math.atan2(s[1], s[0]) for s in steps]
-    changes = [abs((h1 - h0 + math.pi) % (2 * math.pi) - math.pi) for h0, h1 in zip(heads[:-1], heads[1:])]
-    turns = sum(1 for a, b in zip(steps[:-1], steps[1:]) if a != b)
+    changes = [abs((h1 - h0 + math.pi) % (2 * math.pi) - math.pi) for h0, h1 in zip(heads[:-1], heads[1:], strict=True)]
+    turns = sum(1 for a, b in zip(steps[:-1], steps[1:], strict=True) if a != b)
     if planner in ("aco", "astar"):
         return L
     if planner == "praco":
@@ -82,7 +82,8 @@ def _reference_cost(path, grid, planner, p) -> float:
         lam = p["lambdas"]
         clear = np.maximum(jp.grid.clearance_field(grid), 0.5 * res).astype(np.float32)
         l0 = math.hypot(path[0][0] - path[-1][0], path[0][1] - path[-1][1]) * res
-        return lam[0] * L / l0 + lam[1] * sum(changes) / math.pi + lam[2] * sum(1.0 / float(clear[y, x]) for x, y in path)
+        inv_d = sum(1.0 / float(clear[y, x]) for x, y in path)
+        return lam[0] * L / l0 + lam[1] * sum(changes) / math.pi + lam[2] * inv_d
     raise AssertionError(planner)
 
 
@@ -242,7 +243,7 @@ def test_batch_equals_single_and_ignores_colony_only_parameters():
     for planner in OBJECTIVE_PLANNERS:
         over = {"ants": 7} if planner in COLONIES else {}
         batch = exact_objectives(grid, starts, goals, planner=planner, **over)
-        single = [exact_objective(grid, s, g, planner=planner).cost for s, g in zip(starts, goals)]
+        single = [exact_objective(grid, s, g, planner=planner).cost for s, g in zip(starts, goals, strict=True)]
         np.testing.assert_allclose(batch, single, rtol=1e-12)
         # Lengths: the length objectives equal the octile optimum (16 directions: shorter or equal).
         if planner in ("aco", "astar", "dijkstra"):
@@ -299,3 +300,67 @@ def test_no_colony_beats_its_own_optimum(planner):
             ok = b.success.reshape(-1)
             cost = path_objectives(b.paths.reshape(-1, P, 2)[ok], b.n_cells.reshape(-1)[ok], grid, planner, **over)
             assert (cost >= np.repeat(opt, 3)[ok] - 1e-9).all()
+
+
+def test_path_metrics_objective_gap_is_opt_in():
+    free = np.ones((6, 7), bool)
+    free[1:5, 3] = False
+    grid = jp.grid_from_array(free, resolution=0.5)
+    path = np.array([[0, 0], [1, 0], [2, 0], [3, 0], [4, 0], [5, 1], [6, 2], [6, 3]])
+    plain = jp.metrics.path_metrics(path, grid)
+    assert "objective_gap" not in plain and tuple(plain) == jp.metrics.PATH_METRICS
+    best = exact_objective(grid, (0, 0), (6, 3), planner="praco", omega2=2.0)
+    cost = path_objective(path, grid, "praco", omega2=2.0)
+    m = jp.metrics.path_metrics(path, grid, cost=cost, objective_optimum=best.cost)
+    assert {k: m[k] for k in plain} == plain  # the existing metrics unchanged
+    assert m["objective_gap"] == pytest.approx(cost / best.cost - 1) and m["objective_gap"] >= 0
+    batch = jp.metrics.path_metrics(np.stack([path, path]), grid, cost=[cost, best.cost], objective_optimum=best.cost)
+    assert batch["objective_gap"][1] == 0.0
+    with pytest.raises(ValueError, match="go together"):
+        jp.metrics.path_metrics(path, grid, cost=cost)
+
+
+OBJ_RUN = """
+metrics = ["success", "length", "optimality_gap", "objective_gap"]
+[experiment]
+name = "objgap"
+seeds = 2
+[[maps]]
+name = "r"
+generator = "random"
+seed = 1
+params = { width = 20, height = 16, obstacle_ratio = 0.2 }
+scenarios = { source = "random", count = 3, seed = 3, min_distance = 10.0 }
+[[planners]]
+label = "A*"
+kind = "plan"
+name = "astar"
+[[planners]]
+label = "IACO"
+kind = "plan"
+name = "iaco"
+overrides = { ants = 8, iterations = 4 }
+[[planners]]
+label = "KNG"
+kind = "plan"
+name = "astar_kng"
+"""
+
+
+def test_trials_gain_an_objective_gap_column(tmp_path):
+    import csv
+
+    from jaxplan.experiments import run_experiment
+
+    cfg = tmp_path / "o.toml"
+    cfg.write_text(OBJ_RUN)
+    with open(run_experiment(cfg, tmp_path / "run", progress=False) / "trials.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    by = {}
+    for r in rows:
+        by.setdefault(r["planner"], []).append(r)
+    assert set(by) == {"A*", "IACO", "KNG"}, set(by)
+    assert all(float(r["objective_gap"]) == pytest.approx(0.0, abs=1e-12) for r in by["A*"])
+    assert all(r["objective_gap"] == "nan" for r in by["KNG"])  # a polyline: no sum over grid moves
+    gaps = [float(r["objective_gap"]) for r in by["IACO"] if r["success"] == "1"]
+    assert gaps and min(gaps) >= -1e-12

@@ -12,6 +12,7 @@ from jaxplan.search._exact import astar, dijkstra, path_cost
 from jaxplan.search._kng import astar_kng
 from jaxplan.search._objective import (
     OBJECTIVE_PLANNERS,
+    NonAdditiveCost,
     ObjectiveTerms,
     exact_objective,
     exact_objectives,
@@ -24,6 +25,6 @@ from jaxplan.search._sampling import mrbs_rrt, rrt_star
 __all__ = [
     "SearchGraph", "astar", "astar_kng", "dijkstra", "distance_from", "mrbs_rrt", "path_cost", "rrt_star",
     "search_graph", "shortest_lengths",
-    "OBJECTIVE_PLANNERS", "ObjectiveTerms", "exact_objective", "exact_objectives", "objective_terms", "path_objective",
-    "path_objectives",
+    "NonAdditiveCost", "OBJECTIVE_PLANNERS", "ObjectiveTerms", "exact_objective", "exact_objectives", "objective_terms",
+    "path_objective", "path_objectives",
 ]

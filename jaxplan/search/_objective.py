@@ -56,8 +56,8 @@ from jaxplan.registry import resolve
 from jaxplan.result import PlanResult
 from jaxplan.search import _objective_kernels as OK
 
-__all__ = ["OBJECTIVE_PLANNERS", "ObjectiveTerms", "objective_terms", "exact_objective", "exact_objectives",
-           "path_objective", "path_objectives"]
+__all__ = ["NonAdditiveCost", "OBJECTIVE_PLANNERS", "ObjectiveTerms", "objective_terms", "exact_objective",
+           "exact_objectives", "path_objective", "path_objectives"]
 
 OBJECTIVE_PLANNERS = ("aco", "iaco", "risk_aco", "opt_ant", "praco", "astar", "dijkstra")
 """Planners whose cost `exact_objective` minimises exactly (a sum over moves, turns and path cells)."""
@@ -69,6 +69,10 @@ _REFUSED = {
     "mrbs_rrt": "it plans in continuous space (a polyline of samples), not over grid moves and turns",
 }
 _HEURISTIC = {4: OK.H_MANHATTAN, 8: OK.H_OCTILE, 16: OK.H_EUCLID}
+
+
+class NonAdditiveCost(ValueError):
+    """A planner's cost (on this map) is not a sum over moves, turns and cells, so it has no exact optimum here."""
 
 
 class ObjectiveTerms(NamedTuple):
@@ -96,7 +100,7 @@ class ObjectiveTerms(NamedTuple):
 
 def _check_planner(planner: str) -> None:
     if planner in _REFUSED:
-        raise ValueError(f"exact_objective: planner {planner!r} has no cost that is a sum over moves and turns: "
+        raise NonAdditiveCost(f"exact_objective: planner {planner!r} has no cost that is a sum over moves and turns: "
                          f"{_REFUSED[planner]}")
     if planner not in OBJECTIVE_PLANNERS:
         raise ValueError(f"exact_objective: no exact objective for planner {planner!r}; it handles "
@@ -114,8 +118,9 @@ def objective_terms(grid: GridMap, starts: ArrayLike, goals: ArrayLike, planner:
         accepted and ignored, so a run's overrides can be passed as they are).
 
     Raises:
-      ValueError: a planner without an exact objective (the message says why), an unknown or bad
-        parameter, or ``opt_ant`` with ``c > 0`` on a map whose passable cells differ in height.
+      NonAdditiveCost: (a ``ValueError``) a planner whose cost is no sum over moves and turns (the message
+        says why), or ``opt_ant`` with ``c > 0`` on a map whose passable cells differ in height.
+      ValueError: a planner jaxplan does not know, an unknown or bad parameter.
     """
     _check_planner(planner)
     _, p = resolve(planner, weights)
@@ -148,7 +153,7 @@ def objective_terms(grid: GridMap, starts: ArrayLike, goals: ArrayLike, planner:
     elif planner == "opt_ant":
         h = np.asarray(grid.height, np.float32)[ok]
         if float(p["c"]) > 0 and h.size and not np.all(h == h[0]):
-            raise ValueError(
+            raise NonAdditiveCost(
                 "exact_objective: opt_ant's cost a·L + b·R + c·H has H = the mean square deviation of the path "
                 "cells' heights, which is not a sum over moves and turns (it depends on the whole path); this map's "
                 "passable cells differ in height, so its exact minimum is not computed. Pass c=0 for the exact "
