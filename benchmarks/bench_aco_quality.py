@@ -79,6 +79,7 @@ def paper_settings(root: Path, seeds: int) -> None:
     a variance): its row reports the gap to the exact minimum of a·L + b·R (c=0), an upper bound of the gap."""
     from jaxplan.aco import COLONIES
     from jaxplan.experiments import load_config, prepare
+    from jaxplan.nav import get_pipeline
     from jaxplan.search import NonAdditiveCost
 
     print(f"\npaper settings (configs/*.toml as they are, {seeds} seeds):")
@@ -87,15 +88,17 @@ def paper_settings(root: Path, seeds: int) -> None:
         prep = prepare(load_config(root / "configs" / f"{name}.toml"))
         for mw in prep.maps:
             for pc in prep.config.planners:
-                if pc.kind != "plan" or pc.name not in COLONIES:
+                planner = pc.global_planner() if pc.kind == "navigate" else pc.name
+                if pc.kind == "tsp" or planner not in COLONIES:
                     continue
-                over = {k: tuple(v) if isinstance(v, list) else v for k, v in pc.overrides.items()}
-                r = jp.plan_batch(mw.grid, mw.starts, mw.goals, planner=pc.name, seeds=range(seeds), **over)
-                note = ""
+                over = dict(get_pipeline(pc.name).planner_overrides) if pc.kind == "navigate" else {}
+                over.update({k: tuple(v) if isinstance(v, list) else v for k, v in pc.overrides.items()})
+                r = jp.plan_batch(mw.grid, mw.starts, mw.goals, planner=planner, seeds=range(seeds), **over)
+                note = "" if pc.kind == "plan" else f"{pc.name}'s global planner, on the map as loaded (not inflated)"
                 try:
-                    own = own_gaps(mw.grid, mw.starts, mw.goals, r, pc.name, over)
+                    own = own_gaps(mw.grid, mw.starts, mw.goals, r, planner, over)
                 except NonAdditiveCost:  # the colony's full cost (with c·H) over min a·L + b·R <= its optimum
-                    low = jp.search.exact_objectives(mw.grid, mw.starts, mw.goals, planner=pc.name,
+                    low = jp.search.exact_objectives(mw.grid, mw.starts, mw.goals, planner=planner,
                                                      **{**over, "c": 0.0})
                     own = np.where(r.success, r.cost / low[:, None] - 1, np.nan)
                     note = "H_msd on a height map: an upper bound (vs min a·L + b·R)"
