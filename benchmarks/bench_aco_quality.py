@@ -88,7 +88,7 @@ def paper_settings(root: Path, seeds: int) -> None:
         prep = prepare(load_config(root / "configs" / f"{name}.toml"))
         for mw in prep.maps:
             for pc in prep.config.planners:
-                planner = pc.global_planner() if pc.kind == "navigate" else pc.name
+                planner = pc.global_planner if pc.kind == "navigate" else pc.name
                 if pc.kind == "tsp" or planner not in COLONIES:
                     continue
                 over = dict(get_pipeline(pc.name).planner_overrides) if pc.kind == "navigate" else {}
