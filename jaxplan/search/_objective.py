@@ -50,7 +50,6 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-import jaxplan.aco  # noqa: F401  (registers the colonies with the registry)
 from jaxplan.grid import GridMap, check_cell, check_cells, clearance_field, neighbour_table, passable
 from jaxplan.registry import resolve
 from jaxplan.result import PlanResult
@@ -99,6 +98,9 @@ class ObjectiveTerms(NamedTuple):
 
 
 def _check_planner(planner: str) -> None:
+    # The colonies register themselves on import; imported here, not at module level, so that importing
+    # jaxplan.search (which the config parser does) stays as light as it was.
+    import jaxplan.aco  # noqa: F401
     if planner in _REFUSED:
         raise NonAdditiveCost(f"exact_objective: planner {planner!r} has no cost that is a sum over moves and turns: "
                          f"{_REFUSED[planner]}")
