@@ -34,9 +34,9 @@ from jaxplan.experiments.prepare import (
 from jaxplan.experiments.progress import clock
 from jaxplan.experiments.runner import run_experiment
 from jaxplan.experiments.store import CheckpointError, RunFolderError, load_chunk_arrays, read_manifest
-from jaxplan.experiments.trial_metrics import accuracy, grid_path_lengths, optimality_gaps, reductions
+from jaxplan.experiments.trial_metrics import accuracy, grid_path_lengths, objective_gaps, optimality_gaps, reductions
 
 __all__ = ["METRICS", "ConfigError", "ExperimentConfig", "apply_quick", "load_config", "parse_config",
            "ID_COLUMNS", "MapWork", "Prepared", "Unit", "load_map_spec", "prepare", "random_pairs", "spec_scenarios",
            "trial_columns", "clock", "run_experiment", "RunFolderError", "CheckpointError", "load_chunk_arrays",
-           "read_manifest", "accuracy", "grid_path_lengths", "optimality_gaps", "reductions"]
+           "read_manifest", "accuracy", "grid_path_lengths", "objective_gaps", "optimality_gaps", "reductions"]

@@ -111,6 +111,9 @@ METRICS: Mapping[str, Metric] = MappingProxyType({m.name: m for m in (
     Metric("tour_length", _T, "", "closed-tour length in the instance's metric (TSPLIB rounding)"),
     Metric("optimality_gap", _PT, "", "plan: length / exact 8-connected octile optimum - 1; tsp: tour length / "
                                       "optimal tour length - 1"),
+    Metric("objective_gap", _P, "", "the planner's own cost of its path / the exact minimum of that cost - 1 "
+                                    "(jaxplan.search.exact_objective; nan for planners whose cost is no sum over "
+                                    "moves and turns)", default=False),
     Metric("turns", _P, "", "path vertices with a heading change"),
     Metric("sharp_turns", _P, "", "heading changes >= 45 deg"),
     Metric("los_length", _P, "m", "path length after line-of-sight smoothing (yu2020 sec. 3.3, smoother 'los')",

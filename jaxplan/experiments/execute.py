@@ -34,6 +34,7 @@ from jaxplan.experiments.trial_metrics import (
     grid_path_lengths,
     hausdorff,
     los_metrics,
+    objective_gaps,
     optimality_gaps,
     reductions,
 )
@@ -95,6 +96,9 @@ def _run_plan(mw: MapWork, pc: PlannerConfig, idx: np.ndarray, seeds: tuple[int,
         out["hausdorff"] = np.where(ok, hausdorff(mw, idx, br.paths[:n], br.n_cells[:n]), np.nan)
     if "cost" in metrics:
         out["cost"] = np.where(ok, br.cost[:n], np.nan)
+    if "objective_gap" in metrics:
+        out["objective_gap"] = objective_gaps(mw.grid, mw.starts[idx], mw.goals[idx], pc.name, overrides,
+                                              br.paths[:n], br.n_cells[:n], ok)
     if "converged_iteration" in metrics:
         out["converged_iteration"] = np.where(ok, br.converged[:n].astype(np.float64), np.nan)
     keep = {"history": br.history[:n].astype(np.float32), "diversity": br.diversity[:n].astype(np.float32),

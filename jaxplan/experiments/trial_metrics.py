@@ -4,8 +4,8 @@ A chunk's compiled call (`jaxplan.experiments.execute`) returns paths and episod
 metrics here turn them into trials.csv values that depend on each trial's own cells only (not on
 the batch's layout or padding, so a ``--chunk`` change leaves every number as it was): grid path
 lengths as left-to-right float64 sums, optimality gaps, cui2025's accuracy, yu2020's
-line-of-sight reductions, the Hausdorff distance to the exact path, and the smoothed exact
-optimum an executed path is measured against (DESIGN §6).
+line-of-sight reductions, the Hausdorff distance to the exact path, the smoothed exact
+optimum an executed path is measured against (DESIGN §6), and the gap to each planner's own optimum.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from jaxplan.experiments.config import ACCURACY_GAP, PlannerConfig, nav_config
 from jaxplan.experiments.prepare import MapWork
 
 __all__ = ["PATH_KEYS", "LOS_KEYS", "INT_METRICS", "accuracy", "reductions", "los_metrics", "grid_path_lengths",
-           "optimality_gaps", "hausdorff", "executed_optimum"]
+           "optimality_gaps", "objective_gaps", "hausdorff", "executed_optimum"]
 
 PATH_KEYS = ("length", "optimality_gap", "turns", "sharp_turns", "smoothness", "min_clearance", "mean_clearance",
               "max_curvature")
@@ -94,6 +94,35 @@ def optimality_gaps(length: np.ndarray, optimal: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         gap = length / optimal - 1.0
     return np.where(optimal == 0, np.where(length == 0, 0.0, np.inf), gap)
+
+
+def objective_gaps(grid, starts: np.ndarray, goals: np.ndarray, planner: str, overrides: dict, paths: np.ndarray,
+                   n_cells: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """``f64[n, R]`` each trial's gap to its planner's own optimum: the float64 cost of its path under the planner's
+    objective (`jaxplan.search.path_objectives`) / the exact minimum of it (`jaxplan.search.exact_objectives`) − 1.
+
+    nan for failed trials, and for every trial of a planner whose cost `exact_objective` refuses (not a sum over
+    moves and turns: sampling planners, `astar_kng`, `opt_ant`'s height term on a map with heights).
+
+    Args:
+      grid: the map; starts, goals: ``int[n, 2]`` the scenarios; planner, overrides: as run.
+      paths: ``int[n, R, P, 2]`` grid paths with ``n_cells [n, R]`` valid points; ok: ``bool[n, R]`` successes.
+    """
+    from jaxplan.search import OBJECTIVE_PLANNERS, NonAdditiveCost, exact_objectives, path_objectives
+
+    n, R, P = paths.shape[:3]
+    out = np.full((n, R), np.nan)
+    if planner not in OBJECTIVE_PLANNERS or not ok.any():
+        return out
+    try:
+        opt = exact_objectives(grid, starts, goals, planner=planner, **overrides)
+    except NonAdditiveCost:  # no sum over moves on this map (opt_ant's height term): no gap
+        return out
+    flat_ok = ok.reshape(-1)
+    cost = np.full(n * R, np.nan)
+    cost[flat_ok] = path_objectives(paths.reshape(-1, P, 2)[flat_ok], n_cells.reshape(-1)[flat_ok], grid, planner,
+                                    **overrides)
+    return np.where(ok, optimality_gaps(cost.reshape(n, R), opt[:, None]), np.nan)
 
 
 def hausdorff(mw: MapWork, idx: np.ndarray, paths: np.ndarray, n_cells: np.ndarray) -> np.ndarray:

@@ -196,6 +196,8 @@ def path_metrics(
     *,
     reference_n: ArrayLike | None = None,
     hausdorff_samples: int = HAUSDORFF_SAMPLES,
+    cost: ArrayLike | None = None,
+    objective_optimum: ArrayLike | None = None,
 ) -> dict[str, Any]:
     """The path metrics of DESIGN §6 for one path or a padded batch of paths.
 
@@ -212,6 +214,9 @@ def path_metrics(
         default: all ``R``.
       hausdorff_samples: points per segment for the Hausdorff distance (static; see
         `jaxplan.metrics.hausdorff_bounds`).
+      cost, objective_optimum: opt-in, together: the planner's own cost of each path (a number or
+        ``[B]``, e.g. `PlanResult.cost` or `jaxplan.search.path_objective`) and the exact minimum of
+        that cost (`jaxplan.search.exact_objective`); the result then also holds ``objective_gap``.
 
     Returns:
       A dict with the keys of `PATH_METRICS`. For one path the values are Python ``float``
@@ -239,6 +244,9 @@ def path_metrics(
         other path None — a smoothed or any-angle path must be compared with the same
         smoothing of the exact path (DESIGN §6), so pass it. A
         start = goal path has gap 0.
+      * ``objective_gap`` (only with ``cost`` and ``objective_optimum``) = cost / objective_optimum − 1:
+        how far the path is from the optimum of its planner's own objective (IACO's fitness, the risk
+        cost, ...), beside the length gap; the same 0/0 and empty-path rules.
 
       Degenerate paths: with no point or one point, length 0, turns 0, sharp turns 0,
       smoothness 1, curvature 0; with no point, clearances, Hausdorff distance and
@@ -309,6 +317,15 @@ def path_metrics(
         out["hausdorff"] = np.where(counts == 0, np.inf, out["hausdorff"])
     out["optimality_gap"] = None if opt is None else _gap(out["length"].astype(np.float64), opt, counts)
     result = {k: out[k] for k in PATH_METRICS}
+    if (cost is None) != (objective_optimum is None):
+        raise ValueError("cost and objective_optimum go together: pass both for objective_gap, or neither")
+    if cost is not None:
+        c = np.broadcast_to(np.asarray(cost, np.float64), (B,))
+        o = np.broadcast_to(np.asarray(objective_optimum, np.float64), (B,))
+        if np.isnan(c).any() or np.isnan(o).any() or (o < 0).any() or not np.isfinite(o).all():
+            raise ValueError("cost must be a number and objective_optimum finite and >= 0 for every path, got "
+                             f"{c.tolist()} and {o.tolist()}")
+        result["objective_gap"] = _gap(c, o, counts)
     if single:
         result = {k: None if v is None else v[0].item() for k, v in result.items()}
     return result
