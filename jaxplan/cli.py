@@ -103,8 +103,9 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
         _compilation_cache()
     configs = reproduction_configs(args.configs, args.pattern)
     t0 = time.perf_counter()
+    results = None if args.no_results else args.results or (None if args.quick else "docs/results")
     done = reproduce(configs, args.out, args.figures, quick=args.quick, data_dir=args.data_dir,
-                     progress=not args.no_progress)
+                     progress=not args.no_progress, results=results)
     rows = [(r.config.name, r.run_dir.name if r.run_dir else "FAILED", f"{r.run_s:.1f}", f"{r.figures_s:.1f}",
              str(r.figures)) for r in done]
     heads = ("config", "run folder", "run (s)", "figures (s)", "figures")
@@ -112,7 +113,8 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     print("  ".join(h.ljust(w) for h, w in zip(heads, widths, strict=True)))
     for r in rows:
         print("  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)))
-    print(f"total {time.perf_counter() - t0:.1f} s; figures in {args.figures}/index.md")
+    print(f"total {time.perf_counter() - t0:.1f} s; figures in {args.figures}/index.md"
+          + (f"; results pages in {results}/index{'-quick' if args.quick else ''}.md" if results else ""))
     bad = 0
     for r in done:
         if r.error:
@@ -197,6 +199,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--out", default="runs", help="parent folder of the run folders (default: runs)")
     g.add_argument("--figures", default="figures", help="figure root (default: figures)")
     g.add_argument("--data-dir", default=None, help="folder that map paths are relative to")
+    g.add_argument("--results", default=None, help="results pages root: <paper>/<table>.md and index.md, the paper's "
+                                                   "numbers beside ours (default: docs/results; with --quick: none)")
+    g.add_argument("--no-results", action="store_true", help="write no results pages")
     g.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
     g.add_argument("--no-cache", action="store_true", help="do not use JAX's persistent compilation cache")
     g.set_defaults(func=cmd_reproduce)

@@ -244,7 +244,7 @@ def _sweep(run, spec):
     log = _log_x(xs)
     if log:
         ax.set_xscale("log")
-    ax.set_xlabel(xlabel + ("" if "(" in xlabel else " (log scale)" if log else " (value)"))
+    ax.set_xlabel(xlabel + ("" if "(" in xlabel else " (dimensionless)"))
     ax.set_ylabel(metric_label(metric))
     if ax.get_legend_handles_labels()[1]:
         ax.legend(fontsize=8)
