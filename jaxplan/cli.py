@@ -101,13 +101,24 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 
     if not args.no_cache:
         _compilation_cache()
-    configs = reproduction_configs(args.configs, args.pattern)
-    t0 = time.perf_counter()
+    from fnmatch import fnmatch
+
+    from jaxplan.experiments.functions import NAME as STUDY
+
     results = None if args.no_results else args.results or (None if args.quick else "docs/results")
+    studies = results is not None and (args.pattern is None or fnmatch(STUDY, args.pattern)
+                                       or fnmatch(f"{STUDY}.toml", args.pattern))
+    try:
+        configs = reproduction_configs(args.configs, args.pattern)
+    except FileNotFoundError:
+        if not (studies and args.pattern is not None and Path(args.configs).is_dir()):
+            raise
+        configs = []  # only the study matches the pattern
+    t0 = time.perf_counter()
     done = reproduce(configs, args.out, args.figures, quick=args.quick, data_dir=args.data_dir,
-                     progress=not args.no_progress, results=results)
-    rows = [(r.config.name, r.run_dir.name if r.run_dir else "FAILED", f"{r.run_s:.1f}", f"{r.figures_s:.1f}",
-             str(r.figures)) for r in done]
+                     progress=not args.no_progress, results=results, studies=studies)
+    rows = [(r.config.name, "FAILED" if r.error else r.run_dir.name if r.run_dir else "-", f"{r.run_s:.1f}",
+             f"{r.figures_s:.1f}", str(r.figures)) for r in done]
     heads = ("config", "run folder", "run (s)", "figures (s)", "figures")
     widths = [max(len(h), *(len(r[j]) for r in rows)) for j, h in enumerate(heads)]
     print("  ".join(h.ljust(w) for h, w in zip(heads, widths, strict=True)))

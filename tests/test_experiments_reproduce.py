@@ -51,6 +51,7 @@ def test_reproduce_quick_runs_every_config_and_draws_its_figures(tmp_path, capsy
         page = tmp_path / "results" / paper / f"{table}-quick.md"
         assert page.read_text().startswith(f"# {p.stem} — QUICK"), page
         assert f"({paper}/{table}-quick.md)" in results
+    assert "(li2026/fig7-quick.md)" in results  # li2026's optimiser study, not a config
     assert not (tmp_path / "results" / "index.md").exists()
 
 

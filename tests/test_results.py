@@ -208,3 +208,26 @@ def test_hedges_g():
     assert hedges_g(x, y) == pytest.approx(-2.0 * (1 - 3 / (4 * 6 - 9)))
     assert math.isnan(hedges_g(np.array([1.0, 1.0]), np.array([2.0, 2.0])))
     assert math.isnan(hedges_g(np.array([1.0]), y))
+
+
+def test_optimiser_study_curves_and_page(tmp_path):
+    """li2026 Fig. 7 (jaxplan.experiments.functions): best-so-far curves never rise; the page puts the paper's one
+    number in its paper column, marked not comparable (no dimension published), and is found by the index."""
+    import dataclasses
+
+    from jaxplan.experiments import functions as F
+    from jaxplan.experiments.results import write_index_page
+
+    for name, (f, half) in F.FUNCTIONS.items():
+        assert float(f(np.zeros((1, 3), np.float32))[0]) == pytest.approx(0.0, abs=1e-5), name
+    spec = dataclasses.replace(F.QUICK, dim=2, population=6, generations=4, seeds=2)
+    curves = F.run_study(spec)
+    assert set(curves) == {("rastrigin", s) for s in spec.strategies}
+    for c in curves.values():
+        assert c.shape == (2, 4) and np.all(np.diff(c, axis=1) <= 0)
+    page = F.write_study(tmp_path / "results", tmp_path / "figures", spec).read_text()
+    row = next(ln for ln in page.splitlines() if ln.startswith("| rastrigin | issa | best fitness"))
+    assert "| 6.2 |" in row and "not comparable" in row
+    assert (tmp_path / "figures" / "li2026_fig7-quick" / "fig7_fitness.png").stat().st_size > 5_000
+    index = write_index_page(tmp_path / "results", Notes(), quick=True).read_text()
+    assert "[li2026_fig7](li2026/fig7-quick.md)" in index

@@ -58,11 +58,14 @@ def reproduction_configs(config_dir: str | os.PathLike = "configs", pattern: str
 def reproduce(configs: Sequence[str | os.PathLike], out: str | os.PathLike = "runs",
               figures: str | os.PathLike = "figures", *, quick: bool = False,
               data_dir: str | os.PathLike | None = None, progress: bool = True,
-              results: str | os.PathLike | None = None, notes: str | os.PathLike | None = None) -> list[Reproduced]:
+              results: str | os.PathLike | None = None, notes: str | os.PathLike | None = None,
+              studies: bool = False) -> list[Reproduced]:
     """Runs each config (resuming finished chunks) and draws its figures; one failing config does not stop the rest.
 
     With ``results``, also writes each config's results page and the index (`jaxplan.experiments.results`;
-    ``notes``: the hand-written notes file, default ``<config folder>/results/notes.toml``).
+    ``notes``: the hand-written notes file, default ``<config folder>/results/notes.toml``). With ``studies``
+    (and ``results``), also the studies that are not experiment configs: li2026's optimiser comparison on
+    benchmark functions (`jaxplan.experiments.functions`).
 
     Returns:
       One `Reproduced` per config, in order (``error`` set when the run, or drawing its figures at all,
@@ -103,6 +106,16 @@ def reproduce(configs: Sequence[str | os.PathLike], out: str | os.PathLike = "ru
                 continue
         done.append(Reproduced(cfg, run_dir, t1 - t0, time.perf_counter() - t1, len(drawn), tuple(problems),
                                page=page))
+    if results is not None and studies:
+        from jaxplan.experiments import functions
+
+        t0 = time.perf_counter()
+        try:
+            page = functions.write_study(results, figures, functions.QUICK if quick else functions.FULL)
+            done.append(Reproduced(Path(functions.NAME), None, time.perf_counter() - t0, 0.0, 1, (), page=page))
+        except Exception as e:  # noqa: BLE001 - reported like a config's failure
+            done.append(Reproduced(Path(functions.NAME), None, time.perf_counter() - t0, 0.0, 0, (),
+                                   _describe_error(e)))
     if results is not None and any(r.page is not None for r in done):
         write_index_page(results, the_notes, quick=quick, wall_s=time.perf_counter() - t_start)
     return done
