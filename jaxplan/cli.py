@@ -93,6 +93,23 @@ def cmd_figures(args: argparse.Namespace) -> int:
     return 0 if not problems else 1
 
 
+def _reproduce_study(args: argparse.Namespace, results: str):
+    """li2026's optimiser study (not an experiment config): its page and figure, then the index rewritten."""
+    import time
+
+    from jaxplan import benchmark_functions as bf
+    from jaxplan.experiments.reproduce import Reproduced, describe_error
+    from jaxplan.experiments.results import load_notes, write_index_page
+
+    t0 = time.perf_counter()
+    try:
+        page = bf.write_study(results, args.figures, bf.QUICK if args.quick else bf.FULL)
+    except Exception as e:  # noqa: BLE001 - reported like a config's failure, after the others
+        return Reproduced(Path(bf.NAME), None, time.perf_counter() - t0, 0.0, 0, (), describe_error(e))
+    write_index_page(results, load_notes(Path(args.configs) / "results" / "notes.toml"), quick=args.quick)
+    return Reproduced(Path(bf.NAME), None, time.perf_counter() - t0, 0.0, 1, (), page=page)
+
+
 def cmd_reproduce(args: argparse.Namespace) -> int:
     """``jaxplan reproduce [--quick]``: every ``configs/<paper>_*.toml`` run (or resumed), then its figures."""
     import time
@@ -103,7 +120,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
         _compilation_cache()
     from fnmatch import fnmatch
 
-    from jaxplan.experiments.functions import NAME as STUDY
+    from jaxplan.benchmark_functions import NAME as STUDY
 
     results = None if args.no_results else args.results or (None if args.quick else "docs/results")
     studies = results is not None and (args.pattern is None or fnmatch(STUDY, args.pattern)
@@ -116,7 +133,9 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
         configs = []  # only the study matches the pattern
     t0 = time.perf_counter()
     done = reproduce(configs, args.out, args.figures, quick=args.quick, data_dir=args.data_dir,
-                     progress=not args.no_progress, results=results, studies=studies)
+                     progress=not args.no_progress, results=results)
+    if studies:
+        done.append(_reproduce_study(args, results))
     rows = [(r.config.name, "FAILED" if r.error else r.run_dir.name if r.run_dir else "-", f"{r.run_s:.1f}",
              f"{r.figures_s:.1f}", str(r.figures)) for r in done]
     heads = ("config", "run folder", "run (s)", "figures (s)", "figures")

@@ -211,14 +211,14 @@ def test_hedges_g():
 
 
 def test_optimiser_study_curves_and_page(tmp_path):
-    """li2026 Fig. 7 (jaxplan.experiments.functions): best-so-far curves never rise; the page puts the paper's one
+    """li2026 Fig. 7 (jaxplan.benchmark_functions): best-so-far curves never rise; the page puts the paper's one
     number in its paper column, marked not comparable (no dimension published), and is found by the index."""
     import dataclasses
 
-    from jaxplan.experiments import functions as F
+    from jaxplan import benchmark_functions as F
     from jaxplan.experiments.results import write_index_page
 
-    for name, (f, half) in F.FUNCTIONS.items():
+    for name, (f, _) in F.FUNCTIONS.items():
         assert float(f(np.zeros((1, 3), np.float32))[0]) == pytest.approx(0.0, abs=1e-5), name
     spec = dataclasses.replace(F.QUICK, dim=2, population=6, generations=4, seeds=2)
     curves = F.run_study(spec)

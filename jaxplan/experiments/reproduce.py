@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
-__all__ = ["Reproduced", "reproduction_configs", "reproduce"]
+__all__ = ["Reproduced", "reproduction_configs", "reproduce", "describe_error"]
 
 
 @dataclass(frozen=True)
@@ -58,14 +58,13 @@ def reproduction_configs(config_dir: str | os.PathLike = "configs", pattern: str
 def reproduce(configs: Sequence[str | os.PathLike], out: str | os.PathLike = "runs",
               figures: str | os.PathLike = "figures", *, quick: bool = False,
               data_dir: str | os.PathLike | None = None, progress: bool = True,
-              results: str | os.PathLike | None = None, notes: str | os.PathLike | None = None,
-              studies: bool = False) -> list[Reproduced]:
+              results: str | os.PathLike | None = None, notes: str | os.PathLike | None = None) -> list[Reproduced]:
     """Runs each config (resuming finished chunks) and draws its figures; one failing config does not stop the rest.
 
     With ``results``, also writes each config's results page and the index (`jaxplan.experiments.results`;
-    ``notes``: the hand-written notes file, default ``<config folder>/results/notes.toml``). With ``studies``
-    (and ``results``), also the studies that are not experiment configs: li2026's optimiser comparison on
-    benchmark functions (`jaxplan.experiments.functions`).
+    ``notes``: the hand-written notes file, default ``<config folder>/results/notes.toml``). Studies that are
+    not experiment configs (li2026's optimiser comparison, `jaxplan.benchmark_functions`) are run by
+    ``jaxplan reproduce``, which then rewrites the index (`jaxplan.experiments.results.write_index_page`).
 
     Returns:
       One `Reproduced` per config, in order (``error`` set when the run, or drawing its figures at all,
@@ -86,14 +85,14 @@ def reproduce(configs: Sequence[str | os.PathLike], out: str | os.PathLike = "ru
         try:
             run_dir = run_experiment(cfg, out, quick=quick, data_dir=data_dir, progress=progress)
         except Exception as e:  # noqa: BLE001 - reported in the outcome; the next config still runs
-            done.append(Reproduced(cfg, None, time.perf_counter() - t0, 0.0, 0, (), _describe_error(e)))
+            done.append(Reproduced(cfg, None, time.perf_counter() - t0, 0.0, 0, (), describe_error(e)))
             continue
         t1 = time.perf_counter()
         try:
             drawn, problems = draw_figures(run_dir, figures, data_dir=data_dir)
         except Exception as e:  # noqa: BLE001 - as above: the run folder stands, its figures failed
             done.append(Reproduced(cfg, run_dir, t1 - t0, time.perf_counter() - t1, 0, (),
-                                   f"figures: {_describe_error(e)}"))
+                                   f"figures: {describe_error(e)}"))
             continue
         page = None
         if results is not None:
@@ -102,26 +101,16 @@ def reproduce(configs: Sequence[str | os.PathLike], out: str | os.PathLike = "ru
                                         data_dir=data_dir)
             except Exception as e:  # noqa: BLE001 - as above: the run and its figures stand
                 done.append(Reproduced(cfg, run_dir, t1 - t0, time.perf_counter() - t1, len(drawn), tuple(problems),
-                                       f"results page: {_describe_error(e)}"))
+                                       f"results page: {describe_error(e)}"))
                 continue
         done.append(Reproduced(cfg, run_dir, t1 - t0, time.perf_counter() - t1, len(drawn), tuple(problems),
                                page=page))
-    if results is not None and studies:
-        from jaxplan.experiments import functions
-
-        t0 = time.perf_counter()
-        try:
-            page = functions.write_study(results, figures, functions.QUICK if quick else functions.FULL)
-            done.append(Reproduced(Path(functions.NAME), None, time.perf_counter() - t0, 0.0, 1, (), page=page))
-        except Exception as e:  # noqa: BLE001 - reported like a config's failure
-            done.append(Reproduced(Path(functions.NAME), None, time.perf_counter() - t0, 0.0, 0, (),
-                                   _describe_error(e)))
     if results is not None and any(r.page is not None for r in done):
         write_index_page(results, the_notes, quick=quick, wall_s=time.perf_counter() - t_start)
     return done
 
 
-def _describe_error(e: Exception) -> str:
+def describe_error(e: Exception) -> str:
     """The message of an expected failure (bad config, data, run folder); the type too for anything else."""
     from jaxplan.experiments.config import ConfigError
     from jaxplan.experiments.store import RunFolderError
