@@ -2,7 +2,8 @@
 index (``docs/results/index.md``), written from finished run folders by `jaxplan reproduce`.
 
 A page puts, for every number the paper prints, the paper's value beside ours (mean ± sd over seeds of
-the per-seed means, the 95 % Student-t interval of that mean, the number of seeds) and a verdict:
+the per-seed means, the 95 % Student-t interval of that mean — a rate's clipped to [0, 100] % — the number
+of seeds) and a verdict:
 
 - ``consistent``: the paper's value lies inside our 95 % interval;
 - ``ours better`` / ``ours worse``: outside it, on the better or the worse side (`HIGHER_BETTER` says
@@ -158,14 +159,23 @@ def _reason(notes: Notes, cfg: ExperimentConfig, map_: str, planner: str, metric
     return ""
 
 
+def _interval(ps, metric: str) -> tuple[float, float]:
+    """The 95 % interval of the mean of per-seed means ``ps``; a rate's is clipped to [0, 1]."""
+    if ps is None:
+        return math.nan, math.nan
+    lo, hi = confidence_interval(ps)
+    if METRICS[metric].rate and math.isfinite(lo):
+        lo, hi = max(lo, 0.0), min(hi, 1.0)
+    return lo, hi
+
+
 def paper_cells(a: Analysis, cfg: ExperimentConfig, notes: Notes) -> list[Cell]:
     """Every (map, planner, metric) with a paper value, in the summary's order, with its verdict."""
     out = []
     for r in a.summary:
         if r.paper_mean is None:
             continue
-        ps = a.per_seed.get((r.map, r.planner, r.metric))
-        ci = confidence_interval(ps) if ps is not None else (math.nan, math.nan)
+        ci = _interval(a.per_seed.get((r.map, r.planner, r.metric)), r.metric)
         v, why = verdict(r.paper_mean, ci, r.mean, r.metric, _reason(notes, cfg, r.map, r.planner, r.metric))
         out.append(Cell(r.map, r.planner, r.metric, r.paper_mean, r.paper_sd, r.mean, r.sd, ci, r.n, v, why))
     return out
@@ -188,8 +198,14 @@ def _metric_head(metric: str) -> str:
     return f"{metric} ({u})" if u else metric
 
 
-def _num(x: float | None, metric: str) -> str:
-    return fmt(None if x is None else x * _scale(metric))
+def _num(x: float | None, metric: str, ref: float = 1.0) -> str:
+    """``x`` in the metric's display unit; a value below 1e-9 of ``ref`` (rounding noise of an exact planner's
+    sd or gap) shows as 0."""
+    if x is None:
+        return fmt(None)
+    if math.isfinite(x) and abs(x) < 1e-9 * max(1.0, abs(ref)):
+        x = 0.0
+    return fmt(x * _scale(metric))
 
 
 def _pm(mean: float, sd: float | None, metric: str) -> str:
@@ -197,7 +213,7 @@ def _pm(mean: float, sd: float | None, metric: str) -> str:
         return "–"
     if sd is None or not math.isfinite(sd):
         return _num(mean, metric)
-    return f"{_num(mean, metric)} ± {_num(sd, metric)}"
+    return f"{_num(mean, metric)} ± {_num(sd, metric, mean)}"
 
 
 def _ci(ci: tuple[float, float], metric: str) -> str:
@@ -247,7 +263,7 @@ def _ours_table(a: Analysis, cfg: ExperimentConfig, map_: str, few: int) -> str:
                 row.append("n/a")
                 continue
             ps = a.per_seed.get((map_, p, m))
-            ci = confidence_interval(ps) if ps is not None else (math.nan, math.nan)
+            ci = _interval(ps, m)
             warn = " ⚠" if r.n < few and not METRICS[m].timing else ""
             row.append(_pm(r.mean, r.sd, m) + (f" {_ci(ci, m)}" if ps is not None else "") + warn)
         body.append(row)
