@@ -319,9 +319,11 @@ def _pheromone(run, spec):
                              title=f"{pc.label} on {mw.spec.name}")
         if res.success:
             plots.plot_paths(ax, mw.grid, [np.asarray(res.path)], labels=[f"{pc.label} path"], lw=1.2)
+            if ax.get_legend() is not None:  # one line, named in the caption: no legend beside the heat map
+                ax.get_legend().remove()
     fig.suptitle(figure_title(spec, "Final pheromone per cell"))
-    return fig, (f"Final pheromone per cell (max over its allowed outgoing edges) at scenario {sc}, seed {seed}; "
-                 "recomputed by re-planning that trial with keep_pheromone=True.")
+    return fig, (f"Final pheromone per cell (max over its allowed outgoing edges) at scenario {sc}, seed {seed}, "
+                 "with that trial's path (blue line); recomputed by re-planning the trial with keep_pheromone=True.")
 
 
 def _nav_trial(run, m, p, sc, r):

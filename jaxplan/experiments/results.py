@@ -78,6 +78,7 @@ class Notes:
     rules: Mapping[str, tuple[Rule, ...]] = field(default_factory=dict)
     not_reproduced: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     principle: str = ""
+    highlights: Mapping[str, tuple[Mapping[str, Any], ...]] = field(default_factory=dict)
 
 
 def load_notes(path: str | os.PathLike | None) -> Notes:
@@ -92,6 +93,11 @@ def load_notes(path: str | os.PathLike | None) -> Notes:
         [[tables.cui2025_table2.not_comparable]]
         metric = "path_length"           # and/or planner, map; all optional
         reason = "..."
+        [[tables.chu2024_tables3_5.highlight]]   # a table of our results for some planners and metrics
+        title = "..."
+        text = "..."
+        planners = ["...", "..."]
+        metrics = ["length", "turns"]
 
     Raises:
       ValueError: a rule without a reason, or an unknown metric in a rule.
@@ -100,7 +106,7 @@ def load_notes(path: str | os.PathLike | None) -> Notes:
         return Notes()
     raw = tomllib.loads(Path(path).read_text())
     papers = {k: str(v.get("paragraph", "")).strip() for k, v in raw.get("papers", {}).items()}
-    conclusions, rules, missing = {}, {}, {}
+    conclusions, rules, missing, highlights = {}, {}, {}, {}
     for name, t in raw.get("tables", {}).items():
         if "conclusion" in t:
             conclusions[name] = str(t["conclusion"]).strip()
@@ -113,7 +119,16 @@ def load_notes(path: str | os.PathLike | None) -> Notes:
             rs.append(Rule(str(r["reason"]), r.get("planner"), r.get("metric"), r.get("map")))
         rules[name] = tuple(rs)
         missing[name] = tuple(str(x) for x in t.get("not_reproduced", []))
-    return Notes(papers, conclusions, rules, missing, str(raw.get("principle", "")).strip())
+        hs = []
+        for h in t.get("highlight", []):
+            if not h.get("title") or not h.get("planners") or not h.get("metrics"):
+                raise ValueError(f"{path}: tables.{name}.highlight: needs a title, planners and metrics")
+            if any(m not in METRICS for m in h["metrics"]):
+                raise ValueError(f"{path}: tables.{name}.highlight: unknown metric in {h['metrics']!r}")
+            hs.append({"title": str(h["title"]), "text": str(h.get("text", "")).strip(),
+                       "planners": tuple(h["planners"]), "metrics": tuple(h["metrics"])})
+        highlights[name] = tuple(hs)
+    return Notes(papers, conclusions, rules, missing, str(raw.get("principle", "")).strip(), highlights)
 
 
 @dataclass(frozen=True)
@@ -223,8 +238,12 @@ def _ci(ci: tuple[float, float], metric: str) -> str:
     return f"[{_num(lo, metric)}, {_num(hi, metric)}]"
 
 
-def _table(head: Sequence[str], rows: Sequence[Sequence[str]], text: int = 1) -> str:
+def _table(head: Sequence[str], rows: Sequence[Sequence[str]], text: int = 1, last_text: bool = False) -> str:
+    """A Markdown table: the first ``text`` columns (and the last, with ``last_text``) left-aligned, the rest
+    (numbers) right-aligned."""
     align = ["---"] * text + ["---:"] * (len(head) - text)
+    if last_text:
+        align[-1] = "---"
     lines = ["| " + " | ".join(head) + " |", "| " + " | ".join(align) + " |"]
     lines += ["| " + " | ".join(c.replace("|", "/") for c in r) + " |" for r in rows]
     return "\n".join(lines)
@@ -245,14 +264,15 @@ def _comparison(cells: Sequence[Cell], few: int) -> str:
         ver = c.verdict + (f": {c.reason}" if c.reason else "")
         rows.append([c.map, c.planner, _metric_head(c.metric), paper, _pm(c.ours_mean, c.ours_sd, c.metric),
                      _ci(c.ci, c.metric), seeds, ver])
-    return _table(head, rows, text=3)
+    return _table(head, rows, text=3, last_text=True)
 
 
-def _ours_table(a: Analysis, cfg: ExperimentConfig, map_: str, few: int) -> str:
+def _ours_table(a: Analysis, cfg: ExperimentConfig, map_: str, few: int, planners: Sequence[str] | None = None,
+                metrics: Sequence[str] | None = None) -> str:
     rows_by = {(r.planner, r.metric): r for r in a.summary if r.map == map_}
     site = next(m for m in cfg.maps if m.name == map_)
-    planners = [pc.label for pc in cfg.planners if applies(pc, site)]
-    metrics = [m for m in cfg.metrics if any((p, m) in rows_by for p in planners)]
+    planners = [pc.label for pc in cfg.planners if applies(pc, site) and (planners is None or pc.label in planners)]
+    metrics = [m for m in (metrics or cfg.metrics) if any((p, m) in rows_by for p in planners)]
     head = ["planner"] + [f"ours: {_metric_head(m)}" for m in metrics]
     body = []
     for p in planners:
@@ -382,6 +402,10 @@ def table_page(a: Analysis, cfg: ExperimentConfig, notes: Notes, *, config_text:
     else:
         out += ["The paper prints no number for this table's cells (its claims are qualitative; see the figures and "
                 "the conclusion).", ""]
+    for h in notes.highlights.get(cfg.name, ()):
+        out += [f"## {h['title']}", ""] + ([h["text"], ""] if h["text"] else [])
+        for mp in cfg.maps:
+            out += [f"{mp.name}:", "", _ours_table(a, cfg, mp.name, FEW_SEEDS, h["planners"], h["metrics"]), ""]
     out += ["## All our results", "",
             "Mean ± sd over seeds of the per-seed means, then the 95 % interval of the mean; wall-clock times: "
             "over chunks. Fractions in %.", ""]
@@ -435,7 +459,7 @@ def index_page(pages: Sequence[tuple[str, dict]], notes: Notes, *, quick: bool =
         rows.append([s["config"].split("_")[0], f"[{s['config']}]({rel})", str(s["seeds"]),
                      *[str(c.get(v, 0)) for v in VERDICTS],
                      notes.conclusions.get(s["config"], "") if not quick else "(quick run)"])
-    out += [_table(head, rows, text=2), ""]
+    out += [_table(head, rows, text=2, last_text=True), ""]
     tot = {v: sum(s["counts"].get(v, 0) for _, s in pages) for v in VERDICTS}
     out += ["All tables: " + ", ".join(f"{v} {tot[v]}" for v in VERDICTS) + ".", ""]
     if not quick:
@@ -478,6 +502,19 @@ def _compute_s(run_dir: Path) -> float | None:
         return float(sum(float(r["compile_s"] or 0) + float(r["time_s"] or 0) for r in csv.DictReader(f)))
 
 
+def _captions(index: Path) -> dict[str, str]:
+    """Figure name -> caption, read back from a figure folder's index.md (`jaxplan.experiments.figures`)."""
+    if not index.is_file():
+        return {}
+    out = {}
+    for sec in index.read_text().split("\n## ")[1:]:
+        lines = sec.splitlines()
+        name = lines[0].split(" ")[0]
+        body = [ln for ln in lines[1:] if ln and not ln.startswith(("![", "Files: "))]
+        out[name] = body[0] if body else ""
+    return out
+
+
 def write_table_page(run_dir: str | os.PathLike, results: str | os.PathLike, notes: Notes, *,
                      figures_dir: str | os.PathLike | None = None, drawn: Sequence[Any] = (),
                      data_dir: str | os.PathLike | None = None) -> Path:
@@ -507,7 +544,7 @@ def write_table_page(run_dir: str | os.PathLike, results: str | os.PathLike, not
     if figures_dir is not None:
         fdir = Path(figures_dir) / run_dir.resolve().name
         rel = Path(os.path.relpath(fdir, page.parent))
-        caps = {d.name: d.caption for d in drawn}
+        caps = {d.name: d.caption for d in drawn} or _captions(fdir / "index.md")
         names = [d.name for d in drawn] or sorted(p.stem for p in fdir.glob("*.png"))
         figs = [Figure(n, (rel / f"{n}.png").as_posix(), caps.get(n, "")) for n in names
                 if (fdir / f"{n}.png").is_file()]
