@@ -121,6 +121,9 @@ def load_notes(path: str | os.PathLike | None) -> Notes:
         missing[name] = tuple(str(x) for x in t.get("not_reproduced", []))
         hs = []
         for h in t.get("highlight", []):
+            extra = sorted(set(h) - {"title", "text", "planners", "metrics"})
+            if extra:  # e.g. a table's own key written below its [[highlight]] in the TOML file
+                raise ValueError(f"{path}: tables.{name}.highlight: unknown key(s) {', '.join(extra)}")
             if not h.get("title") or not h.get("planners") or not h.get("metrics"):
                 raise ValueError(f"{path}: tables.{name}.highlight: needs a title, planners and metrics")
             if any(m not in METRICS for m in h["metrics"]):
