@@ -189,8 +189,10 @@ def test_index_counts_verdicts_per_table_and_writes_paragraphs(cfg):
 
 def test_the_project_notes_load_and_name_known_configs():
     notes = load_notes(ROOT / "configs" / "results" / "notes.toml")
-    configs = {p.stem for p in (ROOT / "configs").glob("*_*.toml")}
-    assert set(notes.rules) <= configs and set(notes.not_reproduced) <= configs
+    from jaxplan.benchmark_functions import NAME as STUDY
+
+    configs = {p.stem for p in (ROOT / "configs").glob("*_*.toml")} | {STUDY}
+    assert set(notes.rules) <= configs and set(notes.not_reproduced) <= configs and set(notes.conclusions) <= configs
     assert notes.principle
 
 
@@ -231,3 +233,15 @@ def test_optimiser_study_curves_and_page(tmp_path):
     assert (tmp_path / "figures" / "li2026_fig7-quick" / "fig7_fitness.png").stat().st_size > 5_000
     index = write_index_page(tmp_path / "results", Notes(), quick=True).read_text()
     assert "[li2026_fig7](li2026/fig7-quick.md)" in index
+
+
+def test_notes_highlight_renders_a_table_and_refuses_stray_keys(cfg, tmp_path):
+    notes_file = tmp_path / "notes.toml"
+    notes_file.write_text('[tables.demo2020_table9]\n[[tables.demo2020_table9.highlight]]\ntitle = "Focus"\n'
+                          'planners = ["Exact"]\nmetrics = ["length"]\n')
+    page = table_page(_analysis(cfg), cfg, load_notes(notes_file))
+    section = page.split("## Focus", 1)[1].split("## All our results", 1)[0]
+    assert "| Exact | 500 ± 0 [500, 500] ⚠ |" in section and "Ours-ACO" not in section
+    notes_file.write_text(notes_file.read_text() + 'conclusion = "lands in the highlight, not the table"\n')
+    with pytest.raises(ValueError, match="unknown key"):
+        load_notes(notes_file)
