@@ -122,7 +122,9 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 
     from jaxplan.benchmark_functions import NAME as STUDY
 
-    results = None if args.no_results else args.results or (None if args.quick else "docs/results")
+    # Results pages by default only for the project's own full reproduction (configs/, not --quick).
+    default = "docs/results" if not args.quick and args.configs == "configs" else None
+    results = None if args.no_results else args.results or default
     studies = results is not None and (args.pattern is None or fnmatch(STUDY, args.pattern)
                                        or fnmatch(f"{STUDY}.toml", args.pattern))
     try:
@@ -230,7 +232,8 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--figures", default="figures", help="figure root (default: figures)")
     g.add_argument("--data-dir", default=None, help="folder that map paths are relative to")
     g.add_argument("--results", default=None, help="results pages root: <paper>/<table>.md and index.md, the paper's "
-                                                   "numbers beside ours (default: docs/results; with --quick: none)")
+                                                   "numbers beside ours (default: docs/results for the full runs of "
+                                                   "configs/; none with --quick or another --configs)")
     g.add_argument("--no-results", action="store_true", help="write no results pages")
     g.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
     g.add_argument("--no-cache", action="store_true", help="do not use JAX's persistent compilation cache")
