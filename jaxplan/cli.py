@@ -93,6 +93,23 @@ def cmd_figures(args: argparse.Namespace) -> int:
     return 0 if not problems else 1
 
 
+def _reproduce_study(args: argparse.Namespace, results: str):
+    """li2026's optimiser study (not an experiment config): its page and figure, then the index rewritten."""
+    import time
+
+    from jaxplan import benchmark_functions as bf
+    from jaxplan.experiments.reproduce import Reproduced, describe_error
+    from jaxplan.experiments.results import load_notes, write_index_page
+
+    t0 = time.perf_counter()
+    try:
+        page = bf.write_study(results, args.figures, bf.QUICK if args.quick else bf.FULL)
+    except Exception as e:  # noqa: BLE001 - reported like a config's failure, after the others
+        return Reproduced(Path(bf.NAME), None, time.perf_counter() - t0, 0.0, 0, (), describe_error(e))
+    write_index_page(results, load_notes(Path(args.configs) / "results" / "notes.toml"), quick=args.quick)
+    return Reproduced(Path(bf.NAME), None, time.perf_counter() - t0, 0.0, 1, (), page=page)
+
+
 def cmd_reproduce(args: argparse.Namespace) -> int:
     """``jaxplan reproduce [--quick]``: every ``configs/<paper>_*.toml`` run (or resumed), then its figures."""
     import time
@@ -101,18 +118,35 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 
     if not args.no_cache:
         _compilation_cache()
-    configs = reproduction_configs(args.configs, args.pattern)
+    from fnmatch import fnmatch
+
+    from jaxplan.benchmark_functions import NAME as STUDY
+
+    # Results pages by default only for the project's own full reproduction (configs/, not --quick).
+    default = "docs/results" if not args.quick and args.configs == "configs" else None
+    results = None if args.no_results else args.results or default
+    studies = results is not None and (args.pattern is None or fnmatch(STUDY, args.pattern)
+                                       or fnmatch(f"{STUDY}.toml", args.pattern))
+    try:
+        configs = reproduction_configs(args.configs, args.pattern)
+    except FileNotFoundError:
+        if not (studies and args.pattern is not None and Path(args.configs).is_dir()):
+            raise
+        configs = []  # only the study matches the pattern
     t0 = time.perf_counter()
     done = reproduce(configs, args.out, args.figures, quick=args.quick, data_dir=args.data_dir,
-                     progress=not args.no_progress)
-    rows = [(r.config.name, r.run_dir.name if r.run_dir else "FAILED", f"{r.run_s:.1f}", f"{r.figures_s:.1f}",
-             str(r.figures)) for r in done]
+                     progress=not args.no_progress, results=results)
+    if studies:
+        done.append(_reproduce_study(args, results))
+    rows = [(r.config.name, "FAILED" if r.error else r.run_dir.name if r.run_dir else "-", f"{r.run_s:.1f}",
+             f"{r.figures_s:.1f}", str(r.figures)) for r in done]
     heads = ("config", "run folder", "run (s)", "figures (s)", "figures")
     widths = [max(len(h), *(len(r[j]) for r in rows)) for j, h in enumerate(heads)]
     print("  ".join(h.ljust(w) for h, w in zip(heads, widths, strict=True)))
     for r in rows:
         print("  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)))
-    print(f"total {time.perf_counter() - t0:.1f} s; figures in {args.figures}/index.md")
+    print(f"total {time.perf_counter() - t0:.1f} s; figures in {args.figures}/index.md"
+          + (f"; results pages in {results}/index{'-quick' if args.quick else ''}.md" if results else ""))
     bad = 0
     for r in done:
         if r.error:
@@ -197,6 +231,10 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--out", default="runs", help="parent folder of the run folders (default: runs)")
     g.add_argument("--figures", default="figures", help="figure root (default: figures)")
     g.add_argument("--data-dir", default=None, help="folder that map paths are relative to")
+    g.add_argument("--results", default=None, help="results pages root: <paper>/<table>.md and index.md, the paper's "
+                                                   "numbers beside ours (default: docs/results for the full runs of "
+                                                   "configs/; none with --quick or another --configs)")
+    g.add_argument("--no-results", action="store_true", help="write no results pages")
     g.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
     g.add_argument("--no-cache", action="store_true", help="do not use JAX's persistent compilation cache")
     g.set_defaults(func=cmd_reproduce)

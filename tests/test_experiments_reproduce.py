@@ -33,7 +33,8 @@ def test_reproduction_config_is_complete(path):
 
 def test_reproduce_quick_runs_every_config_and_draws_its_figures(tmp_path, capsys):
     rc = main(["reproduce", "--quick", "--configs", str(ROOT / "configs"), "--out", str(tmp_path / "runs"),
-               "--figures", str(tmp_path / "figures"), "--no-progress", "--no-cache"])
+               "--figures", str(tmp_path / "figures"), "--no-progress", "--no-cache",
+               "--results", str(tmp_path / "results")])
     out = capsys.readouterr().out
     assert rc == 0, out
     index = (tmp_path / "figures" / "index.md").read_text()
@@ -42,6 +43,16 @@ def test_reproduce_quick_runs_every_config_and_draws_its_figures(tmp_path, capsy
         assert (run / "trials.csv").is_file() and (run / "report.md").is_file()
         assert f"({run.name}/index.md)" in index
         assert "paper" in (run / "summary.md").read_text()
+    # the results pages of quick runs say so, in their names, titles and the index (issue 28)
+    results = (tmp_path / "results" / "index-quick.md").read_text()
+    assert results.startswith("# Reproduction results — QUICK")
+    for p in CONFIGS:
+        paper, _, table = p.stem.partition("_")
+        page = tmp_path / "results" / paper / f"{table}-quick.md"
+        assert page.read_text().startswith(f"# {p.stem} — QUICK"), page
+        assert f"({paper}/{table}-quick.md)" in results
+    assert "(li2026/fig7-quick.md)" in results  # li2026's optimiser study, not a config
+    assert not (tmp_path / "results" / "index.md").exists()
 
 
 def test_quick_keeps_only_the_named_planners_and_maps():

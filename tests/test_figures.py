@@ -218,3 +218,76 @@ def test_bad_figure_entries_are_config_problems():
         parse_config(text)
     msg = str(e.value)
     assert "figures[2].steps" in msg and "figures[3].metric: required" in msg and "figures[3].x: expected 1" in msg
+
+
+def _axis_labels(fig) -> list[str]:
+    """Every non-empty axis label of a figure (colour bars included)."""
+    return [lab for ax in fig.axes for lab in (ax.get_xlabel(), ax.get_ylabel()) if lab]
+
+
+@pytest.mark.parametrize("which", ["plan", "nav"])
+def test_every_axis_label_names_its_unit(plan_run, nav_run, which):
+    """Issue 28, item 5: every axis reads "quantity (unit)"; fractions in %, raw metric keys never."""
+    import re
+
+    from jaxplan.experiments.config import METRICS
+    from jaxplan.experiments.figure_kinds import DRAW
+    from jaxplan.experiments.plots import plt
+    from jaxplan.experiments.run_data import load_run
+
+    run = load_run(plan_run if which == "plan" else nav_run)
+    for spec in run.config.figures:
+        fig, _ = DRAW[spec.kind](run, spec)
+        try:
+            labels = _axis_labels(fig)
+            assert labels, spec.kind
+            for lab in labels:
+                assert re.search(r"\(.+\)", lab), f"{spec.kind}: axis label {lab!r} names no unit"
+                assert not any(k in lab for k in METRICS if "_" in k), f"{spec.kind}: raw metric key in {lab!r}"
+        finally:
+            plt.close(fig)
+
+
+def test_sweeps_over_orders_of_magnitude_use_a_log_axis_and_fractions_read_in_percent(tmp_path):
+    from jaxplan.experiments.figure_kinds import DRAW
+    from jaxplan.experiments.plots import plt
+    from jaxplan.experiments.run_data import load_run
+
+    maps = "\n".join(f"""
+[[maps]]
+name = "r{i}"
+generator = "random"
+seed = 1
+params = {{ width = 12, height = 12, obstacle_ratio = 0.1 }}
+""" for i in range(3))
+    text = (PLAN.replace("{maps}", maps).replace('x = "obstacle_ratio"', "x = [0.01, 0.1, 10.0]")
+            .replace('metric = "turns"\nx =', 'metric = "success"\nx =').replace('map = "r20"', 'map = "r1"')
+            .replace('maps = ["r10"]', 'maps = ["r0"]'))
+    cfg = tmp_path / "figlog.toml"
+    cfg.write_text(text.replace('name = "figplan"', 'name = "figlog"'))
+    run = load_run(run_experiment(cfg, tmp_path / "runs", progress=False))
+    spec = next(f for f in run.config.figures if f.kind == "sweep")
+    fig, caption = DRAW["sweep"](run, spec)
+    try:
+        ax = fig.axes[0]
+        assert ax.get_xscale() == "log" and "log axis" in caption
+        assert ax.get_ylabel() == "success rate (%)"
+        assert max(max(line.get_ydata()) for line in ax.lines) == pytest.approx(100.0)
+    finally:
+        plt.close(fig)
+
+
+def test_convergence_of_planners_with_different_costs_is_drawn_relative_to_each_runs_final_best(plan_run):
+    """A* is left out; one planner (AS: cost = length) keeps its own cost in metres; mixed costs would not."""
+    from jaxplan.experiments.figure_kinds import DRAW
+    from jaxplan.experiments.plots import plt
+    from jaxplan.experiments.run_data import load_run
+
+    run = load_run(plan_run)
+    spec = next(f for f in run.config.figures if f.kind == "convergence")
+    fig, caption = DRAW["convergence"](run, spec)
+    try:
+        assert fig.axes[0].get_ylabel() == "best path length L (m)"
+        assert "relative" not in caption
+    finally:
+        plt.close(fig)

@@ -23,6 +23,7 @@ from jaxplan.experiments.run_data import (
     figure_title,
     map_layer,
     metric_label,
+    metric_scale,
     need_trials,
     panel_grid,
     scenario_of,
@@ -36,20 +37,61 @@ __all__ = ["DRAW"]
 plt = plots.plt  # the Agg backend is chosen in plots
 
 
-def _curves(run: RunData, spec: FigureSpec, key: str, ylabel: str, what: str):
+COSTS: dict[str, tuple[str, str, tuple[str, ...]]] = {
+    "aco": ("path length L", "m", ()),
+    "iaco": ("fitness F = l1 L/L0 + l2 sum|turn|/pi + l3 sum 1/d", "dimensionless", ("lambdas",)),
+    "risk_aco": ("cost B = u L + v risk + w turns", "cost units", ("u", "v", "w")),
+    "opt_ant": ("cost S = a L + b turns + c height msd", "cost units", ("a", "b", "c")),
+    "praco": ("cost Z = w1 L + w2 turns", "cost units", ("omega1", "omega2")),
+}
+"""ACO planner -> (its cost, the cost's unit, the parameters that weigh it): a convergence curve's quantity.
+Two planners share a cost only with the same name and the same weights (tsp planners: the tour length)."""
+
+
+def _cost_of(pc) -> tuple:
+    """A planner's cost definition: (name, weights) — equal for planners whose best costs share an axis."""
+    if pc.kind == "tsp":
+        return ("tour",)
+    _, _, keys = COSTS.get(pc.name, ("", "", ()))
+    return (pc.name,) + tuple((k, str(pc.overrides.get(k))) for k in keys)
+
+
+def _curves(run: RunData, spec: FigureSpec, key: str, what: str):
+    """Convergence (``history``) or diversity curves of the selected iterative planners, one panel per map.
+
+    Planners are drawn on one quantity only: their own best cost (with its unit) when they all share one
+    cost definition (`COSTS`); otherwise each seed's curve relative to that seed's final best cost, in %
+    (best cost: the excess over the final best; diversity: the sd of the ants' costs over the final best)."""
     mi, pi = selected(run, spec, ("plan", "tsp"))
-    pi = [p for p in pi if run.config.planners[p].name not in ("astar", "dijkstra")]
+    cfg = run.config
+    pi = [p for p in pi if cfg.planners[p].name not in ("astar", "dijkstra")]
     if not pi:
         raise ValueError(f"figure {spec.name!r}: no iterative plan planner selected")
     sc = scenario_of(run, spec, mi)
     band = spec.params.get("band", "iqr") or None
+    shared = len({_cost_of(cfg.planners[p]) for p in pi}) == 1
+    first = cfg.planners[pi[0]]
+    if shared:
+        qty, unit = ("best tour length", "TSPLIB distance") if first.kind == "tsp" else \
+            (f"best {COSTS.get(first.name, ('cost', 'cost units'))[0]}", COSTS.get(first.name, ('', 'cost units'))[1])
+        ylabel = f"{qty} ({unit})" if key == "history" else f"sd of the ants' {qty[5:]} ({unit})"
+    else:
+        ylabel = ("best cost above the run's final best (%)" if key == "history"
+                  else "sd of the ants' costs / the run's final best (%)")
     fig, axes = panel_grid(len(mi))
     for ax, m in zip(axes[0], mi, strict=True):
         curves = {}
         for p in pi:
             got = run.arrays(m, p, sc)
-            if got is not None and key in got[0]:
-                curves[run.config.planners[p].label] = np.asarray(got[0][key][got[1]], np.float64)
+            if got is None or key not in got[0]:
+                continue
+            h = np.asarray(got[0][key][got[1]], np.float64)
+            if not shared:
+                final = np.asarray(got[0]["history"][got[1]], np.float64)[:, -1:]
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    h = np.where(np.isfinite(final) & (final > 0),
+                                 100.0 * (h / final - (1.0 if key == "history" else 0.0)), np.nan)
+            curves[cfg.planners[p].label] = h
         if curves:
             plots.plot_convergence(ax, curves, band=band, ylabel=ylabel)
         if spec.params.get("log"):
@@ -58,16 +100,17 @@ def _curves(run: RunData, spec: FigureSpec, key: str, ylabel: str, what: str):
     fig.suptitle(figure_title(spec, what))
     bands = {"iqr": "median and 25-75 % band", "sd": "mean ± 1 sd", "minmax": "median and min-max band",
              None: "median"}[band]
-    return fig, f"{what} over {len(run.config.seeds)} seeds at scenario {sc} ({bands})."
+    how = ("" if shared else " The planners' costs are defined differently, so each seed's curve is drawn "
+           "relative to that seed's final best cost (in %), one quantity for every planner.")
+    return fig, f"{what} over {len(cfg.seeds)} seeds at scenario {sc} ({bands}).{how}"
 
 
 def _convergence(run, spec):
-    return _curves(run, spec, "history", "best cost", "Convergence: best cost per iteration")
+    return _curves(run, spec, "history", "Convergence: best cost per iteration")
 
 
 def _diversity(run, spec):
-    return _curves(run, spec, "diversity", "diversity (sd of ant costs)",
-                   "Population diversity (sd of the ants' path costs) per iteration")
+    return _curves(run, spec, "diversity", "Population diversity (sd of the ants' path costs) per iteration")
 
 
 def _box(run, spec):
@@ -86,14 +129,15 @@ def _box(run, spec):
                     run.config.planners[p], run.prep.maps[m].spec):
                 continue
             v, _ = per_seed_means(t, name, label, metric, run.config.seeds)
-            data.append(v[np.isfinite(v)])
+            data.append(v[np.isfinite(v)] * metric_scale(metric))
             labels.append(label)
         ax.boxplot(data, tick_labels=labels) if data else None
         ax.set_ylabel(metric_label(metric))
         ax.set_title(name)
         ax.tick_params(axis="x", labelrotation=30)
-    fig.suptitle(figure_title(spec, f"{metric}: per-seed means"))
-    return fig, f"Box plot of the per-seed means of {metric} (each seed averaged over the map's scenarios)."
+    fig.suptitle(figure_title(spec, f"{metric_label(metric)}: per-seed means"))
+    return fig, (f"Box plot of the per-seed means of {metric_label(metric)} (each seed averaged over the map's "
+                 "scenarios; box: quartiles, whiskers: 1.5 IQR, circles: seeds beyond).")
 
 
 def _paper_value(cfg: ExperimentConfig, map_: str, label: str, metric: str):
@@ -120,28 +164,37 @@ def _bar(run, spec):
             label = cfg.planners[p].label
             labels.append(label)
             v, _ = per_seed_means(t, name, label, metric, cfg.seeds)
-            v = v[np.isfinite(v)]
+            v = v[np.isfinite(v)] * metric_scale(metric)
             if v.size:
                 ax.bar(j - 0.2, v.mean(), 0.4, yerr=v.std(ddof=1) if v.size > 1 else 0, color="C0", capsize=3,
                        label="ours" if j == 0 else None)
             pv = _paper_value(cfg, name, label, metric)
             if pv is not None:
                 any_paper = True
-                ax.bar(j + 0.2, pv.mean, 0.4, yerr=pv.sd or 0, color="white", edgecolor="C1", hatch="//",
+                ax.bar(j + 0.2, pv.mean * metric_scale(metric), 0.4, yerr=(pv.sd or 0) * metric_scale(metric),
+                       color="white", edgecolor="C1", hatch="//",
                        capsize=3, label="paper" if not ax.get_legend_handles_labels()[1].count("paper") else None)
         ax.set_xticks(xs, labels, rotation=30)
         ax.set_ylabel(metric_label(metric))
         ax.set_title(name)
         if ax.get_legend_handles_labels()[1]:
             ax.legend(fontsize=8)
-    fig.suptitle(figure_title(spec, f"{metric}: mean ± sd over seeds"))
-    cap = f"Mean ± sd over seeds of the per-seed means of {metric}"
+    fig.suptitle(figure_title(spec, f"{metric_label(metric)}: mean ± sd over seeds"))
+    cap = f"Mean ± sd over seeds of the per-seed means of {metric_label(metric)}"
     if any_paper:
         cap += f"; hatched bars: the paper's reported values ({cfg.paper_source}), not ours"
     return fig, cap + "."
 
 
+def _log_x(xs: np.ndarray) -> bool:
+    """A sweep over orders of magnitude (all x > 0, largest / smallest >= 100) is drawn on a log x axis."""
+    xs = xs[np.isfinite(xs)]
+    return bool(xs.size > 1 and np.all(xs > 0) and xs.max() / xs.min() >= 100.0)
+
+
 def _sweep(run, spec):
+    """``metric`` against ``x``: a generator parameter (one line per planner, a point per map), one number per
+    map, or a planner parameter (one line per map, a point per planner: e.g. IACO's elite weight)."""
     from jaxplan.experiments.stats import per_seed_means
 
     t = need_trials(run)
@@ -149,43 +202,55 @@ def _sweep(run, spec):
     mi, pi = selected(run, spec)
     cfg = run.config
     x = spec.params["x"]
-    if isinstance(x, str):
+    scale = metric_scale(metric)
+    xlabel = spec.params.get("xlabel", x if isinstance(x, str) else "x")
+    by_planner = isinstance(x, str) and all(x not in run.prep.maps[m].spec.params for m in mi) and all(
+        x in cfg.planners[p].overrides for p in pi)
+    if isinstance(x, str) and not by_planner:
         xs = []
         for m in mi:
             ms = run.prep.maps[m].spec
             if x not in ms.params:
-                raise ValueError(f"figure {spec.name!r}: map {ms.name!r} has no generator parameter {x!r}")
+                raise ValueError(f"figure {spec.name!r}: map {ms.name!r} has no generator parameter {x!r} (nor does "
+                                 f"every selected planner set it)")
             xs.append(float(ms.params[x]))
-        xlabel = spec.params.get("xlabel", x)
+    elif by_planner:
+        xs = [float(cfg.planners[p].overrides[x]) for p in pi]
     else:
         xs = [float(v) for v in x]
-        xlabel = spec.params.get("xlabel", "x")
     xs = np.asarray(xs)
     order = np.argsort(xs, kind="stable")
+    # lines: (legend label, [(map index, planner index)] along x)
+    lines = ([(run.prep.maps[m].spec.name, [(m, p) for p in pi]) for m in mi] if by_planner
+             else [(cfg.planners[p].label, [(m, p) for m in mi]) for p in pi])
     fig, ax = plt.subplots(figsize=(6, 4.2), constrained_layout=True)
     any_paper = False
-    for p in pi:
-        label = cfg.planners[p].label
+    for name, cells in lines:
         mean, sd, pap = [], [], []
-        for m in mi:
-            v, _ = per_seed_means(t, run.prep.maps[m].spec.name, label, metric, cfg.seeds)
-            v = v[np.isfinite(v)]
+        for m, p in cells:
+            mname, label = run.prep.maps[m].spec.name, cfg.planners[p].label
+            v, _ = per_seed_means(t, mname, label, metric, cfg.seeds)
+            v = v[np.isfinite(v)] * scale
             mean.append(v.mean() if v.size else math.nan)
             sd.append(v.std(ddof=1) if v.size > 1 else 0.0)
-            pv = _paper_value(cfg, run.prep.maps[m].spec.name, label, metric)
-            pap.append(pv.mean if pv is not None else math.nan)
+            pv = _paper_value(cfg, mname, label, metric)
+            pap.append(pv.mean * scale if pv is not None else math.nan)
         mean, sd, pap = (np.asarray(a)[order] for a in (mean, sd, pap))
-        (line,) = ax.plot(xs[order], mean, marker="o", label=label)
+        (line,) = ax.plot(xs[order], mean, marker="o", label=f"{name} (ours, mean ± sd)")
         ax.fill_between(xs[order], mean - sd, mean + sd, color=line.get_color(), alpha=0.2, lw=0)
         if np.isfinite(pap).any():
             any_paper = True
-            ax.plot(xs[order], pap, ls="--", marker="s", mfc="none", color=line.get_color(), label=f"{label} (paper)")
-    ax.set_xlabel(xlabel)
+            ax.plot(xs[order], pap, ls="--", marker="s", mfc="none", color=line.get_color(), label=f"{name} (paper)")
+    log = _log_x(xs)
+    if log:
+        ax.set_xscale("log")
+    ax.set_xlabel(xlabel + ("" if "(" in xlabel else " (dimensionless)"))
     ax.set_ylabel(metric_label(metric))
     if ax.get_legend_handles_labels()[1]:
         ax.legend(fontsize=8)
-    ax.set_title(figure_title(spec, f"{metric} against {xlabel}"))
-    cap = f"{metric} against {xlabel}: mean ± sd over seeds"
+    ax.set_title(figure_title(spec, f"{metric_label(metric)} against {xlabel}"))
+    cap = (f"{metric_label(metric)} against {xlabel}{' (log axis)' if log else ''}: mean ± sd over seeds of the "
+           "per-seed means" + (", one line per map" if by_planner else ", one line per planner"))
     if any_paper:
         cap += f"; dashed open markers: the paper's values ({cfg.paper_source}), not ours"
     return fig, cap + "."
@@ -254,9 +319,11 @@ def _pheromone(run, spec):
                              title=f"{pc.label} on {mw.spec.name}")
         if res.success:
             plots.plot_paths(ax, mw.grid, [np.asarray(res.path)], labels=[f"{pc.label} path"], lw=1.2)
+            if ax.get_legend() is not None:  # one line, named in the caption: no legend beside the heat map
+                ax.get_legend().remove()
     fig.suptitle(figure_title(spec, "Final pheromone per cell"))
-    return fig, (f"Final pheromone per cell (max over its allowed outgoing edges) at scenario {sc}, seed {seed}; "
-                 "recomputed by re-planning that trial with keep_pheromone=True.")
+    return fig, (f"Final pheromone per cell (max over its allowed outgoing edges) at scenario {sc}, seed {seed}, "
+                 "with that trial's path (blue line); recomputed by re-planning the trial with keep_pheromone=True.")
 
 
 def _nav_trial(run, m, p, sc, r):

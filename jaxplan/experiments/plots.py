@@ -73,13 +73,14 @@ def _frame(ax: plt.Axes, grid: GridMap, title: str | None) -> None:
 
 def _draw_field(
     ax: plt.Axes, grid: GridMap, data: np.ndarray, cmap: str, label: str, norm: Normalize | None = None,
-    colorbar: bool = True,
+    colorbar: bool = True, bar_label: str | None = None,
 ):
-    """Draws ``data [H, W]`` (a masked array; masked cells stay transparent) as a colour field."""
+    """Draws ``data [H, W]`` (a masked array; masked cells stay transparent) as a colour field; the image is
+    labelled ``label``, its colour bar ``bar_label`` (default ``label``: a quantity with its unit)."""
     im = ax.imshow(data, cmap=cmap, norm=norm, extent=_extent(grid), interpolation="nearest")
     im.set_label(label)
     if colorbar:
-        plt.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label=label)
+        plt.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label=bar_label or label)
     return im
 
 
@@ -142,7 +143,8 @@ def plot_map(
         data, label = _layer_data(grid, layer)
         # Risk is >= 0: anchor the scale at 0, so a risk-free map reads as "no risk".
         norm = Normalize(vmin=0.0, vmax=float(data.max())) if layer == "risk" and data.count() else None
-        _draw_field(ax, grid, data, LAYERS[layer], label, norm=norm, colorbar=colorbar and data.count() > 0)
+        _draw_field(ax, grid, data, LAYERS[layer], label, norm=norm, colorbar=colorbar and data.count() > 0,
+                    bar_label="risk (Poisson draws per cell)" if layer == "risk" else None)
     _draw_blocked(ax, grid)
     if show_turn_rule:
         _draw_turn_rule(ax, grid)
@@ -374,7 +376,8 @@ def plot_pheromone(
         if pos.size:
             norm = LogNorm(vmin=pos.min(), vmax=pos.max())
     label = f"pheromone ({reduce} over edges{', log scale' if log else ''})"
-    im = _draw_field(ax, grid, data, cmap, label, norm=norm, colorbar=colorbar)
+    bar = f"pheromone τ (dimensionless; {reduce} over edges{', log scale' if log else ''})"
+    im = _draw_field(ax, grid, data, cmap, label, norm=norm, colorbar=colorbar, bar_label=bar)
     im.set_label("pheromone")
     _draw_blocked(ax, grid)
     _frame(ax, grid, title)
@@ -490,7 +493,7 @@ def plot_convergence(
         if band is not None:
             draw = np.isfinite(low) & np.isfinite(high)
             ax.fill_between(xs, low, high, where=draw, color=line.get_color(), alpha=alpha, lw=0, interpolate=False)
-    ax.set_xlabel("iteration")
+    ax.set_xlabel("iteration (count)")
     ax.set_ylabel(ylabel)
     if any(n is not None for n in names):
         ax.legend(fontsize=8)

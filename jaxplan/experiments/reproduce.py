@@ -3,7 +3,10 @@
 One process runs them all in file-name order, so compiled programs that two configs share
 (the same planner on maps of the same shape) are built once. Each config's run folder is
 ``OUT/NAME`` (``OUT/NAME-quick`` with ``quick``), resumable as any run; its figures go to
-``FIGURES/NAME[-quick]/`` with an index page, and ``FIGURES/index.md`` lists them all.
+``FIGURES/NAME[-quick]/`` with an index page, and ``FIGURES/index.md`` lists them all. With ``results``
+(``docs/results``; `jaxplan.experiments.results`) each config's results page, the paper's numbers beside
+ours with a verdict, goes to ``RESULTS/<paper>/<table>[-quick].md`` and ``RESULTS/index[-quick].md``
+lists them with their verdict counts.
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
-__all__ = ["Reproduced", "reproduction_configs", "reproduce"]
+__all__ = ["Reproduced", "reproduction_configs", "reproduce", "describe_error"]
 
 
 @dataclass(frozen=True)
@@ -28,6 +31,7 @@ class Reproduced:
     figures: int
     problems: tuple[str, ...]
     error: str | None = None
+    page: Path | None = None
 
 
 def reproduction_configs(config_dir: str | os.PathLike = "configs", pattern: str | None = None) -> list[Path]:
@@ -53,36 +57,60 @@ def reproduction_configs(config_dir: str | os.PathLike = "configs", pattern: str
 
 def reproduce(configs: Sequence[str | os.PathLike], out: str | os.PathLike = "runs",
               figures: str | os.PathLike = "figures", *, quick: bool = False,
-              data_dir: str | os.PathLike | None = None, progress: bool = True) -> list[Reproduced]:
+              data_dir: str | os.PathLike | None = None, progress: bool = True,
+              results: str | os.PathLike | None = None, notes: str | os.PathLike | None = None) -> list[Reproduced]:
     """Runs each config (resuming finished chunks) and draws its figures; one failing config does not stop the rest.
+
+    With ``results``, also writes each config's results page and the index (`jaxplan.experiments.results`;
+    ``notes``: the hand-written notes file, default ``<config folder>/results/notes.toml``). Studies that are
+    not experiment configs (li2026's optimiser comparison, `jaxplan.benchmark_functions`) are run by
+    ``jaxplan reproduce``, which then rewrites the index (`jaxplan.experiments.results.write_index_page`).
 
     Returns:
       One `Reproduced` per config, in order (``error`` set when the run, or drawing its figures at all,
       failed; ``problems`` lists single figures not drawn).
     """
     from jaxplan.experiments.figures import draw_figures
+    from jaxplan.experiments.results import load_notes, write_index_page, write_table_page
     from jaxplan.experiments.runner import run_experiment
 
+    t_start = time.perf_counter()
+    configs = [Path(c) for c in configs]
+    if results is not None and notes is None and configs:
+        notes = configs[0].parent / "results" / "notes.toml"
+    the_notes = load_notes(notes) if results is not None else None
     done = []
-    for cfg in map(Path, configs):
+    for cfg in configs:
         t0 = time.perf_counter()
         try:
             run_dir = run_experiment(cfg, out, quick=quick, data_dir=data_dir, progress=progress)
         except Exception as e:  # noqa: BLE001 - reported in the outcome; the next config still runs
-            done.append(Reproduced(cfg, None, time.perf_counter() - t0, 0.0, 0, (), _describe_error(e)))
+            done.append(Reproduced(cfg, None, time.perf_counter() - t0, 0.0, 0, (), describe_error(e)))
             continue
         t1 = time.perf_counter()
         try:
             drawn, problems = draw_figures(run_dir, figures, data_dir=data_dir)
         except Exception as e:  # noqa: BLE001 - as above: the run folder stands, its figures failed
             done.append(Reproduced(cfg, run_dir, t1 - t0, time.perf_counter() - t1, 0, (),
-                                   f"figures: {_describe_error(e)}"))
+                                   f"figures: {describe_error(e)}"))
             continue
-        done.append(Reproduced(cfg, run_dir, t1 - t0, time.perf_counter() - t1, len(drawn), tuple(problems)))
+        page = None
+        if results is not None:
+            try:
+                page = write_table_page(run_dir, results, the_notes, figures_dir=figures, drawn=drawn,
+                                        data_dir=data_dir)
+            except Exception as e:  # noqa: BLE001 - as above: the run and its figures stand
+                done.append(Reproduced(cfg, run_dir, t1 - t0, time.perf_counter() - t1, len(drawn), tuple(problems),
+                                       f"results page: {describe_error(e)}"))
+                continue
+        done.append(Reproduced(cfg, run_dir, t1 - t0, time.perf_counter() - t1, len(drawn), tuple(problems),
+                               page=page))
+    if results is not None and any(r.page is not None for r in done):
+        write_index_page(results, the_notes, quick=quick, wall_s=time.perf_counter() - t_start)
     return done
 
 
-def _describe_error(e: Exception) -> str:
+def describe_error(e: Exception) -> str:
     """The message of an expected failure (bad config, data, run folder); the type too for anything else."""
     from jaxplan.experiments.config import ConfigError
     from jaxplan.experiments.store import RunFolderError

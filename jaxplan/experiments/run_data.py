@@ -27,8 +27,8 @@ from jaxplan.experiments.config import (
 )
 
 __all__ = ["RunData", "MissingArrays", "load_run", "selected", "panel_grid", "map_layer", "figure_title",
-           "figure_metric", "metric_label", "need_trials", "scenario_of", "scenario_seed", "cell_path_m",
-           "trial_obstacles", "disc_positions"]
+           "figure_metric", "metric_label", "metric_scale", "QUANTITIES", "need_trials", "scenario_of", "scenario_seed",
+           "cell_path_m", "trial_obstacles", "disc_positions"]
 
 plt = plots.plt  # the Agg backend is chosen in plots
 
@@ -175,9 +175,54 @@ def figure_metric(run: RunData, spec: FigureSpec) -> str:
     return m
 
 
+QUANTITIES: dict[str, tuple[str, str, float]] = {
+    "success": ("success rate", "%", 100.0),
+    "accuracy": ("accuracy: success with gap <= 10 %", "%", 100.0),
+    "length": ("path length", "m", 1.0),
+    "tour_length": ("tour length", "TSPLIB distance", 1.0),
+    "optimality_gap": ("gap to the exact optimum", "%", 100.0),
+    "turns": ("turns", "count", 1.0),
+    "sharp_turns": ("sharp turns (>= 45 deg)", "count", 1.0),
+    "los_length": ("length after line-of-sight smoothing", "m", 1.0),
+    "los_turns": ("turns after line-of-sight smoothing", "count", 1.0),
+    "los_length_reduction": ("length saved by line-of-sight smoothing", "%", 100.0),
+    "los_turns_reduction": ("turns saved by line-of-sight smoothing", "%", 100.0),
+    "smoothness": ("smoothness 1 - mean |turn|/pi", "0-1", 1.0),
+    "min_clearance": ("smallest clearance", "m", 1.0),
+    "mean_clearance": ("mean clearance", "m", 1.0),
+    "max_curvature": ("largest curvature", "1/m", 1.0),
+    "hausdorff": ("Hausdorff distance to the A* path", "m", 1.0),
+    "cost": ("the planner's own cost", "its cost units", 1.0),
+    "converged_iteration": ("iteration of convergence", "count", 1.0),
+    "collisions": ("collisions per episode", "count", 1.0),
+    "active_contacts": ("active contacts per episode", "count", 1.0),
+    "passive_contacts": ("passive contacts per episode", "count", 1.0),
+    "time_s": ("arrival time", "s", 1.0),
+    "rmse": ("tracking RMSE", "m", 1.0),
+    "energy": ("energy proxy", "J", 1.0),
+    "path_length": ("executed path length", "m", 1.0),
+    "recoveries": ("control steps without a feasible sample", "count", 1.0),
+    "replans": ("re-plans per episode", "count", 1.0),
+    "plan_time_s": ("planning wall time per trial", "s", 1.0),
+    "step_time_s": ("wall time per control step", "s", 1.0),
+}
+"""Metric -> (quantity, unit, scale) of a figure axis: values are drawn times ``scale`` (fractions as %), and
+the axis reads ``quantity (unit)``; every metric of `METRICS` has an entry."""
+
+
 def metric_label(metric: str) -> str:
-    unit = METRICS[metric].unit
-    return f"{metric} ({unit})" if unit else metric
+    """The axis label of ``metric``: its quantity and, in parentheses, its unit (``%`` for fractions)."""
+    q = QUANTITIES.get(metric)
+    if q is None:
+        unit = METRICS[metric].unit
+        return f"{metric} ({unit or 'dimensionless'})"
+    return f"{q[0]} ({q[1]})"
+
+
+def metric_scale(metric: str) -> float:
+    """The factor a figure multiplies ``metric``'s values by (100 for fractions drawn in %)."""
+    q = QUANTITIES.get(metric)
+    return q[2] if q is not None else 1.0
 
 
 def need_trials(run: RunData) -> dict:

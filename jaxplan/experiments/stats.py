@@ -37,8 +37,8 @@ import numpy as np
 from jaxplan.experiments.config import METRICS, ExperimentConfig, PaperValue, applies
 
 __all__ = ["SummaryRow", "TestRow", "Analysis", "read_trials", "per_seed_means", "trial_range", "analyse", "holm",
-           "write_summary", "write_significance", "write_timings", "SUMMARY_COLUMNS", "SIGNIFICANCE_COLUMNS",
-           "TIMING_COLUMNS"]
+           "confidence_interval", "hedges_g", "write_summary", "write_significance", "write_timings",
+           "SUMMARY_COLUMNS", "SIGNIFICANCE_COLUMNS", "TIMING_COLUMNS"]
 
 SUMMARY_COLUMNS = ("map", "planner", "metric", "unit", "statistic", "n", "trials", "mean", "sd", "min", "max",
                    "paper_mean", "paper_sd", "paper_min", "paper_max", "paper_source")
@@ -157,6 +157,41 @@ def _mean_sd(x: np.ndarray) -> tuple[float, float, int]:
     if x.size == 0:
         return math.nan, math.nan, 0
     return float(np.mean(x)), (float(np.std(x, ddof=1)) if x.size > 1 else math.nan), int(x.size)
+
+
+def confidence_interval(x: np.ndarray, level: float = 0.95) -> tuple[float, float]:
+    """Student-t interval of the mean of the finite values of ``x`` (``scipy.stats.t``; ddof=1): (lo, hi).
+
+    A sample of one value has no interval (nan, nan); a constant sample (an exact planner) has a
+    zero-width one at its value.
+    """
+    from scipy import stats as sps
+
+    x = np.asarray(x, np.float64)
+    x = x[np.isfinite(x)]
+    if x.size < 2:
+        return math.nan, math.nan
+    m, se = float(np.mean(x)), float(np.std(x, ddof=1)) / math.sqrt(x.size)
+    if se == 0.0:
+        return m, m
+    half = float(sps.t.ppf(0.5 + level / 2.0, x.size - 1)) * se
+    return m - half, m + half
+
+
+def hedges_g(x: np.ndarray, y: np.ndarray) -> float:
+    """Hedges' g of two samples (finite values only): (mean(x) - mean(y)) / pooled sd, times the small-sample
+    correction 1 - 3 / (4 (n_x + n_y) - 9). The effect size beside a Welch test's p-value: |g| of 0.2, 0.5,
+    0.8 are the usual "small", "medium", "large". nan with fewer than two values in a sample or no spread."""
+    x = np.asarray(x, np.float64)
+    y = np.asarray(y, np.float64)
+    x, y = x[np.isfinite(x)], y[np.isfinite(y)]
+    nx, ny = x.size, y.size
+    if nx < 2 or ny < 2:
+        return math.nan
+    pooled = math.sqrt(((nx - 1) * np.var(x, ddof=1) + (ny - 1) * np.var(y, ddof=1)) / (nx + ny - 2))
+    if pooled == 0.0:
+        return math.nan
+    return float((np.mean(x) - np.mean(y)) / pooled * (1.0 - 3.0 / (4.0 * (nx + ny) - 9.0)))
 
 
 def holm(p: Sequence[float]) -> np.ndarray:
