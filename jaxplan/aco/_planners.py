@@ -298,6 +298,45 @@ class BatchResult(NamedTuple):
                   "successes": self.successes[i, r].copy(), "compile_s": self.compile_s, **extra},
         )
 
+    def to_dict(self) -> dict[str, Any]:
+        """Every field as built-in Python (`jaxplan.core.export.plain`); ``paths`` as nested lists ``[N][R]`` of
+        each run's ``[x, y]`` cells, without the −1 padding (``tau`` only when kept)."""
+        from jaxplan.core.export import plain
+
+        d = plain({k: v for k, v in self._asdict().items() if k != "paths" and (k != "tau" or v is not None)})
+        d["paths"] = [[self.paths[i, r, : self.n_cells[i, r]].tolist() for r in range(self.paths.shape[1])]
+                      for i in range(self.paths.shape[0])]
+        return d
+
+    def to_dataframe(self, what: str = "summary") -> Any:
+        """A long-form `pandas.DataFrame` (pandas: ``pip install 'jaxplan[export]'``); ``scenario`` and ``seed``
+        are indices into the call's scenarios and seeds.
+
+        Args:
+          what: ``"summary"`` one row per run (success, length m, cost, turns, cells, converged iteration);
+            ``"path"`` one row per path cell (``step``, ``x``, ``y``); ``"history"`` one row per iteration
+            (``best_cost``, ``diversity``, ``successes``).
+        """
+        from jaxplan.core.export import check_what, frame
+
+        check_what(what, ("summary", "path", "history"), "BatchResult")
+        N, R = self.length.shape
+        sc, se = np.meshgrid(np.arange(N), np.arange(R), indexing="ij")
+        if what == "summary":
+            return frame({"planner": np.full(N * R, self.planner, object), "scenario": sc.ravel(), "seed": se.ravel(),
+                          "success": self.success.ravel(), "length": self.length.ravel(), "cost": self.cost.ravel(),
+                          "turns": self.turns.ravel(), "cells": self.n_cells.ravel(),
+                          "converged_iteration": self.converged.ravel()})
+        if what == "path":
+            keep = np.arange(self.paths.shape[2])[None, None, :] < self.n_cells[..., None]  # [N, R, P]
+            i, r, k = np.nonzero(keep)
+            return frame({"scenario": i, "seed": r, "step": k, "x": self.paths[i, r, k, 0],
+                          "y": self.paths[i, r, k, 1]})
+        I = self.history.shape[2]
+        i, r, k = (a.ravel() for a in np.meshgrid(np.arange(N), np.arange(R), np.arange(I), indexing="ij"))
+        return frame({"scenario": i, "seed": r, "iteration": k + 1, "best_cost": self.history.ravel(),
+                      "diversity": self.diversity.ravel(), "successes": self.successes.ravel()})
+
 
 def _seed_count(seeds) -> int:
     """How many seeds ``seeds`` holds, without building a list of a huge range (the memory guard runs first)."""
