@@ -29,7 +29,7 @@ import dataclasses
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -38,7 +38,7 @@ from jaxplan.core.progress import ProgressBar
 from jaxplan.experiments import plots
 from jaxplan.experiments.tables import text_table
 
-__all__ = ["DemoResult", "run_demo", "demo_table", "ROWS", "PIPELINES"]
+__all__ = ["DemoResult", "run_demo", "demo_table", "animate_episodes", "ROWS", "PIPELINES"]
 
 plt = plots.plt
 
@@ -149,10 +149,14 @@ def _figure(result: DemoResult, grid, path: Path) -> list[str]:
     return written
 
 
-def _animation(result: DemoResult, grid, path: Path, frames: int) -> list[str]:
+def animate_episodes(episodes: Mapping[str, Any], grid, path: str | Path, frames: int = 30) -> list[str]:
+    """A GIF of ``episodes`` (`jaxplan.nav.Episode` by label) on ``grid``: each robot's trail and the first
+    episode's moving discs, ``frames`` frames evenly spaced over the longest episode (matplotlib's Pillow writer;
+    raises ``ImportError`` without Pillow). Returns the files written."""
     from matplotlib.animation import PillowWriter
 
-    eps = list(result.episodes.items())
+    path = Path(path)
+    eps = list(episodes.items())
     T = max(len(ep.trajectory) for _, ep in eps)
     idx = np.unique(np.linspace(0, T - 1, frames).round().astype(int))
     fig, ax = plt.subplots(figsize=(6, 4.2))
@@ -237,7 +241,7 @@ def run_demo(out_dir: str | Path = "figures", *, seed: int = 0, quick: bool = Fa
         if gif:
             bar.update(len(PIPELINES) + 1, description="demo: animation")
             t0 = time.perf_counter()
-            files += _animation(result, grid, out / "demo.gif", frames)
+            files += animate_episodes(result.episodes, grid, out / "demo.gif", frames)
             wall["animation"] = time.perf_counter() - t0
         bar.update(steps, description="demo")
     return dataclasses.replace(result, files=tuple(files))
