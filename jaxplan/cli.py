@@ -1,10 +1,14 @@
-"""Command line: ``jaxplan demo | plan | run | figures | reproduce | tune | bench``.
+"""Command line: ``jaxplan demo | plan | navigate | run | figures | export | reproduce | tune | bench``.
 
 ``jaxplan --help`` and every ``jaxplan CMD --help`` answer without importing JAX or numba: this
 module imports only the standard library at the top, and each command imports what it needs.
 Before a command runs, the process opts in to one JAX CPU host device per core
 (`jaxplan.use_host_devices`; ``$JAXPLAN_HOST_DEVICES`` overrides the count, ``off`` leaves JAX's
 default, and an ``XLA_FLAGS`` device count stands), so batched calls shard over the cores.
+
+Long commands (``run``, ``reproduce``, ``tune``, ``figures``, ``demo``, ``bench``, ``plan``, ``navigate``) draw a
+progress bar with the time left (or a spinner for a stage such as compiling) on stderr when it is a terminal;
+``--no-progress`` turns it off, and piped output never has one (`jaxplan.core.progress`).
 
 A failure ends in one line naming the cause and what to do, with exit code 2 (bad input) or 1 (a fault of
 the environment); Ctrl-C ends with 130 and says how to resume; ``jaxplan --debug CMD`` adds the traceback
@@ -46,7 +50,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
         _compilation_cache()
     print(f"jaxplan {VERSION} demo: iaco_dwa and aco_dwa among moving obstacles"
           + (" (quick variant)" if args.quick else ""), flush=True)
-    result = run_demo(args.out_dir, seed=args.seed, quick=args.quick, gif=not args.no_gif)
+    result = run_demo(args.out_dir, seed=args.seed, quick=args.quick, gif=not args.no_gif,
+                      progress=not args.no_progress)
     print(demo_table(result))
     print("  wall time includes each pipeline's one-off compilation; planning time is the warm global plan")
     extra = ", ".join(f"{k} {result.wall_s[k]:.1f} s" for k in ("figure", "animation") if k in result.wall_s)
@@ -165,7 +170,10 @@ def cmd_plan(args: argparse.Namespace) -> int:
         check_suffix(args.out, PLAN_SUFFIXES, "jaxplan plan")  # before any work
     grid = load_map(args.map, resolution=args.resolution)
     start, goal = tuple(args.start), tuple(args.goal)
-    res = plan(grid, start, goal, planner=args.planner, seed=args.seed, **overrides)
+    from jaxplan.core.progress import ProgressBar
+
+    with ProgressBar(f"{args.planner}: planning (compiled on first use)", None, enabled=not args.no_progress):
+        res = plan(grid, start, goal, planner=args.planner, seed=args.seed, **overrides)
     print(text_table([(args.planner, path_column(res, grid))], PATH_ROWS, f"{args.planner} on {args.map}"))
     smoothed, metrics, failure = None, None, None
     if res.success:
@@ -220,7 +228,7 @@ def cmd_navigate(args: argparse.Namespace) -> int:
         grid, n=args.walkers, speed=args.walker_speed, radius=args.walker_radius, seed=args.seed, avoid=avoid,
         avoid_radius=1.5)
     ep = navigate(grid, start, goal, pipeline=args.pipeline, seed=args.seed, obstacles=obs,
-                  time_limit=args.time_limit, **overrides)
+                  time_limit=args.time_limit, progress=not args.no_progress, **overrides)
     m = ep.metrics
     print(f"{args.pipeline} on {args.map}: {'success' if ep.success else 'failed'} ({ep.reason}); "
           f"time {ep.time_s:.1f} s, path {m['path_length']:.2f} m, collisions {ep.collisions}, recoveries "
@@ -259,7 +267,8 @@ def cmd_figures(args: argparse.Namespace) -> int:
     """``jaxplan figures RUN``: every ``[[figures]]`` entry of the run's config as PNG and SVG, plus index.md."""
     from jaxplan.experiments.figures import draw_figures
 
-    drawn, problems = draw_figures(args.run, args.out, data_dir=args.data_dir, partial=args.partial)
+    drawn, problems = draw_figures(args.run, args.out, data_dir=args.data_dir, partial=args.partial,
+                                   progress=not args.no_progress)
     name = Path(args.run).resolve().name
     print(f"wrote {len(drawn)} figures to {Path(args.out) / name}/ (index.md lists them)")
     for d in drawn:
@@ -339,6 +348,7 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--quick", action="store_true", help="a small generated warehouse (seconds, for tests)")
     d.add_argument("--no-gif", action="store_true", help="skip the animation")
     d.add_argument("--no-cache", action="store_true", help="do not use JAX's persistent compilation cache")
+    d.add_argument("--no-progress", action="store_true", help="no progress bar on stderr (drawn only on a terminal)")
     d.set_defaults(func=cmd_demo)
     q = sub.add_parser("plan", help="plan one path on a map; --out writes .json, .csv or .png")
     q.add_argument("map", help="map file (MovingAI .map)")
@@ -355,6 +365,7 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--resolution", type=float, default=1.0, help="metres per cell")
     q.add_argument("--out", default=None, metavar="FILE", help="write the plan: .json (path in cells and metres, "
                    "metrics, planner and parameters, provenance), .csv (path points) or .png/.svg/.pdf (path on map)")
+    q.add_argument("--no-progress", action="store_true", help="no progress spinner on stderr")
     q.set_defaults(func=cmd_plan)
     v = sub.add_parser("navigate", help="one two-level navigation episode among random walkers; --out writes .json, "
                                         ".gif or .png")
@@ -371,6 +382,7 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--resolution", type=float, default=1.0, help="metres per cell")
     v.add_argument("--out", default=None, metavar="FILE", help="write the episode: .json (trajectory, controls, "
                    "metrics, walkers, provenance), .gif (animation; needs Pillow) or .png/.svg/.pdf")
+    v.add_argument("--no-progress", action="store_true", help="no progress stages on stderr")
     v.set_defaults(func=cmd_navigate)
     x = sub.add_parser("export", help="a run's trials, paths, histories and trajectories as npz or parquet tables")
     x.add_argument("run", help="a run folder written by `jaxplan run` (e.g. runs/NAME)")
@@ -394,6 +406,7 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--data-dir", default=None, help="folder that the config's map paths are relative to")
     f.add_argument("--partial", action="store_true", help="draw a figure even if some of its chunks' arrays are "
                                                           "missing or damaged, labelled partial (default: refuse it)")
+    f.add_argument("--no-progress", action="store_true", help="no progress bar on stderr (drawn only on a terminal)")
     f.set_defaults(func=cmd_figures)
     g = sub.add_parser("reproduce", help="run every paper's reproduction config (configs/<paper>_*.toml, e.g. "
                                          "cui2025_table2.toml), then draw its figures")

@@ -50,7 +50,8 @@ def progress_wanted(enabled: bool = True, stream: TextIO | None = None) -> bool:
 
 
 def _rich_progress(stream: TextIO) -> Any:
-    """A started `rich.progress.Progress` on ``stream``, or None without rich."""
+    """A started `rich.progress.Progress` on ``stream``, None without rich, False when another rich display is
+    live (rich draws one at a time)."""
     try:
         from rich.console import Console
         from rich.progress import (
@@ -71,7 +72,10 @@ def _rich_progress(stream: TextIO) -> Any:
                  TextColumn("{task.fields[unit]}"), TimeElapsedColumn(), TextColumn("left"), TimeRemainingColumn(),
                  console=console, redirect_stdout=same_screen, redirect_stderr=stream is sys.stderr,
                  refresh_per_second=8)
-    p.start()
+    try:
+        p.start()
+    except Exception:  # noqa: BLE001 - rich's LiveError: another bar is live (a bar inside a bar draws nothing)
+        return False
     return p
 
 
@@ -96,6 +100,8 @@ class ProgressBar:
         self.description, self.total, self.done, self.unit = description, total, done, unit
         self.start_done, self.t0 = done, time.perf_counter()
         self._rich = _rich_progress(self.stream) if self.active else None
+        if self._rich is False:  # an outer bar is live: it keeps the screen
+            self._rich, self.active = None, False
         self._task = None
         if self._rich is not None:
             self._task = self._rich.add_task(description, total=total, completed=done, unit=unit)
