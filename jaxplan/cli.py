@@ -87,9 +87,10 @@ def _parse_sets(items: Sequence[str] | None) -> dict:
     return out
 
 
-def _planner_params(planner: str, overrides: dict, option: str = "--set") -> dict:
+def _planner_params(planner: str, overrides: dict, options: dict | None = None) -> dict:
     """Every parameter of ``planner`` with ``overrides`` applied, checked against its registered parameters and
-    values; the ``ValueError`` names the bad ``--set`` key or value and what the planner takes."""
+    values; the ``ValueError`` names the bad ``--set`` key or value (or the option ``options[key]`` that gave it,
+    e.g. ``--connectivity``) and what the planner takes."""
     import difflib
 
     from jaxplan.planning import planners
@@ -101,17 +102,18 @@ def _planner_params(planner: str, overrides: dict, option: str = "--set") -> dic
         raise ValueError(f"--planner {planner!r} is not a planner{f' (did you mean {near[0]!r}?)' if near else ''}; "
                          f"choose from {', '.join(sorted(specs))}")
     spec = specs[planner]
+    options = options or {}
+    said = lambda k: f"{options[k]} {overrides[k]!r}" if k in options else f"--set {k}={overrides[k]!r}"  # noqa: E731
     for k in overrides:
         if k not in spec.defaults:
             near = difflib.get_close_matches(k, list(spec.defaults), n=1)
-            raise ValueError(f"{option} {k}={overrides[k]!r}: planner {planner!r} has no parameter {k!r}"
+            raise ValueError(f"{said(k)}: planner {planner!r} has no parameter {k!r}"
                              f"{f' (did you mean {near[0]!r}?)' if near else ''}; it takes: "
                              f"{', '.join(sorted(spec.defaults)) or 'none'}")
     try:
         return resolve(planner, overrides)[1]
     except (ValueError, TypeError) as e:
-        given = " ".join(f"{k}={v!r}" for k, v in overrides.items())
-        raise ValueError(f"{option} {given}: {e}") from None
+        raise ValueError(f"{' '.join(map(said, overrides))}: {e}") from None
 
 
 def _why_failed(grid, start, goal, planner: str, params: dict, res) -> str:
@@ -163,7 +165,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     # Only grid planners take a connectivity (the sampling planners have none), so pass it only when asked.
     if args.connectivity is not None:
         overrides["connectivity"] = args.connectivity
-    params = _planner_params(args.planner, overrides)
+    params = _planner_params(args.planner, overrides, {"connectivity": "--connectivity"})
     if args.out is not None:
         from jaxplan.experiments.outputs import PLAN_SUFFIXES, check_suffix
 

@@ -27,6 +27,10 @@ from typing import Any, TextIO
 
 __all__ = ["clock", "progress_wanted", "ProgressBar"]
 
+_LIVE: list["ProgressBar"] = []
+"""The bar drawn now, if any: one bar at a time, so a bar inside a bar (a batched call inside a run's chunk, with
+``progress=True``) draws nothing and the outer one keeps the screen."""
+
 _KEEP: Any = object()
 """Sentinel of `ProgressBar.update`: leave the total as it is (None means a spinner)."""
 
@@ -96,12 +100,14 @@ class ProgressBar:
     def __init__(self, description: str, total: int | None = None, *, done: int = 0, unit: str = "",
                  enabled: bool = True, stream: TextIO | None = None):
         self.stream = sys.stderr if stream is None else stream
-        self.active = progress_wanted(enabled, self.stream)
+        self.active = progress_wanted(enabled, self.stream) and not _LIVE
         self.description, self.total, self.done, self.unit = description, total, done, unit
         self.start_done, self.t0 = done, time.perf_counter()
         self._rich = _rich_progress(self.stream) if self.active else None
-        if self._rich is False:  # an outer bar is live: it keeps the screen
+        if self._rich is False:  # another rich display is live: it keeps the screen
             self._rich, self.active = None, False
+        if self.active:
+            _LIVE.append(self)
         self._task = None
         if self._rich is not None:
             self._task = self._rich.add_task(description, total=total, completed=done, unit=unit)
@@ -166,6 +172,8 @@ class ProgressBar:
         if not self.active:
             return
         self.active = False
+        if self in _LIVE:
+            _LIVE.remove(self)
         if self._rich is not None:
             self._rich.refresh()
             self._rich.stop()

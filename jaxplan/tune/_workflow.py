@@ -149,9 +149,9 @@ class _Progress:
                                enabled=enabled)
 
     def update(self, row: dict, eval_s: float) -> None:
-        self.bar.update(row["generation"], description=f"{self.name}: best {row['best']:.6g} | gen mean "
-                                                      f"{row['gen_mean']:.6g} | NaN/inf {row['n_bad']} | eval "
-                                                      f"{eval_s:.2f} s")
+        bad = f", {row['n_bad']} NaN/inf" if row["n_bad"] else ""
+        text = f"{self.name}: best {row['best']:.5g} (mean {row['gen_mean']:.4g}{bad})"
+        self.bar.update(row["generation"], description=text)
 
     def close(self) -> None:
         self.bar.close()
