@@ -386,12 +386,6 @@ def build_parser() -> argparse.ArgumentParser:
                    "metrics, walkers, provenance), .gif (animation; needs Pillow) or .png/.svg/.pdf")
     v.add_argument("--no-progress", action="store_true", help="no progress stages on stderr")
     v.set_defaults(func=cmd_navigate)
-    x = sub.add_parser("export", help="a run's trials, paths, histories and trajectories as npz or parquet tables")
-    x.add_argument("run", help="a run folder written by `jaxplan run` (e.g. runs/NAME)")
-    x.add_argument("--format", default="npz", choices=("npz", "parquet"),
-                   help="npz (one file, always available) or parquet (one file per table; needs pyarrow)")
-    x.add_argument("--out", default=None, help="npz file or parquet folder (default RUN/export.npz or RUN/export/)")
-    x.set_defaults(func=cmd_export)
     r = sub.add_parser("run", help="run (or resume) the experiment of a TOML config; writes OUT/NAME/")
     r.add_argument("config", help="experiment config (TOML; schema: jaxplan.experiments.config)")
     r.add_argument("--quick", action="store_true", help="apply the config's [experiment.quick] changes (a smoke run, "
@@ -410,6 +404,12 @@ def build_parser() -> argparse.ArgumentParser:
                                                           "missing or damaged, labelled partial (default: refuse it)")
     f.add_argument("--no-progress", action="store_true", help="no progress bar on stderr (drawn only on a terminal)")
     f.set_defaults(func=cmd_figures)
+    x = sub.add_parser("export", help="a run's trials, paths, histories and trajectories as npz or parquet tables")
+    x.add_argument("run", help="a run folder written by `jaxplan run` (e.g. runs/NAME)")
+    x.add_argument("--format", default="npz", choices=("npz", "parquet"),
+                   help="npz (one file, always available) or parquet (one file per table; needs pyarrow)")
+    x.add_argument("--out", default=None, help="npz file or parquet folder (default RUN/export.npz or RUN/export/)")
+    x.set_defaults(func=cmd_export)
     g = sub.add_parser("reproduce", help="run every paper's reproduction config (configs/<paper>_*.toml, e.g. "
                                          "cui2025_table2.toml), then draw its figures")
     g.add_argument("--quick", action="store_true", help="the configs' [experiment.quick] smoke runs (CI)")

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -128,3 +129,40 @@ def test_navigate_rejects_a_bad_pipeline_and_suffix(small_map, capsys):
     assert "not a pipeline" in capsys.readouterr().err
     assert main(["navigate", str(small_map), "--start", "0", "0", "--goal", "9", "7", "--out", "e.mp4"]) == 2
     assert ".gif" in capsys.readouterr().err
+
+
+def _readme_plan_commands() -> list[list[str]]:
+    """The README's ``jaxplan plan ... --out FILE`` commands (continuation lines joined, comments dropped)."""
+    import shlex
+
+    from conftest import ROOT
+
+    text = (ROOT / "README.md").read_text().replace("\\\n", " ")
+    found = []
+    for line in text.splitlines():
+        line = line.strip()
+        if line.startswith("jaxplan plan ") and "--out" in line:
+            found.append(shlex.split(line, comments=True)[1:])
+    return found
+
+
+def test_the_readme_plan_commands_write_their_json_and_png(movingai, tmp_path, capsys):
+    """Every ``jaxplan plan ... --out`` line of the README runs, with its output redirected to a temporary folder
+    and its map path read from the repository root (README paths are relative to it)."""
+    from conftest import ROOT
+
+    commands = _readme_plan_commands()
+    if not commands:
+        pytest.skip("the README shows no `jaxplan plan ... --out` command yet")
+    suffixes = set()
+    for argv in commands:
+        k = argv.index("--out")
+        out = tmp_path / Path(argv[k + 1]).name
+        argv = [*argv[:k + 1], str(out), *argv[k + 2:]]
+        argv[1] = str((ROOT / argv[1]).resolve()) if not Path(argv[1]).is_absolute() else argv[1]
+        assert main(argv) == 0, capsys.readouterr().err
+        assert out.stat().st_size > 0
+        suffixes.add(out.suffix)
+        if out.suffix == ".json":
+            assert json.loads(out.read_text())["success"] is True
+    assert {".json", ".png"} <= suffixes

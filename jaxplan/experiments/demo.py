@@ -225,7 +225,7 @@ def run_demo(out_dir: str | Path = "figures", *, seed: int = 0, quick: bool = Fa
     steps = len(PIPELINES) + 1 + int(gif)
     with ProgressBar("demo", steps, unit="steps", enabled=progress) as bar:
         for k, name in enumerate(PIPELINES):
-            bar.update(k, description=f"demo: {name} (compiling, then the episode)")
+            bar.update(k, description=f"demo: {name} (compile + run)")
             t0 = time.perf_counter()
             episodes[name] = navigate(grid, scene.start, scene.goal, pipeline=name, seed=seed, obstacles=obs,
                                       config=cfg, **overrides)
