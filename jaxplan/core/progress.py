@@ -67,13 +67,17 @@ def _rich_progress(stream: TextIO) -> Any:
             TimeElapsedColumn,
             TimeRemainingColumn,
         )
+        from rich.table import Column
     except ImportError:
         return None
     console = Console(file=stream, force_terminal=True)
     # stdout is redirected above the bar only when it shares the terminal; piped stdout must keep its bytes.
     same_screen = getattr(sys.stdout, "isatty", lambda: False)()
-    p = Progress(SpinnerColumn(), TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                 TextColumn("{task.fields[unit]}"), TimeElapsedColumn(), TextColumn("left"), TimeRemainingColumn(),
+    fixed = lambda: Column(no_wrap=True)  # noqa: E731
+    p = Progress(SpinnerColumn(table_column=fixed()), TextColumn("{task.description}", table_column=fixed()),
+                 BarColumn(bar_width=16, table_column=fixed()), MofNCompleteColumn(table_column=fixed()),
+                 TextColumn("{task.fields[unit]}", table_column=fixed()), TimeElapsedColumn(table_column=fixed()),
+                 TextColumn("left", table_column=fixed()), TimeRemainingColumn(table_column=fixed()),
                  console=console, redirect_stdout=same_screen, redirect_stderr=stream is sys.stderr,
                  refresh_per_second=8)
     try:
@@ -110,7 +114,7 @@ class ProgressBar:
             _LIVE.append(self)
         self._task = None
         if self._rich is not None:
-            self._task = self._rich.add_task(description, total=total, completed=done, unit=unit)
+            self._task = self._rich.add_task(self._fit(description), total=total, completed=done, unit=unit)
         self._draw()
 
     @property
@@ -140,8 +144,17 @@ class ProgressBar:
         if self._rich is not None:
             fields = {} if unit is None else {"unit": unit}
             kw = {} if total is _KEEP else {"total": total}
-            self._rich.update(self._task, completed=self.done, description=self.description, **kw, **fields)
+            self._rich.update(self._task, completed=self.done, description=self._fit(self.description), **kw,
+                              **fields)
         self._draw()
+
+    def _fit(self, text: str) -> str:
+        """``text`` cut (with an ellipsis) so that the counts and times keep their room on a narrow terminal."""
+        if self._rich is None:
+            return text
+        counts = 2 * len(str(self.total or 0)) + 1  # "done/total"
+        room = max(12, self._rich.console.width - 44 - counts - len(self.unit))
+        return text if len(text) <= room else text[: room - 1] + "…"
 
     def left_s(self) -> float:
         """Estimated seconds left (nan before the first unit done in this session, or for a spinner)."""
