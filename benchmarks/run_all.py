@@ -632,6 +632,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     ap.add_argument("--json", type=Path, default=None, help="also write the JSON here")
     ap.add_argument("--data-dir", default=os.environ.get("JAXPLAN_DATA", str(ROOT.parent / "shared" / "benchmarks")))
     ap.add_argument("--only", default=",".join(SECTIONS), help=f"comma-separated sections of {','.join(SECTIONS)}")
+    ap.add_argument("--no-progress", action="store_true", help="no progress bar on stderr (drawn only on a terminal)")
     args = ap.parse_args(argv)
     sizes = dict(repeats=5, queries=50, rows=1000, paths=10_000, subset=500, episodes=64, nav_repeats=3,
                  nav_singles=5, population=16,
@@ -669,17 +670,22 @@ def main(argv: list[str] | None = None) -> None:
           f"{' (uncommitted changes)' if mach['git_dirty'] else ''}", flush=True)
     rows: list[Row] = []
     timings: dict[str, float] = {}
-    for name in args.only:
-        t0 = time.perf_counter()
-        try:
-            rows.extend(SECTION_FNS[name](args))
-        except FileNotFoundError as e:
-            rows.append(status_row(name, f"skipped: {e.filename or e} not found"))
-        except Exception as e:  # noqa: BLE001 - one failing section must not hide the others
-            traceback.print_exc()
-            rows.append(status_row(name, f"failed: {type(e).__name__}: {e}"))
-        timings[name] = time.perf_counter() - t0
-        print(f"  [{name}: {timings[name]:.0f} s]", file=sys.stderr, flush=True)
+    from jaxplan.core.progress import ProgressBar
+
+    with ProgressBar("bench", len(args.only), unit="sections", enabled=not args.no_progress) as bar:
+        for k, name in enumerate(args.only):
+            bar.update(k, description=f"bench: {name}")
+            t0 = time.perf_counter()
+            try:
+                rows.extend(SECTION_FNS[name](args))
+            except FileNotFoundError as e:
+                rows.append(status_row(name, f"skipped: {e.filename or e} not found"))
+            except Exception as e:  # noqa: BLE001 - one failing section must not hide the others
+                traceback.print_exc()
+                rows.append(status_row(name, f"failed: {type(e).__name__}: {e}"))
+            timings[name] = time.perf_counter() - t0
+            print(f"  [{name}: {timings[name]:.0f} s]", file=sys.stderr, flush=True)
+        bar.update(len(args.only), description="bench")
     wall = time.perf_counter() - t_start
     print("\nspeed-up: times faster than the reference (>1: jaxplan faster); n: repeats of the median; "
           "compilation excluded\n")
@@ -688,7 +694,7 @@ def main(argv: list[str] | None = None) -> None:
     print(steal.summary(mach["steal_fraction"]))
     print(f"\nwall time {wall:.0f} s ({', '.join(f'{k} {v:.0f} s' for k, v in timings.items())})")
     data = {"started_utc": started.isoformat(timespec="seconds"), "quick": args.quick, "machine": mach,
-            "options": {k: v for k, v in vars(args).items() if k not in ("json",)}, "wall_s": wall,
+            "options": {k: v for k, v in vars(args).items() if k not in ("json", "no_progress")}, "wall_s": wall,
             "section_wall_s": timings, "rows": [dataclasses.asdict(r) for r in rows]}
     name = f"run_all-{started:%Y-%m-%d}-{mach['git_rev'] or 'norev'}{'-quick' if args.quick else ''}.json"
     out = HERE / "results" / name

@@ -1,10 +1,14 @@
-"""Command line: ``jaxplan demo | plan | run | figures | reproduce | tune | bench``.
+"""Command line: ``jaxplan demo | plan | navigate | run | figures | export | reproduce | tune | bench``.
 
 ``jaxplan --help`` and every ``jaxplan CMD --help`` answer without importing JAX or numba: this
 module imports only the standard library at the top, and each command imports what it needs.
 Before a command runs, the process opts in to one JAX CPU host device per core
 (`jaxplan.use_host_devices`; ``$JAXPLAN_HOST_DEVICES`` overrides the count, ``off`` leaves JAX's
 default, and an ``XLA_FLAGS`` device count stands), so batched calls shard over the cores.
+
+Long commands (``run``, ``reproduce``, ``tune``, ``figures``, ``demo``, ``bench``, ``plan``, ``navigate``) draw a
+progress bar with the time left (or a spinner for a stage such as compiling) on stderr when it is a terminal;
+``--no-progress`` turns it off, and piped output never has one (`jaxplan.core.progress`).
 
 A failure ends in one line naming the cause and what to do, with exit code 2 (bad input) or 1 (a fault of
 the environment); Ctrl-C ends with 130 and says how to resume; ``jaxplan --debug CMD`` adds the traceback
@@ -46,7 +50,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
         _compilation_cache()
     print(f"jaxplan {VERSION} demo: iaco_dwa and aco_dwa among moving obstacles"
           + (" (quick variant)" if args.quick else ""), flush=True)
-    result = run_demo(args.out_dir, seed=args.seed, quick=args.quick, gif=not args.no_gif)
+    result = run_demo(args.out_dir, seed=args.seed, quick=args.quick, gif=not args.no_gif,
+                      progress=not args.no_progress)
     print(demo_table(result))
     print("  wall time includes each pipeline's one-off compilation; planning time is the warm global plan")
     extra = ", ".join(f"{k} {result.wall_s[k]:.1f} s" for k in ("figure", "animation") if k in result.wall_s)
@@ -54,17 +59,199 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _literal(text: str):
+    """A ``--set`` value: ``true``/``false``, ``none``/``null``, a Python number, tuple or list literal, else the
+    text itself (``heuristic=geodesic``)."""
+    import ast
+
+    low = text.strip().lower()
+    if low in ("true", "false"):
+        return low == "true"
+    if low in ("none", "null"):
+        return None
+    try:
+        value = ast.literal_eval(text.strip())
+    except (ValueError, SyntaxError, MemoryError, RecursionError):
+        return text.strip()
+    return value if isinstance(value, (int, float, tuple, list, str)) else text.strip()
+
+
+def _parse_sets(items: Sequence[str] | None) -> dict:
+    """``--set KEY=VALUE`` options as a dict (a later key wins); ``ValueError`` for an item without ``=``."""
+    out = {}
+    for item in items or ():
+        key, sep, text = item.partition("=")
+        if not sep or not key.strip():
+            raise ValueError(f"--set {item!r}: expected KEY=VALUE (e.g. --set ants=64 --set heuristic=geodesic)")
+        out[key.strip()] = _literal(text)
+    return out
+
+
+def _planner_params(planner: str, overrides: dict, options: dict | None = None) -> dict:
+    """Every parameter of ``planner`` with ``overrides`` applied, checked against its registered parameters and
+    values; the ``ValueError`` names the bad ``--set`` key or value (or the option ``options[key]`` that gave it,
+    e.g. ``--connectivity``) and what the planner takes."""
+    import difflib
+
+    from jaxplan.planning import planners
+    from jaxplan.registry import resolve
+
+    specs = planners()
+    if planner not in specs:
+        near = difflib.get_close_matches(planner, specs, n=1)
+        raise ValueError(f"--planner {planner!r} is not a planner{f' (did you mean {near[0]!r}?)' if near else ''}; "
+                         f"choose from {', '.join(sorted(specs))}")
+    spec = specs[planner]
+    options = options or {}
+    said = lambda k: f"{options[k]} {overrides[k]!r}" if k in options else f"--set {k}={overrides[k]!r}"  # noqa: E731
+    for k in overrides:
+        if k not in spec.defaults:
+            near = difflib.get_close_matches(k, list(spec.defaults), n=1)
+            raise ValueError(f"{said(k)}: planner {planner!r} has no parameter {k!r}"
+                             f"{f' (did you mean {near[0]!r}?)' if near else ''}; it takes: "
+                             f"{', '.join(sorted(spec.defaults)) or 'none'}")
+    try:
+        return resolve(planner, overrides)[1]
+    except (ValueError, TypeError) as e:
+        raise ValueError(f"{' '.join(map(said, overrides))}: {e}") from None
+
+
+def _why_failed(grid, start, goal, planner: str, params: dict, res) -> str:
+    """Why ``res`` (no path) failed, from what `PlanResult` keeps: is the goal reachable under the planner's move
+    rules (exact A*), and for a colony its iterations, ants, dead-end rule and step limit (a failed colony keeps
+    no partial path: ``path`` is empty and every iteration's ``successes`` is 0)."""
+    import numpy as np
+
+    from jaxplan.planning import plan
+
+    moves = {k: params[k] for k in ("connectivity", "vehicle_height") if k in params}
+    exact = plan(grid, start, goal, planner="astar", **moves)
+    rule = f"{moves.get('connectivity', 8)}-connected" + (
+        f", vehicle height {moves['vehicle_height']}" if moves.get("vehicle_height") is not None else "")
+    if not exact.success:
+        return (f"the goal is unreachable from the start ({rule} moves, no corner cutting: exact A* finds no path "
+                f"either)")
+    reach = f"the goal is reachable ({rule}: exact shortest path {exact.length:.2f} m, {len(exact.path)} cells)"
+    if "ants" in params:
+        ants = int(params["ants"]) * int(params.get("colonies", 1))
+        its = len(res.history)
+        succ = np.asarray(res.info.get("successes", np.zeros(0)))
+        steps = params.get("max_steps") or "min(free cells, 4·(H + W))"
+        hints = []
+        if params.get("dead_end") == "die":
+            hints.append("--set dead_end=retreat (ants stuck in a dead end die now)")
+        if params.get("heuristic") == "euclidean":
+            hints.append("--set heuristic=geodesic (the exact goal distance as η)")
+        hints.append(f"more --set iterations= or ants= (now {its} x {ants})")
+        if params.get("max_steps"):
+            hints.append(f"a larger --set max_steps= (now {params['max_steps']}; the exact path has {len(exact.path)} "
+                         f"cells)")
+        return (f"{reach}, but no ant of {ants} reached it in any of {its} iterations (ants at the goal: "
+                f"{int(succ.sum())}; dead-end rule {params.get('dead_end')!r}, at most {steps} steps per ant; a failed "
+                f"colony keeps no partial path). Try " + ", ".join(hints))
+    if "iterations" in params:  # the sampling planners
+        return (f"{reach}, but the tree did not connect the goal in {params['iterations']} samples: try more "
+                f"--set iterations= or another --seed")
+    return reach
+
+
 def cmd_plan(args: argparse.Namespace) -> int:
+    """``jaxplan plan MAP --start X Y --goal X Y``: one path, a table, and with ``--out`` a .json/.csv/.png file."""
     from jaxplan.experiments.tables import PATH_ROWS, path_column, text_table
     from jaxplan.grid import load_map
     from jaxplan.planning import plan
 
-    grid = load_map(args.map, resolution=args.resolution)
+    overrides = _parse_sets(args.set)
     # Only grid planners take a connectivity (the sampling planners have none), so pass it only when asked.
-    extra = {} if args.connectivity is None else {"connectivity": args.connectivity}
-    res = plan(grid, tuple(args.start), tuple(args.goal), planner=args.planner, **extra)
+    if args.connectivity is not None:
+        overrides["connectivity"] = args.connectivity
+    params = _planner_params(args.planner, overrides, {"connectivity": "--connectivity"})
+    if args.out is not None:
+        from jaxplan.experiments.outputs import PLAN_SUFFIXES, check_suffix
+
+        check_suffix(args.out, PLAN_SUFFIXES, "jaxplan plan")  # before any work
+    grid = load_map(args.map, resolution=args.resolution)
+    start, goal = tuple(args.start), tuple(args.goal)
+    from jaxplan.core.progress import ProgressBar
+
+    with ProgressBar(f"{args.planner}: planning (compiled on first use)", None, enabled=not args.no_progress):
+        res = plan(grid, start, goal, planner=args.planner, seed=args.seed, **overrides)
     print(text_table([(args.planner, path_column(res, grid))], PATH_ROWS, f"{args.planner} on {args.map}"))
+    smoothed, metrics, failure = None, None, None
+    if res.success:
+        from jaxplan.metrics import path_metrics
+
+        metrics = path_metrics(res.path, grid)
+        if args.smooth:
+            from jaxplan.smooth import smooth
+
+            smoothed = smooth(res.path, grid, tuple(args.smooth.split(",")))
+            sm = path_metrics(smoothed.points, grid)
+            metrics = {**metrics, **{f"smoothed_{k}": v for k, v in sm.items()}}
+            print(f"smoothed ({args.smooth}): {len(smoothed.points)} points, length {sm['length']:.3f} m, "
+                  f"{int(smoothed.removed)} vertices removed, {int(smoothed.fallbacks)} fallbacks")
+    else:
+        failure = _why_failed(grid, start, goal, args.planner, params, res)
+        print(f"{args.planner} found no path: {failure}", file=sys.stderr)
+    if args.out is not None:
+        from jaxplan.experiments.outputs import plan_record, write_plan
+
+        record = plan_record(map_path=args.map, grid=grid, start=start, goal=goal, planner=args.planner,
+                             seed=args.seed, params=params, overrides=overrides, result=res, metrics=metrics,
+                             smoothed=smoothed, smooth_method=args.smooth, failure=failure)
+        print(f"wrote {write_plan(args.out, record, grid, res, smoothed)}")
     return 0 if res.success else 1
+
+
+def cmd_navigate(args: argparse.Namespace) -> int:
+    """``jaxplan navigate MAP --start X Y --goal X Y``: one two-level episode among random walkers."""
+    import numpy as np
+
+    from jaxplan.grid import load_map
+    from jaxplan.nav import navigate, pipelines, random_obstacles
+
+    overrides = _parse_sets(args.set)
+    names = pipelines()
+    if args.pipeline not in names:
+        raise ValueError(f"--pipeline {args.pipeline!r} is not a pipeline; choose from {', '.join(names)}")
+    pipe = names[args.pipeline]
+    _planner_params(pipe.global_planner, {**pipe.planner_overrides, **overrides})  # a bad --set fails before any work
+    if args.out is not None:
+        from jaxplan.experiments.outputs import EPISODE_SUFFIXES, check_suffix
+
+        check_suffix(args.out, EPISODE_SUFFIXES, "jaxplan navigate")
+    if args.walkers < 0:
+        raise ValueError(f"--walkers must be >= 0, got {args.walkers}")
+    grid = load_map(args.map, resolution=args.resolution)
+    start, goal = tuple(args.start), tuple(args.goal)
+    res = float(grid.resolution)
+    avoid = (np.array([start, goal], np.float64) + 0.5) * res
+    obs = None if args.walkers == 0 else random_obstacles(
+        grid, n=args.walkers, speed=args.walker_speed, radius=args.walker_radius, seed=args.seed, avoid=avoid,
+        avoid_radius=1.5)
+    ep = navigate(grid, start, goal, pipeline=args.pipeline, seed=args.seed, obstacles=obs,
+                  time_limit=args.time_limit, progress=not args.no_progress, **overrides)
+    m = ep.metrics
+    print(f"{args.pipeline} on {args.map}: {'success' if ep.success else 'failed'} ({ep.reason}); "
+          f"time {ep.time_s:.1f} s, path {m['path_length']:.2f} m, collisions {ep.collisions}, recoveries "
+          f"{int(m['recoveries'])}, re-plans {int(m['replans'])}, walkers {args.walkers}")
+    if args.out is not None:
+        from jaxplan.experiments.outputs import write_episode
+
+        record = {"map": str(args.map), "resolution_m": res, "start": list(start), "goal": list(goal),
+                  "pipeline": args.pipeline, "seed": args.seed, "overrides": overrides, "walkers":
+                  {"n": args.walkers, "speed": args.walker_speed, "radius": args.walker_radius}}
+        print(f"wrote {write_episode(args.out, ep, grid, record)}")
+    return 0 if ep.success else 1
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    """``jaxplan export RUN --format npz|parquet``: a run's trials, paths, histories and trajectories as tables."""
+    from jaxplan.experiments.export import export_run
+
+    files = export_run(args.run, args.out, args.format)
+    print("wrote " + ", ".join(map(str, files)))
+    return 0
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -82,7 +269,8 @@ def cmd_figures(args: argparse.Namespace) -> int:
     """``jaxplan figures RUN``: every ``[[figures]]`` entry of the run's config as PNG and SVG, plus index.md."""
     from jaxplan.experiments.figures import draw_figures
 
-    drawn, problems = draw_figures(args.run, args.out, data_dir=args.data_dir, partial=args.partial)
+    drawn, problems = draw_figures(args.run, args.out, data_dir=args.data_dir, partial=args.partial,
+                                   progress=not args.no_progress)
     name = Path(args.run).resolve().name
     print(f"wrote {len(drawn)} figures to {Path(args.out) / name}/ (index.md lists them)")
     for d in drawn:
@@ -196,16 +384,42 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--quick", action="store_true", help="a small generated warehouse (seconds, for tests)")
     d.add_argument("--no-gif", action="store_true", help="skip the animation")
     d.add_argument("--no-cache", action="store_true", help="do not use JAX's persistent compilation cache")
+    d.add_argument("--no-progress", action="store_true", help="no progress bar on stderr (drawn only on a terminal)")
     d.set_defaults(func=cmd_demo)
-    q = sub.add_parser("plan", help="plan one path on a MovingAI map")
-    q.add_argument("map", help="MovingAI .map file")
-    q.add_argument("--start", type=int, nargs=2, required=True, metavar=("X", "Y"))
-    q.add_argument("--goal", type=int, nargs=2, required=True, metavar=("X", "Y"))
-    q.add_argument("--planner", default="astar")
+    q = sub.add_parser("plan", help="plan one path on a map; --out writes .json, .csv or .png")
+    q.add_argument("map", help="map file (MovingAI .map)")
+    q.add_argument("--start", type=int, nargs=2, required=True, metavar=("X", "Y"), help="start cell (column, row)")
+    q.add_argument("--goal", type=int, nargs=2, required=True, metavar=("X", "Y"), help="goal cell (column, row)")
+    q.add_argument("--planner", default="astar", help="a planner of jaxplan.planners() (default astar)")
+    q.add_argument("--seed", type=int, default=0, help="the planner's seed (default 0; exact planners ignore it)")
+    q.add_argument("--set", action="append", metavar="KEY=VALUE", help="a planner parameter, repeatable: --set "
+                   "ants=64 --set heuristic=geodesic --set lambdas=0.6,0.3,0.1 (checked against the planner's)")
+    q.add_argument("--smooth", default=None, metavar="METHOD", help="smooth the path: los, key_nodes, fillet, bezier, "
+                                                                   "bspline, or a chain such as los,fillet")
     q.add_argument("--connectivity", type=int, default=None, choices=(4, 8, 16),
                    help="grid moves per cell (default: the planner's own, 8 for the grid planners)")
     q.add_argument("--resolution", type=float, default=1.0, help="metres per cell")
+    q.add_argument("--out", default=None, metavar="FILE", help="write the plan: .json (path in cells and metres, "
+                   "metrics, planner and parameters, provenance), .csv (path points) or .png/.svg/.pdf (path on map)")
+    q.add_argument("--no-progress", action="store_true", help="no progress spinner on stderr")
     q.set_defaults(func=cmd_plan)
+    v = sub.add_parser("navigate", help="one two-level navigation episode among random walkers; --out writes .json, "
+                                        ".gif or .png")
+    v.add_argument("map", help="map file (MovingAI .map)")
+    v.add_argument("--start", type=int, nargs=2, required=True, metavar=("X", "Y"), help="start cell (column, row)")
+    v.add_argument("--goal", type=int, nargs=2, required=True, metavar=("X", "Y"), help="goal cell (column, row)")
+    v.add_argument("--pipeline", default="iaco_dwa", help="a pipeline of jaxplan.pipelines() (default iaco_dwa)")
+    v.add_argument("--seed", type=int, default=0, help="seed of the global planner and of the walkers (default 0)")
+    v.add_argument("--set", action="append", metavar="KEY=VALUE", help="a global planner parameter, repeatable")
+    v.add_argument("--walkers", type=int, default=2, help="random walkers (moving discs; default 2, 0 for none)")
+    v.add_argument("--walker-speed", type=float, default=0.5, help="walkers' speed in m/s (default 0.5)")
+    v.add_argument("--walker-radius", type=float, default=0.25, help="walkers' radius in m (default 0.25)")
+    v.add_argument("--time-limit", type=float, default=None, help="seconds (default: from the path length)")
+    v.add_argument("--resolution", type=float, default=1.0, help="metres per cell")
+    v.add_argument("--out", default=None, metavar="FILE", help="write the episode: .json (trajectory, controls, "
+                   "metrics, walkers, provenance), .gif (animation; needs Pillow) or .png/.svg/.pdf")
+    v.add_argument("--no-progress", action="store_true", help="no progress stages on stderr")
+    v.set_defaults(func=cmd_navigate)
     r = sub.add_parser("run", help="run (or resume) the experiment of a TOML config; writes OUT/NAME/")
     r.add_argument("config", help="experiment config (TOML; schema: jaxplan.experiments.config)")
     r.add_argument("--quick", action="store_true", help="apply the config's [experiment.quick] changes (a smoke run, "
@@ -222,7 +436,14 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--data-dir", default=None, help="folder that the config's map paths are relative to")
     f.add_argument("--partial", action="store_true", help="draw a figure even if some of its chunks' arrays are "
                                                           "missing or damaged, labelled partial (default: refuse it)")
+    f.add_argument("--no-progress", action="store_true", help="no progress bar on stderr (drawn only on a terminal)")
     f.set_defaults(func=cmd_figures)
+    x = sub.add_parser("export", help="a run's trials, paths, histories and trajectories as npz or parquet tables")
+    x.add_argument("run", help="a run folder written by `jaxplan run` (e.g. runs/NAME)")
+    x.add_argument("--format", default="npz", choices=("npz", "parquet"),
+                   help="npz (one file, always available) or parquet (one file per table; needs pyarrow)")
+    x.add_argument("--out", default=None, help="npz file or parquet folder (default RUN/export.npz or RUN/export/)")
+    x.set_defaults(func=cmd_export)
     g = sub.add_parser("reproduce", help="run every paper's reproduction config (configs/<paper>_*.toml, e.g. "
                                          "cui2025_table2.toml), then draw its figures")
     g.add_argument("--quick", action="store_true", help="the configs' [experiment.quick] smoke runs (CI)")

@@ -49,3 +49,31 @@ class PlanResult(NamedTuple):
             planner=planner,
             info=dict(info),
         )
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every field as built-in Python (`jaxplan.core.export.plain`): ``path`` a list of ``[x, y]`` cells,
+        ``history`` a list, ``info`` a dict of lists and numbers (``inf`` stays a float)."""
+        from jaxplan.core.export import plain
+
+        return plain(self._asdict())
+
+    def to_dataframe(self, what: str = "summary") -> Any:
+        """A `pandas.DataFrame` (pandas: ``pip install 'jaxplan[export]'``).
+
+        Args:
+          what: ``"summary"`` one row (planner, success, length m, cost, turns, cells, time_s);
+            ``"path"`` one row per path cell (``step``, ``x``, ``y`` cells); ``"history"`` one row per iteration
+            (``iteration`` from 1, ``best_cost``).
+        """
+        from jaxplan.core.export import check_what, frame
+
+        check_what(what, ("summary", "path", "history"), "PlanResult")
+        if what == "path":
+            p = np.asarray(self.path).reshape(-1, 2)
+            return frame({"step": np.arange(len(p)), "x": p[:, 0], "y": p[:, 1]})
+        if what == "history":
+            h = np.asarray(self.history)
+            return frame({"iteration": np.arange(1, len(h) + 1), "best_cost": h})
+        return frame({"planner": [self.planner], "success": [bool(self.success)], "length": [float(self.length)],
+                      "cost": [float(self.cost)], "turns": [int(self.turns)], "cells": [len(self.path)],
+                      "time_s": [float(self.time_s)]})

@@ -43,6 +43,7 @@ from jaxplan.aco._colony import Colony, RunConfig, run_batch, walk_backend
 from jaxplan.aco._context import GoalTables, MapTables, check_one, goal_tables, map_tables
 from jaxplan.aco._walk_numba import WALK_BACKENDS, sharing_cores
 from jaxplan.core.cache import Built, digest, memoize
+from jaxplan.core.progress import ProgressBar
 from jaxplan.grid import GridMap, passable
 from jaxplan.registry import register_planner, resolve
 from jaxplan.result import PlanResult
@@ -298,6 +299,45 @@ class BatchResult(NamedTuple):
                   "successes": self.successes[i, r].copy(), "compile_s": self.compile_s, **extra},
         )
 
+    def to_dict(self) -> dict[str, Any]:
+        """Every field as built-in Python (`jaxplan.core.export.plain`); ``paths`` as nested lists ``[N][R]`` of
+        each run's ``[x, y]`` cells, without the −1 padding (``tau`` only when kept)."""
+        from jaxplan.core.export import plain
+
+        d = plain({k: v for k, v in self._asdict().items() if k != "paths" and (k != "tau" or v is not None)})
+        d["paths"] = [[self.paths[i, r, : self.n_cells[i, r]].tolist() for r in range(self.paths.shape[1])]
+                      for i in range(self.paths.shape[0])]
+        return d
+
+    def to_dataframe(self, what: str = "summary") -> Any:
+        """A long-form `pandas.DataFrame` (pandas: ``pip install 'jaxplan[export]'``); ``scenario`` and ``seed``
+        are indices into the call's scenarios and seeds.
+
+        Args:
+          what: ``"summary"`` one row per run (success, length m, cost, turns, cells, converged iteration);
+            ``"path"`` one row per path cell (``step``, ``x``, ``y``); ``"history"`` one row per iteration
+            (``best_cost``, ``diversity``, ``successes``).
+        """
+        from jaxplan.core.export import check_what, frame
+
+        check_what(what, ("summary", "path", "history"), "BatchResult")
+        N, R = self.length.shape
+        sc, se = np.meshgrid(np.arange(N), np.arange(R), indexing="ij")
+        if what == "summary":
+            return frame({"planner": np.full(N * R, self.planner, object), "scenario": sc.ravel(), "seed": se.ravel(),
+                          "success": self.success.ravel(), "length": self.length.ravel(), "cost": self.cost.ravel(),
+                          "turns": self.turns.ravel(), "cells": self.n_cells.ravel(),
+                          "converged_iteration": self.converged.ravel()})
+        if what == "path":
+            keep = np.arange(self.paths.shape[2])[None, None, :] < self.n_cells[..., None]  # [N, R, P]
+            i, r, k = np.nonzero(keep)
+            return frame({"scenario": i, "seed": r, "step": k, "x": self.paths[i, r, k, 0],
+                          "y": self.paths[i, r, k, 1]})
+        I = self.history.shape[2]
+        i, r, k = (a.ravel() for a in np.meshgrid(np.arange(N), np.arange(R), np.arange(I), indexing="ij"))
+        return frame({"scenario": i, "seed": r, "iteration": k + 1, "best_cost": self.history.ravel(),
+                      "diversity": self.diversity.ravel(), "successes": self.successes.ravel()})
+
 
 def _seed_count(seeds) -> int:
     """How many seeds ``seeds`` holds, without building a list of a huge range (the memory guard runs first)."""
@@ -340,7 +380,7 @@ def _result_memory(runs: int, path_cells: int) -> MemoryEstimate:
 
 
 def _run_colony(name: str, grid: GridMap, starts: np.ndarray, goals: np.ndarray, seeds, p: Mapping[str, Any],
-                keep_pheromone: bool = False, mesh: Mesh | None = None):
+                keep_pheromone: bool = False, mesh: Mesh | None = None, bar: ProgressBar | None = None):
     cfg, params, connectivity, vh = split_params(grid, p)
     if keep_pheromone:
         cfg = RunConfig(**{**cfg.__dict__, "keep_pheromone": True})
@@ -356,7 +396,11 @@ def _run_colony(name: str, grid: GridMap, starts: np.ndarray, goals: np.ndarray,
     gt = goal_tables(grid, starts, goals, connectivity, vh, geodesic=cfg.heuristic == "geodesic")
     if mesh is not None:
         gt = pad_leading(gt, padded_size(N, mesh))  # copies of the last scenario, sliced off below
+    if bar is not None:
+        bar.stage(f"{name}: compiling the batch program")
     fn, compile_s = compiled(colony, cfg, tables, gt, params, keys, mesh)
+    if bar is not None:
+        bar.stage(f"{name}: {N} scenarios x {len(keys)} seeds, {cfg.iterations} iterations (one compiled call)")
     t0 = time.perf_counter()
     out = jax.block_until_ready(fn(tables, gt, params, keys))
     if mesh is not None:
@@ -410,6 +454,7 @@ def plan_batch(
     seeds=range(1),
     *,
     mesh: Mesh | str | None = "auto",
+    progress: bool = False,
     **overrides: Any,
 ) -> BatchResult:
     """Runs ``planner`` on every scenario with every seed in one compiled call.
@@ -427,6 +472,10 @@ def plan_batch(
         are split over the mesh's devices (padded to a multiple of the device count with
         copies of the last scenario, which are dropped again); the results equal the
         single-device call's. Other planners ignore it.
+      progress: show progress on stderr (`jaxplan.core.progress`; only on a terminal): an ACO batch is one
+        compiled call, so its bar names the stage (compiling, then the call) with the elapsed time and no estimate
+        of time left; the other planners run scenario by scenario, with a bar and time left. The results are the
+        same either way.
       **overrides: planner parameters, as for `jaxplan.plan`.
 
     Returns:
@@ -441,18 +490,25 @@ def plan_batch(
                 raise ValueError(f"starts and goals differ in shape: {s.shape} vs {g.shape}")
             return _empty_batch(planner, len(seed_keys([int(x) for x in seeds])), int(p["iterations"]))
         mesh = auto_mesh(mesh, len(s))
-        out, dt, compile_s, width = _run_colony(planner, grid, s, g, seeds, p, mesh=mesh)
+        with ProgressBar(f"{planner}: preparing", None, enabled=progress) as bar:
+            out, dt, compile_s, width = _run_colony(planner, grid, s, g, seeds, p, mesh=mesh, bar=bar)
         return _to_batch(planner, out, dt, compile_s, width)
     what = f"planner {planner!r} on a {grid.shape[0]}x{grid.shape[1]} map"
     check_memory(_result_memory(len(s) * _seed_count(seeds), 1), what, unit="runs (scenarios x seeds)")
     seed_list = [int(x) for x in seeds]
     R_ = len(seed_keys(seed_list))
     t0 = time.perf_counter()
-    if planner in _SEEDLESS:  # deterministic: one plan per scenario serves every seed
-        once = [spec.fn(grid, a, b, 0, **p) for a, b in zip(s, g, strict=True)]
-        results = [[r] * R_ for r in once]
-    else:  # sampling planners (rrt_star, mrbs_rrt) depend on the seed
-        results = [[spec.fn(grid, a, b, seed, **p) for seed in seed_list] for a, b in zip(s, g, strict=True)]
+    seedless = planner in _SEEDLESS  # deterministic: one plan per scenario serves every seed
+    with ProgressBar(planner, len(s) * (1 if seedless else R_), unit="plans", enabled=progress) as bar:
+        def one(a, b, seed):
+            r = spec.fn(grid, a, b, seed, **p)
+            bar.update(advance=1)
+            return r
+
+        if seedless:
+            results = [[r] * R_ for r in [one(a, b, 0) for a, b in zip(s, g, strict=True)]]
+        else:  # sampling planners (rrt_star, mrbs_rrt) depend on the seed
+            results = [[one(a, b, seed) for seed in seed_list] for a, b in zip(s, g, strict=True)]
     dt = time.perf_counter() - t0
     P = max((len(r.path) for row in results for r in row), default=1)
     check_memory(_result_memory(len(results) * R_, max(P, 1)), what, unit="runs (scenarios x seeds)")

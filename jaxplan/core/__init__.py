@@ -11,6 +11,9 @@ helper does not pull in JAX or numba with another:
 * `jaxplan.core.failure`: how the command line ends on a failure (one line, exit code 2 bad input / 1 fault /
   130 interrupted).
 * `jaxplan.core.provenance`: the one provenance record (git, CPU, versions, devices) of runs and benchmarks.
+* `jaxplan.core.progress`: the progress bar of long commands and batched calls (rich or a plain line, drawn only
+  on a terminal).
+* `jaxplan.core.export`: results as plain Python (``to_dict``) and pandas DataFrames (``to_dataframe``).
 
 Layers. Imports flow strictly downward through these layers: a module may import from its own
 package and from any lower layer, never from a higher one, and there is no import cycle::

@@ -29,15 +29,16 @@ import dataclasses
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
 from jaxplan.core.io import atomic_path
+from jaxplan.core.progress import ProgressBar
 from jaxplan.experiments import plots
 from jaxplan.experiments.tables import text_table
 
-__all__ = ["DemoResult", "run_demo", "demo_table", "ROWS", "PIPELINES"]
+__all__ = ["DemoResult", "run_demo", "demo_table", "animate_episodes", "ROWS", "PIPELINES"]
 
 plt = plots.plt
 
@@ -148,10 +149,14 @@ def _figure(result: DemoResult, grid, path: Path) -> list[str]:
     return written
 
 
-def _animation(result: DemoResult, grid, path: Path, frames: int) -> list[str]:
+def animate_episodes(episodes: Mapping[str, Any], grid, path: str | Path, frames: int = 30) -> list[str]:
+    """A GIF of ``episodes`` (`jaxplan.nav.Episode` by label) on ``grid``: each robot's trail and the first
+    episode's moving discs, ``frames`` frames evenly spaced over the longest episode (matplotlib's Pillow writer;
+    raises ``ImportError`` without Pillow). Returns the files written."""
     from matplotlib.animation import PillowWriter
 
-    eps = list(result.episodes.items())
+    path = Path(path)
+    eps = list(episodes.items())
     T = max(len(ep.trajectory) for _, ep in eps)
     idx = np.unique(np.linspace(0, T - 1, frames).round().astype(int))
     fig, ax = plt.subplots(figsize=(6, 4.2))
@@ -196,7 +201,7 @@ def _animation(result: DemoResult, grid, path: Path, frames: int) -> list[str]:
 
 
 def run_demo(out_dir: str | Path = "figures", *, seed: int = 0, quick: bool = False, gif: bool = True,
-             frames: int = 30) -> DemoResult:
+             frames: int = 30, progress: bool = False) -> DemoResult:
     """Runs both pipelines and writes ``OUT/demo.png`` (and ``demo.gif``); see the module docstring.
 
     Args:
@@ -205,6 +210,8 @@ def run_demo(out_dir: str | Path = "figures", *, seed: int = 0, quick: bool = Fa
       quick: the small test variant (a generated 14x10 warehouse).
       gif: write the animation.
       frames: animation frames (evenly spaced over the longer episode).
+      progress: a bar over the steps (each pipeline's compile and episode, the figure, the animation) on stderr
+        (`jaxplan.core.progress`: only on a terminal).
     """
     from jaxplan.nav import navigate, random_obstacles
 
@@ -215,20 +222,26 @@ def run_demo(out_dir: str | Path = "figures", *, seed: int = 0, quick: bool = Fa
     obs = random_obstacles(grid, n=o["n"], speed=o["speed"], radius=o["radius"], seed=seed, avoid=avoid,
                            avoid_radius=1.5)
     episodes, wall = {}, {}
-    for name in PIPELINES:
+    steps = len(PIPELINES) + 1 + int(gif)
+    with ProgressBar("demo", steps, unit="steps", enabled=progress) as bar:
+        for k, name in enumerate(PIPELINES):
+            bar.update(k, description=f"demo: {name} (compile + run)")
+            t0 = time.perf_counter()
+            episodes[name] = navigate(grid, scene.start, scene.goal, pipeline=name, seed=seed, obstacles=obs,
+                                      config=cfg, **overrides)
+            wall[name] = time.perf_counter() - t0
+        radius = float(cfg.dwa.robot.footprint.radius)
+        columns = {name: _column(grid, ep, radius, wall[name]) for name, ep in episodes.items()}
+        result = DemoResult(scene, episodes, columns, wall, ())
+        out = Path(out_dir)
+        bar.update(len(PIPELINES), description="demo: figure")
         t0 = time.perf_counter()
-        episodes[name] = navigate(grid, scene.start, scene.goal, pipeline=name, seed=seed, obstacles=obs,
-                                  config=cfg, **overrides)
-        wall[name] = time.perf_counter() - t0
-    radius = float(cfg.dwa.robot.footprint.radius)
-    columns = {name: _column(grid, ep, radius, wall[name]) for name, ep in episodes.items()}
-    result = DemoResult(scene, episodes, columns, wall, ())
-    out = Path(out_dir)
-    t0 = time.perf_counter()
-    files = _figure(result, grid, out / "demo.png")
-    wall["figure"] = time.perf_counter() - t0
-    if gif:
-        t0 = time.perf_counter()
-        files += _animation(result, grid, out / "demo.gif", frames)
-        wall["animation"] = time.perf_counter() - t0
+        files = _figure(result, grid, out / "demo.png")
+        wall["figure"] = time.perf_counter() - t0
+        if gif:
+            bar.update(len(PIPELINES) + 1, description="demo: animation")
+            t0 = time.perf_counter()
+            files += animate_episodes(result.episodes, grid, out / "demo.gif", frames)
+            wall["animation"] = time.perf_counter() - t0
+        bar.update(steps, description="demo")
     return dataclasses.replace(result, files=tuple(files))

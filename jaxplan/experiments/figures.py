@@ -47,6 +47,7 @@ from pathlib import Path
 from typing import Sequence
 
 from jaxplan.core.io import atomic_write, confined
+from jaxplan.core.progress import ProgressBar
 from jaxplan.experiments import plots
 from jaxplan.experiments.config import FigureSpec
 from jaxplan.experiments.figure_kinds import DRAW
@@ -123,7 +124,7 @@ def _draw_one(run: RunData, spec: FigureSpec, d: Path) -> Drawn:
 
 def draw_figures(run_dir: str | os.PathLike, out: str | os.PathLike = "figures", *,
                  data_dir: str | os.PathLike | None = None, strict: bool = False,
-                 partial: bool = False) -> tuple[list[Drawn], list[str]]:
+                 partial: bool = False, progress: bool = False) -> tuple[list[Drawn], list[str]]:
     """Draws every ``[[figures]]`` entry of a run folder's config.
 
     Args:
@@ -133,6 +134,7 @@ def draw_figures(run_dir: str | os.PathLike, out: str | os.PathLike = "figures",
       strict: raise on the first figure that cannot be drawn (default: list it, whatever the error, and go on).
       partial: draw a figure whose chunks' arrays are partly missing or damaged, labelled partial
         (default: list it as not drawn, naming the chunk).
+      progress: a bar over the figures on stderr (`jaxplan.core.progress`: only on a terminal).
 
     Returns:
       (the figures written, the problems of those not drawn — one line each).
@@ -145,13 +147,17 @@ def draw_figures(run_dir: str | os.PathLike, out: str | os.PathLike = "figures",
     d = Path(out) / run_name
     d.mkdir(parents=True, exist_ok=True)
     drawn, problems = [], []
-    for spec in run.config.figures:
-        try:
-            drawn.append(_draw_one(run, spec, d))
-        except Exception as e:  # noqa: BLE001 - one figure's failure (even a bug) must not cost the others
-            if strict:
-                raise
-            known = isinstance(e, (ValueError, KeyError, FileNotFoundError, MissingArrays))
-            problems.append(f"{spec.name} ({spec.kind}): {e if known else f'{type(e).__name__}: {e}'}")
+    figures = run.config.figures
+    with ProgressBar(f"{run_name}: figures", len(figures), unit="figures", enabled=progress) as bar:
+        for k, spec in enumerate(figures):
+            bar.update(k, description=f"{run_name}: {spec.name} ({spec.kind})")
+            try:
+                drawn.append(_draw_one(run, spec, d))
+            except Exception as e:  # noqa: BLE001 - one figure's failure (even a bug) must not cost the others
+                if strict:
+                    raise
+                known = isinstance(e, (ValueError, KeyError, FileNotFoundError, MissingArrays))
+                problems.append(f"{spec.name} ({spec.kind}): {e if known else f'{type(e).__name__}: {e}'}")
+        bar.update(len(figures), description=f"{run_name}: figures")
     write_index(Path(out), run_name, run.config.description or run.config.name, drawn, problems)
     return drawn, problems

@@ -1,37 +1,38 @@
-"""Progress of a long run on stderr: one rewritten line on a terminal, one line per chunk otherwise."""
+"""Progress of a long run on stderr: a bar over its trials with elapsed time and time left (`jaxplan.core.progress`).
+
+``NAME  chunk k/K MAP/PLANNER  [bar]  done/total trials  elapsed  left``: the description names the chunk being
+computed (the first one includes JAX's compilation, so the first estimate of time left is pessimistic; chunks
+resumed from the checkpoints are shown as done but not counted in the rate). Drawn only on a terminal and without
+``--no-progress`` / ``progress=False``; the run's files are the same either way.
+"""
 
 from __future__ import annotations
 
-import math
-import sys
-import time
+from jaxplan.core.progress import ProgressBar, clock, progress_wanted
 
-__all__ = ["clock", "Progress"]
-
-def clock(s: float) -> str:
-    """Seconds as ``H:MM:SS``."""
-    s = int(round(s))
-    return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
+__all__ = ["clock", "progress_wanted", "Progress", "ProgressBar"]
 
 
 class Progress:
-    """``NAME: done/total trials (pct) | chunk k/K | elapsed | left ~`` on stderr (one rewritten line on a TTY)."""
+    """The bar of `jaxplan.experiments.run_experiment`: ``total`` trials in ``chunks`` compiled calls, ``done`` of
+    them already committed (a resumed run)."""
 
     def __init__(self, name: str, total: int, done: int, chunks: int, enabled: bool):
-        self.name, self.total, self.start_done, self.chunks, self.enabled = name, total, done, chunks, enabled
-        self.t0 = time.perf_counter()
-        self.tty = sys.stderr.isatty()
+        self.name, self.total, self.chunks = name, total, chunks
+        self.bar = ProgressBar(f"{name}: starting", total, done=done, unit="trials", enabled=enabled)
+
+    @property
+    def enabled(self) -> bool:
+        """Whether the bar is drawn."""
+        return self.bar.active
+
+    def start(self, chunk: int, what: str) -> None:
+        """Chunk ``chunk`` (1-based) of ``what`` (``MAP/PLANNER``) is being computed (compiled on first use)."""
+        self.bar.stage(f"{self.name}: chunk {chunk}/{self.chunks} {what}")
 
     def update(self, done: int, chunk: int, what: str) -> None:
-        if not self.enabled:
-            return
-        el = time.perf_counter() - self.t0
-        new = done - self.start_done
-        left = el / new * (self.total - done) if new else float("nan")
-        msg = (f"{self.name}: {done}/{self.total} trials ({done / max(self.total, 1):.0%}) | chunk {chunk}/"
-               f"{self.chunks} {what} | elapsed {clock(el)} | left ~{clock(left) if math.isfinite(left) else '?'}")
-        print(("\r" + msg.ljust(110)) if self.tty else msg, end="" if self.tty else "\n", file=sys.stderr, flush=True)
+        """Chunk ``chunk`` of ``what`` is committed; ``done`` trials in all."""
+        self.bar.update(done, description=f"{self.name}: chunk {chunk}/{self.chunks} {what} done")
 
     def close(self) -> None:
-        if self.enabled and self.tty:
-            print(file=sys.stderr, flush=True)
+        self.bar.close()

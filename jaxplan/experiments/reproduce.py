@@ -89,7 +89,7 @@ def reproduce(configs: Sequence[str | os.PathLike], out: str | os.PathLike = "ru
             continue
         t1 = time.perf_counter()
         try:
-            drawn, problems = draw_figures(run_dir, figures, data_dir=data_dir)
+            drawn, problems = draw_figures(run_dir, figures, data_dir=data_dir, progress=progress)
         except Exception as e:  # noqa: BLE001 - as above: the run folder stands, its figures failed
             done.append(Reproduced(cfg, run_dir, t1 - t0, time.perf_counter() - t1, 0, (),
                                    f"figures: {describe_error(e)}"))

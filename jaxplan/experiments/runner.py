@@ -91,20 +91,22 @@ def _run_chunks(prep: Prepared, store: Store, progress: bool, stop_after: int | 
     if progress and done_units:
         print(f"{cfg.name}: resuming, {len(done_units)}/{len(prep.units)} chunks already done", file=sys.stderr)
     computed = 0
-    for u in prep.units:
-        if store.done(u):
-            continue
-        if stop_after is not None and computed >= stop_after:
-            bar.close()
-            return False
-        text, arrays, timing = run_unit(prep, u)
-        info = {"map": prep.maps[u.m].spec.name, "planner": cfg.planners[u.p].label, "kind": cfg.planners[u.p].kind,
-                "scenarios": [u.lo, u.hi], "trials": (u.hi - u.lo) * R}
-        store.commit(u, info, text, arrays, timing)
-        computed += 1
-        done += (u.hi - u.lo) * R
-        bar.update(done, u.index + 1, f"{info['map']}/{info['planner']}")
-    bar.close()
+    try:
+        for u in prep.units:
+            if store.done(u):
+                continue
+            if stop_after is not None and computed >= stop_after:
+                return False
+            bar.start(u.index + 1, f"{prep.maps[u.m].spec.name}/{cfg.planners[u.p].label}")
+            text, arrays, timing = run_unit(prep, u)
+            info = {"map": prep.maps[u.m].spec.name, "planner": cfg.planners[u.p].label,
+                    "kind": cfg.planners[u.p].kind, "scenarios": [u.lo, u.hi], "trials": (u.hi - u.lo) * R}
+            store.commit(u, info, text, arrays, timing)
+            computed += 1
+            done += (u.hi - u.lo) * R
+            bar.update(done, u.index + 1, f"{info['map']}/{info['planner']}")
+    finally:
+        bar.close()
     return True
 
 

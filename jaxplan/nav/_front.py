@@ -37,6 +37,7 @@ from jax.sharding import PartitionSpec as P
 from numpy.typing import ArrayLike
 
 from jaxplan.core.cache import Built, memoize
+from jaxplan.core.progress import ProgressBar
 from jaxplan.dwa import DWAParams, table_of
 from jaxplan.grid import GridMap, clearance_field, shortest_lengths
 from jaxplan.metrics import EnergyModel, energy
@@ -112,8 +113,8 @@ _SEEDLESS = ("astar", "dijkstra", "astar_kng")  # deterministic planners: one pl
 
 
 def _global_plans(plan_grid: GridMap, starts: np.ndarray, goals: np.ndarray, ok: np.ndarray, pipe: Pipeline,
-                  seeds: list[int], overrides: Mapping[str, Any],
-                  mesh: Mesh | str | None = "auto") -> tuple[np.ndarray, np.ndarray, float]:
+                  seeds: list[int], overrides: Mapping[str, Any], mesh: Mesh | str | None = "auto",
+                  bar: ProgressBar | None = None) -> tuple[np.ndarray, np.ndarray, float]:
     """Plans ``f64[S, R, P, 2]`` (cell coordinates, −1 padded), valid points ``[S, R]`` (0: failed) and the
     planning wall time (s, compilation excluded) for the ``ok`` rows of ``starts``/``goals [S, 2]``.
 
@@ -129,6 +130,8 @@ def _global_plans(plan_grid: GridMap, starts: np.ndarray, goals: np.ndarray, ok:
     idx = np.nonzero(ok)[0]
     if idx.size == 0:
         return np.full((S, R, 2, 2), -1.0), np.zeros((S, R), np.int64), 0.0
+    if bar is not None:
+        bar.stage(f"{pipe.name}: global plans ({pipe.global_planner}, compiled on first use)")
     if pipe.global_planner in COLONIES:
         br = plan_batch(plan_grid, starts[idx], goals[idx], planner=pipe.global_planner, seeds=seeds, mesh=mesh,
                         **params)
@@ -147,6 +150,8 @@ def _global_plans(plan_grid: GridMap, starts: np.ndarray, goals: np.ndarray, ok:
             res = plan(plan_grid, starts[i], goals[i], planner=pipe.global_planner, seed=seed, **params)
             pts = res.info.get("points", res.path) if res.success else np.zeros((0, 2))
             results[i, r] = np.asarray(pts, np.float64)
+            if bar is not None:
+                bar.stage(f"{pipe.name}: global plans ({pipe.global_planner}) {len(results)}/{idx.size * len(seeds)}")
     elapsed = time.perf_counter() - t0
     P = max(2, max(len(p) for p in results.values()))
     plans = np.full((S, R, P, 2), -1.0)
@@ -252,7 +257,8 @@ def _to_episodes(x: ArrayLike, E: int, N: int, R: int) -> np.ndarray:
 
 
 def _execute(cfg: NavConfig, grid: GridMap, plan_free: np.ndarray, params: DWAParams | MPPIParams,
-             inputs: EpisodeInputs, mesh: Mesh | str | None) -> tuple[Any, float, float]:
+             inputs: EpisodeInputs, mesh: Mesh | str | None,
+             bar: ProgressBar | None = None) -> tuple[Any, float, float]:
     """Step 4: the episode program on the ``B`` episodes of ``inputs``, split over a mesh when results do not
     depend on it; returns its outputs (numpy, ``[B, ...]``), compile and run seconds."""
     steps = cfg.steps
@@ -271,7 +277,11 @@ def _execute(cfg: NavConfig, grid: GridMap, plan_free: np.ndarray, params: DWAPa
         if B_pad != B:
             inputs = pad_leading(inputs, B_pad)
             inputs = inputs._replace(active=inputs.active.at[B:].set(False))
+    if bar is not None:
+        bar.stage(f"compiling the episode program ({cfg.local})")
     compiled, compile_s = _compiled_episodes(cfg, steps, mesh_, (table, free_j, params, inputs))
+    if bar is not None:
+        bar.stage(f"{B} episodes of up to {steps} steps (one compiled call)")
     t0 = time.perf_counter()
     out = jax.block_until_ready(compiled(table, free_j, params, inputs))
     run_s = time.perf_counter() - t0
@@ -352,9 +362,20 @@ def _check_episode_memory(cfg: NavConfig, grid: GridMap, robots: int, obstacles:
 def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | None, global_planner: str | None,
          local_planner: str | None, seeds: Sequence[int], obstacles: Any, config: NavConfig | None,
          params: DWAParams | MPPIParams | Mapping[str, float] | None, time_limit: float | None,
-         overrides: Mapping[str, Any], mesh: Mesh | str | None = "auto") -> EpisodeBatch:
+         overrides: Mapping[str, Any], mesh: Mesh | str | None = "auto", progress: bool = False) -> EpisodeBatch:
     """The steps of the module docstring for ``starts, goals [E, N, 2]`` (cells) × seeds: an `EpisodeBatch`
-    ``[E, R, N]``."""
+    ``[E, R, N]``; ``progress``: the stages on stderr (`jaxplan.core.progress`, only on a terminal)."""
+    with ProgressBar("navigation: checking", None, enabled=progress) as bar:
+        return _run_steps(grid, starts, goals, pipeline, global_planner, local_planner, seeds, obstacles, config,
+                          params, time_limit, overrides, mesh, bar if bar.active else None)
+
+
+def _run_steps(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | None,
+               global_planner: str | None, local_planner: str | None, seeds: Sequence[int], obstacles: Any,
+               config: NavConfig | None, params: DWAParams | MPPIParams | Mapping[str, float] | None,
+               time_limit: float | None, overrides: Mapping[str, Any], mesh: Mesh | str | None,
+               bar: ProgressBar | None) -> EpisodeBatch:
+    """`_run` with its stages shown on ``bar`` (or None)."""
     run_args = checked_run(grid, starts, goals, pipeline, global_planner, local_planner, seeds, config, params,
                             time_limit, mesh)
     pipe, cfg, seeds, starts, goals = run_args.pipe, run_args.cfg, run_args.seeds, run_args.starts, run_args.goals
@@ -372,7 +393,7 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
     ok = reason0 == ""
 
     # 2. Global plans on the planning map, in cell coordinates.
-    plans, n_plan, plan_time = _global_plans(plan_grid, s_flat, g_flat, ok, pipe, seeds, overrides, mesh)
+    plans, n_plan, plan_time = _global_plans(plan_grid, s_flat, g_flat, ok, pipe, seeds, overrides, mesh, bar)
     reason = np.repeat(reason0[:, None], R, axis=1)  # [E*N, R]
     reason[(reason == "") & (n_plan < 2)] = PLAN_FAILED
     run = reason == ""
@@ -396,7 +417,7 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
         # Episode (scenario e, seed s) draws its MPPI noise from the key data (s, e).
         key=jnp.asarray(np.array([[s, e] for e in range(E) for s in seeds], np.uint32).reshape(E * R, 2)),
     )
-    out, compile_s, run_s = _execute(cfg, grid, pf, run_args.params, inputs, mesh)
+    out, compile_s, run_s = _execute(cfg, grid, pf, run_args.params, inputs, mesh, bar)
 
     # 5. Metrics, back to [E, R, N, ...]; metres in world coordinates (the map's origin added).
     batch = _episode_batch(out, E, R, N, active, reason, plans, n_plan, wp_m, n_wp, obs, float(cfg.dwa.period),
@@ -429,7 +450,7 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: s
              local_planner: str | None = None, seed: int = 0, obstacles: MovingObstacles | None = None, *,
              pipeline: str | None = None, config: NavConfig | None = None,
              params: DWAParams | MPPIParams | Mapping[str, float] | None = None, time_limit: float | None = None,
-             **overrides: Any) -> Episode:
+             progress: bool = False, **overrides: Any) -> Episode:
     """One two-level navigation episode (DESIGN §3).
 
     Args:
@@ -445,6 +466,7 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: s
         overrides.
       time_limit: seconds (default: 60 s + 3 × the waypoint polyline's length at v_max, capped
         at ``config.max_time``).
+      progress: the stages on stderr (as `navigate_batch`).
       **overrides: the global planner's parameters (as for `jaxplan.plan`).
 
     Raises:
@@ -454,7 +476,7 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: s
     """
     cfg = config
     b = _run(grid, np.asarray(start)[None, None], np.asarray(goal)[None, None], pipeline, global_planner,
-             local_planner, [seed], obstacles, cfg, params, time_limit, overrides)
+             local_planner, [seed], obstacles, cfg, params, time_limit, overrides, progress=progress)
     return b.episode(0, 0, 0)
 
 
@@ -462,7 +484,7 @@ def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline:
                    seeds: Sequence[int] = range(1), obstacles: Any = None, *, global_planner: str | None = None,
                    local_planner: str | None = None, config: NavConfig | None = None,
                    params: DWAParams | MPPIParams | Mapping[str, float] | None = None, time_limit: float | None = None,
-                   mesh: Mesh | str | None = "auto", **overrides: Any) -> EpisodeBatch:
+                   mesh: Mesh | str | None = "auto", progress: bool = False, **overrides: Any) -> EpisodeBatch:
     """Scenarios × seeds single-robot episodes in one compiled global-planning call and one episode call.
 
     Args:
@@ -478,6 +500,9 @@ def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline:
         single-device run's; ``"auto"`` leaves them on one device otherwise. An explicit mesh
         with ``replan_group = 0`` gives each device its own re-planning budget (results then
         depend on the device count).
+      progress: show the stages on stderr (global plans, compiling, the episodes; `jaxplan.core.progress`, only
+        on a terminal): the episodes are one compiled call, so the bar names the stage with the elapsed time and
+        gives no time left for it. The results are the same either way.
       Others as in `navigate`.
 
     Returns:
@@ -490,14 +515,14 @@ def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline:
         pipeline = None
     cfg = config
     return _run(grid, s[:, None], g[:, None], pipeline, global_planner, local_planner, list(seeds), obstacles, cfg,
-                params, time_limit, overrides, mesh)
+                params, time_limit, overrides, mesh, progress)
 
 
 def navigate_multi(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline: str | None = "iaco_dwa",
                    seeds: Sequence[int] = range(1), obstacles: Any = None, *, global_planner: str | None = None,
                    local_planner: str | None = None, config: NavConfig | None = None,
                    params: DWAParams | MPPIParams | Mapping[str, float] | None = None, time_limit: float | None = None,
-                   mesh: Mesh | str | None = "auto", **overrides: Any) -> EpisodeBatch:
+                   mesh: Mesh | str | None = "auto", progress: bool = False, **overrides: Any) -> EpisodeBatch:
     """Multi-robot episodes: ``starts, goals int[N, 2]`` (one team) or ``[E, N, 2]`` (E teams).
 
     Each robot plans its own global path and runs its own DWA, treating the other robots
@@ -514,4 +539,4 @@ def navigate_multi(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline:
         pipeline = None
     cfg = config
     return _run(grid, s, g, pipeline, global_planner, local_planner, list(seeds), obstacles, cfg, params,
-                time_limit, overrides, mesh)
+                time_limit, overrides, mesh, progress)

@@ -49,6 +49,37 @@ class Episode(NamedTuple):
     active_contacts: int = 0
     passive_contacts: int = 0
 
+    def to_dict(self) -> dict:
+        """Every field as built-in Python (`jaxplan.core.export.plain`): trajectory ``[[x, y, theta], ...]``, the
+        obstacles' routes as a dict of lists, metrics as numbers."""
+        from jaxplan.core.export import plain
+
+        return plain(self._asdict())
+
+    def to_dataframe(self, what: str = "summary"):
+        """A `pandas.DataFrame` (pandas: ``pip install 'jaxplan[export]'``).
+
+        Args:
+          what: ``"summary"`` one row (success, reason, collisions, time_s and the metrics);
+            ``"trajectory"`` one row per pose (``step``, ``t`` s, ``x``, ``y`` m, ``theta`` rad, and the control
+            ``v``, ``omega`` applied from it, NaN at the last pose).
+        """
+        from jaxplan.core.export import check_what, frame
+
+        check_what(what, ("summary", "trajectory"), "Episode")
+        if what == "trajectory":
+            tr, u = np.asarray(self.trajectory), np.asarray(self.controls)
+            T = len(tr)
+            v, w = np.full(T, np.nan), np.full(T, np.nan)
+            v[: len(u)], w[: len(u)] = u[:, 0], u[:, 1]
+            return frame({"step": np.arange(T), "t": np.asarray(self.times), "x": tr[:, 0], "y": tr[:, 1],
+                          "theta": tr[:, 2], "v": v, "omega": w})
+        row = {"success": bool(self.success), "reason": self.reason, "collisions": int(self.collisions),
+               "active_contacts": int(self.active_contacts), "passive_contacts": int(self.passive_contacts),
+               "time_s": float(self.time_s)}
+        row.update({k: v for k, v in self.metrics.items() if k not in row})
+        return frame({k: [v] for k, v in row.items()})
+
 
 class EpisodeBatch(NamedTuple):
     """Episodes of a batched call, leading axes ``[E scenarios, R seeds, N robots]`` (numpy).
@@ -138,6 +169,38 @@ class EpisodeBatch(NamedTuple):
             obstacles=obs, obstacle_positions=opos, active_contacts=int(self.active_contacts[e, r, i]),
             passive_contacts=int(self.passive_contacts[e, r, i]),
         )
+
+    def to_dict(self) -> dict:
+        """Every field as built-in Python (`jaxplan.core.export.plain`): arrays as nested lists ``[E][R][N]…``
+        (states and plans padded as stored: use ``steps`` and ``n_plan``)."""
+        from jaxplan.core.export import plain
+
+        return plain(self._asdict())
+
+    def to_dataframe(self, what: str = "summary"):
+        """A long-form `pandas.DataFrame` (pandas: ``pip install 'jaxplan[export]'``); ``scenario``, ``seed`` and
+        ``robot`` index the call's axes.
+
+        Args:
+          what: ``"summary"`` one row per episode (feasible, reason and every metric of ``METRICS``);
+            ``"trajectory"`` one row per valid state (``step``, ``t`` s, ``x``, ``y`` m, ``theta`` rad, ``v`` m/s,
+            ``omega`` rad/s).
+        """
+        from jaxplan.core.export import check_what, frame
+
+        check_what(what, ("summary", "trajectory"), "EpisodeBatch")
+        E, R, N = self.success.shape
+        if what == "summary":
+            e, r, i = (a.ravel() for a in np.meshgrid(np.arange(E), np.arange(R), np.arange(N), indexing="ij"))
+            cols = {"pipeline": np.full(E * R * N, self.pipeline, object), "scenario": e, "seed": r, "robot": i,
+                    "feasible": self.feasible.ravel(), "reason": self.reason.ravel()}
+            cols.update({k: getattr(self, k).ravel() for k in self.METRICS})
+            return frame(cols)
+        keep = np.arange(self.states.shape[3])[None, None, None, :] <= self.steps[..., None]  # [E, R, N, S + 1]
+        e, r, i, k = np.nonzero(keep)
+        st = self.states[e, r, i, k]
+        return frame({"scenario": e, "seed": r, "robot": i, "step": k, "t": k * self.period, "x": st[:, 0],
+                      "y": st[:, 1], "theta": st[:, 2], "v": st[:, 3], "omega": st[:, 4]})
 
     def summary(self, where: np.ndarray | None = None) -> dict[str, tuple[float, float]]:
         """Mean and sd over seeds of each metric's per-seed mean over the feasible episodes (and ``where``).

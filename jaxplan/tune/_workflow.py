@@ -52,7 +52,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxplan.core.io import atomic_write, confined, folder_lock
-from jaxplan.experiments import CheckpointError, RunFolderError, clock
+from jaxplan.core.progress import ProgressBar
+from jaxplan.experiments import CheckpointError, RunFolderError
 from jaxplan.tune._base import Strategy, sanitize
 from jaxplan.tune._objective import Objective, Split
 from jaxplan.tune._strategies import make_strategy
@@ -139,22 +140,21 @@ def _load_state(path: Path, template, digest: str | None = None):
 
 
 class _Progress:
-    def __init__(self, name: str, total: int, enabled: bool):
-        self.name, self.total, self.enabled, self.t0 = name, total, enabled, time.perf_counter()
-        self.tty = sys.stderr.isatty()
+    """The tuning bar: generations done of ``total``, the best fitness so far, elapsed and time left
+    (`jaxplan.core.progress`; drawn only on a terminal). The first generation includes compiling the objective."""
+
+    def __init__(self, name: str, total: int, enabled: bool, done: int = 0):
+        self.name = name
+        self.bar = ProgressBar(f"{name}: generation {done + 1} (compiling)", total, done=done, unit="generations",
+                               enabled=enabled)
 
     def update(self, row: dict, eval_s: float) -> None:
-        if not self.enabled:
-            return
-        el = time.perf_counter() - self.t0
-        msg = (f"{self.name}: generation {row['generation']}/{self.total} | best {row['best']:.6g} | "
-               f"gen mean {row['gen_mean']:.6g} | NaN/inf {row['n_bad']} | eval {eval_s:.2f} s | "
-               f"elapsed {clock(el)}")
-        print(("\r" + msg.ljust(110)) if self.tty else msg, end="" if self.tty else "\n", file=sys.stderr, flush=True)
+        bad = f", {row['n_bad']} NaN/inf" if row["n_bad"] else ""
+        text = f"{self.name}: best {row['best']:.5g} (mean {row['gen_mean']:.4g}{bad})"
+        self.bar.update(row["generation"], description=text)
 
     def close(self) -> None:
-        if self.enabled and self.tty:
-            print(file=sys.stderr, flush=True)
+        self.bar.close()
 
 
 def tune_loop(objective: Objective, strategy: Strategy, generations: int, run_dir: str | Path, *, seed: int = 0,
@@ -212,7 +212,7 @@ def tune_loop(objective: Objective, strategy: Strategy, generations: int, run_di
         shutil.rmtree(p, ignore_errors=True)
     ck.mkdir(parents=True, exist_ok=True)
     ask, tell = jax.jit(strategy.ask), jax.jit(strategy.tell)
-    prog = _Progress(run_dir.name, generations, progress)
+    prog = _Progress(run_dir.name, generations, progress, g0)
     P = strategy.population_size
     n_bad_total = sum(r["n_bad"] for r in rows)
 

@@ -1,0 +1,173 @@
+"""The files `jaxplan plan --out` and `jaxplan navigate --out` write, chosen by suffix.
+
+One plan (`plan_record`, `write_plan`):
+  * ``.json``: the map, start and goal, the planner with every parameter (defaults and ``--set`` overrides), the
+    seed, the result (success, length m, cost, turns, history, time), the path in cells and in metres (cell
+    centres), the smoothed path when asked, the path metrics (DESIGN §6), why a failed plan failed, and the
+    provenance record (`jaxplan.core.provenance`: jaxplan version, git revision, library versions, machine).
+    Non-finite numbers (the ``inf`` length of a failed plan) are ``null``.
+  * ``.csv``: one row per path point: ``step, x, y`` (cells) and ``x_m, y_m`` (metres); the smoothed polyline
+    when smoothing was asked, else the grid path.
+  * ``.png`` (or ``.svg``, ``.pdf``): the map with the path (and the smoothed path) over it, start and goal.
+
+One episode (`write_episode`): ``.json`` (`jaxplan.nav.Episode.to_dict` with the run's settings and provenance),
+``.gif`` (the robot's trail among the walkers; needs Pillow, which matplotlib installs) or ``.png`` (the trail
+over the map).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from jaxplan.core.export import json_text, plain
+from jaxplan.core.io import atomic_write
+
+__all__ = ["PLAN_SUFFIXES", "EPISODE_SUFFIXES", "cells_to_metres", "plan_record", "write_plan", "write_episode"]
+
+PLAN_SUFFIXES = (".json", ".csv", ".png", ".svg", ".pdf")
+EPISODE_SUFFIXES = (".json", ".gif", ".png", ".svg", ".pdf")
+
+
+def cells_to_metres(points: Any, grid: Any) -> np.ndarray:
+    """``[..., 2]`` cell coordinates ``(x, y)`` (cell centres at integers) as metres (DESIGN §2: centre of cell
+    ``(x, y)`` is ``((x + 0.5)·res, (y + 0.5)·res)``)."""
+    return (np.asarray(points, np.float64) + 0.5) * float(grid.resolution)
+
+
+def check_suffix(path: str | os.PathLike, suffixes: tuple[str, ...], what: str) -> Path:
+    """``path`` as a `Path`, or ``ValueError`` naming the suffixes ``what`` writes."""
+    p = Path(path)
+    if p.suffix.lower() not in suffixes:
+        raise ValueError(f"{what} --out {p}: the suffix decides the format; use one of {', '.join(suffixes)}")
+    return p
+
+
+def plan_record(*, map_path: str, grid: Any, start, goal, planner: str, seed: int, params: Mapping[str, Any],
+                overrides: Mapping[str, Any], result: Any, metrics: Mapping[str, Any] | None,
+                smoothed: Any = None, smooth_method: str | None = None, failure: str | None = None) -> dict:
+    """The ``.json`` record of one plan (see the module docstring)."""
+    from jaxplan.core.provenance import provenance
+
+    path = np.asarray(result.path).reshape(-1, 2)
+    info = {k: v for k, v in result.info.items() if k != "tau"}
+    rec = {
+        "map": {"path": str(map_path), "height": int(grid.shape[0]), "width": int(grid.shape[1]),
+                "resolution_m": float(grid.resolution)},
+        "start": [int(v) for v in start], "goal": [int(v) for v in goal],
+        "planner": planner, "seed": int(seed), "parameters": plain(dict(params)), "overrides": plain(dict(overrides)),
+        "success": bool(result.success), "length_m": float(result.length), "cost": float(result.cost),
+        "turns": int(result.turns), "iterations": int(len(result.history)), "history": plain(result.history),
+        "time_s": float(result.time_s), "info": plain(info),
+        "path_cells": path.tolist(), "path_m": cells_to_metres(path, grid).tolist(),
+        "metrics": plain(dict(metrics)) if metrics is not None else None,
+    }
+    if smoothed is not None:
+        pts = np.asarray(smoothed.points).reshape(-1, 2)
+        rec["smoothed"] = {"method": smooth_method, "points_cells": pts.tolist(),
+                           "points_m": cells_to_metres(pts, grid).tolist(), "removed": int(smoothed.removed),
+                           "fallbacks": int(smoothed.fallbacks)}
+    if failure is not None:
+        rec["failure"] = failure
+    rec["provenance"] = provenance(devices=False)
+    return rec
+
+
+def _csv_points(points: np.ndarray, grid: Any) -> bytes:
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["step", "x", "y", "x_m", "y_m"])
+    m = cells_to_metres(points, grid)
+    for k, (p, q) in enumerate(zip(points, m, strict=True)):
+        w.writerow([k, *(repr(float(v)) if points.dtype.kind == "f" else int(v) for v in p), *map(repr, q.tolist())])
+    return buf.getvalue().encode()
+
+
+def _figure(grid: Any, title: str, draw) -> Any:
+    from jaxplan.experiments import plots
+
+    fig, ax = plots.plt.subplots(figsize=(6, 6 * grid.shape[0] / max(grid.shape[1], 1) + 0.6))
+    plots.plot_map(ax, grid, colorbar=False)
+    draw(ax, plots)
+    ax.set_title(title, fontsize=9)
+    return fig
+
+
+def write_plan(out: str | os.PathLike, record: dict, grid: Any, result: Any, smoothed: Any = None) -> Path:
+    """Writes one plan to ``out`` (``.json``, ``.csv`` or an image); returns the path."""
+    p = check_suffix(out, PLAN_SUFFIXES, "jaxplan plan")
+    p.parent.mkdir(parents=True, exist_ok=True)
+    suffix = p.suffix.lower()
+    if suffix == ".json":
+        atomic_write(p, json_text(record).encode())
+    elif suffix == ".csv":
+        pts = np.asarray(smoothed.points if smoothed is not None else result.path).reshape(-1, 2)
+        atomic_write(p, _csv_points(pts, grid))
+    else:
+        start, goal = np.asarray(record["start"]), np.asarray(record["goal"])
+
+        def draw(ax, plots):
+            paths, labels = [np.asarray(result.path).reshape(-1, 2)], [record["planner"]]
+            if smoothed is not None:
+                paths.append(np.asarray(smoothed.points).reshape(-1, 2))
+                labels.append(f"smoothed ({record['smoothed']['method']})")
+            plots.plot_paths(ax, grid, paths, labels, start=start, goal=goal)
+            if len(labels) > 1 or not result.success:
+                ax.legend(fontsize=8, loc="upper right")
+
+        head = (f"{record['planner']} on {Path(record['map']['path']).name}: "
+                + (f"{result.length:.2f} m, {result.turns} turns" if result.success else "no path"))
+        fig = _figure(grid, head, draw)
+        from jaxplan.experiments.plots import plt, save_figure
+
+        save_figure(fig, str(p))
+        plt.close(fig)
+    return p
+
+
+def write_episode(out: str | os.PathLike, episode: Any, grid: Any, record: Mapping[str, Any],
+                  frames: int = 40) -> Path:
+    """Writes one navigation episode to ``out`` (``.json``, ``.gif`` or an image); returns the path.
+
+    Raises:
+      ImportError: ``.gif`` without Pillow.
+    """
+    p = check_suffix(out, EPISODE_SUFFIXES, "jaxplan navigate")
+    p.parent.mkdir(parents=True, exist_ok=True)
+    suffix = p.suffix.lower()
+    label = str(record.get("pipeline", "robot"))
+    if suffix == ".json":
+        from jaxplan.core.provenance import provenance
+
+        atomic_write(p, json_text({**record, "episode": episode.to_dict(),
+                                   "provenance": provenance(devices=False)}).encode())
+    elif suffix == ".gif":
+        import importlib.util
+
+        if importlib.util.find_spec("PIL") is None:
+            raise ImportError("jaxplan navigate --out *.gif needs Pillow (matplotlib's GIF writer): pip install "
+                              "pillow; or write .json or .png")
+        from jaxplan.experiments.demo import animate_episodes
+
+        animate_episodes({label: episode}, grid, p, frames)
+    else:
+        def draw(ax, plots):
+            tr = np.asarray(episode.trajectory)
+            ax.plot(tr[:, 0], tr[:, 1], lw=1.6, label=label)
+            plan = np.asarray(episode.plan).reshape(-1, 2)
+            if len(plan):
+                plots.plot_paths(ax, grid, [plan], ["global plan"], lw=1.0)
+            ax.legend(fontsize=8, loc="upper right")
+
+        head = f"{label}: {episode.reason}, {episode.time_s:.1f} s, {episode.collisions} collisions"
+        fig = _figure(grid, head, draw)
+        from jaxplan.experiments.plots import plt, save_figure
+
+        save_figure(fig, str(p))
+        plt.close(fig)
+    return p
