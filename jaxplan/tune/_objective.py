@@ -479,6 +479,50 @@ def dwa_scenarios(grid, starts: np.ndarray, goals: np.ndarray, seeds: Sequence[i
 DWA_TUNABLE = ("heading", "velocity", "clearance", "goal")
 
 
+def _episode_programs(grid, train: Split, test: Split, config, base: Mapping[str, np.ndarray], slots, weights,
+                      steps: int, tolerance: float, n_discs: int, params_type, episodes: Callable, points: int):
+    """What `dwa_objective` and `mppi_objective` share: the batched episode program of each split, its memory
+    estimate, and the parts a gradient route reuses.
+
+    ``params_type`` builds the local planner's params from the scattered weights, ``episodes`` runs them
+    (`dwa_episodes` or `mppi_episodes`), ``points`` is the rollout points per sample of the memory estimate.
+    """
+    from jaxplan.dwa import clearance_table
+    from jaxplan.grid import collision_map
+
+    splits = {"train": train, "test": test}
+    table = clearance_table(collision_map(grid))
+    radius = float(config.robot.footprint.radius) if hasattr(config.robot.footprint, "radius") else 0.25
+    eps = {k: dwa_scenarios(grid, sp.starts, sp.goals, sp.seeds, n_discs) for k, sp in splits.items()}
+    base_j = {k: jnp.asarray(v, jnp.float32) for k, v in base.items()}
+
+    def program(split_name: str):
+        ep = eps[split_name]
+        N, R = len(splits[split_name].starts), len(splits[split_name].seeds)
+
+        def run(pop):
+            def one(x):
+                tr = episodes(table, config, params_type(**_scatter(base_j, slots, x)), ep, steps, tolerance)
+                return _episode_metrics(tr, steps, config.period, radius)
+
+            metrics = {k: v.reshape(pop.shape[0], N, R) for k, v in jax.vmap(one)(pop).items()}
+            cost = sum(w * metrics[k] for k, w in weights.items())
+            return cost, metrics
+
+        return run
+
+    def memory(population: int, split_name: str) -> MemoryEstimate:
+        sp = splits[split_name]
+        robots = population * len(sp.starts) * len(sp.seeds)
+        est = dwa_memory(robots, config.samples, points, obstacles=n_discs, chunk=None,
+                         map_cells=int(np.asarray(grid.free).size))
+        return _per_member(est, population, {"episode traces": robots * steps * 4 * 4})
+
+    parts = dict(table=table, config=config, steps=steps, episodes=eps, slots=slots, base=base_j, tolerance=tolerance,
+                 radius=radius)
+    return program, memory, parts
+
+
 def dwa_objective(grid, train: Split, test: Split, evaluator: str = "weighted", space: Mapping | None = None,
                   weights: Mapping[str, float] | None = None, dwa: Mapping[str, Any] | None = None,
                   max_time: float = 20.0, n_discs: int = 2, tolerance: float = 0.5,
@@ -495,8 +539,7 @@ def dwa_objective(grid, train: Split, test: Split, evaluator: str = "weighted", 
       dwa: `DWAConfig` fields (static counts, distances); default a small, fast window.
       max_time: episode length (s).
     """
-    from jaxplan.dwa import DWAConfig, DWAParams, clearance_table, default_params
-    from jaxplan.grid import collision_map
+    from jaxplan.dwa import DWAConfig, DWAParams, default_params
 
     space = space or {"heading": (0.01, 1.0), "velocity": (0.01, 1.0), "clearance": (0.01, 1.0)}
     weights = _metric_weights("dwa_objective", weights, DWA_METRICS, {"time": 1.0, "failure": 1.0})
@@ -510,39 +553,11 @@ def dwa_objective(grid, train: Split, test: Split, evaluator: str = "weighted", 
     steps = int(math.ceil(max_time / config.period))
     slots = _slots(bounds)
     defaults = np.clip(np.array([float(base[n]) for n, _ in slots], np.float32), bounds.low, bounds.high)
-    table = clearance_table(collision_map(grid))
-    radius = float(config.robot.footprint.radius) if hasattr(config.robot.footprint, "radius") else 0.25
-    eps = {k: dwa_scenarios(grid, sp.starts, sp.goals, sp.seeds, n_discs) for k, sp in
-           (("train", train), ("test", test))}
-    base_j = {k: jnp.asarray(v, jnp.float32) for k, v in base.items()}
-
-    def program(split_name: str):
-        ep = eps[split_name]
-        N, R = len(dict(train=train, test=test)[split_name].starts), len(dict(train=train, test=test)[split_name].seeds)
-
-        def run(pop):
-            def one(x):
-                p = DWAParams(**_scatter(base_j, slots, x))
-                tr = dwa_episodes(table, config, p, ep, steps, tolerance)
-                return _episode_metrics(tr, steps, config.period, radius)
-
-            metrics = {k: v.reshape(pop.shape[0], N, R) for k, v in jax.vmap(one)(pop).items()}
-            cost = sum(w * metrics[k] for k, w in weights.items())
-            return cost, metrics
-
-        return run
-
-    def memory(population: int, split_name: str) -> MemoryEstimate:
-        sp = {"train": train, "test": test}[split_name]
-        robots = population * len(sp.starts) * len(sp.seeds)
-        est = dwa_memory(robots, config.samples, config.steps, obstacles=n_discs, chunk=None,
-                         map_cells=int(np.asarray(grid.free).size))
-        return _per_member(est, population, {"episode traces": robots * steps * 4 * 4})
-
+    program, memory, parts = _episode_programs(grid, train, test, config, base, slots, weights, steps, tolerance,
+                                               n_discs, DWAParams, dwa_episodes, config.steps)
     obj = Objective(name or f"dwa_{evaluator}_weights", "dwa", evaluator, bounds, defaults, weights,
                     {"train": train, "test": test}, program, base, memory=memory)
-    object.__setattr__(obj, "_dwa", dict(table=table, config=config, steps=steps, episodes=eps, slots=slots,
-                                          base=base_j, tolerance=tolerance, radius=radius))
+    object.__setattr__(obj, "_dwa", parts)
     return obj
 
 
@@ -595,8 +610,6 @@ def mppi_objective(grid, train: Split, test: Split, space: Mapping | None = None
         [0.005, 0.2]; any `MPPIParams` field may be tuned.
       mppi: `MPPIConfig` fields (static counts, distances); default 128 samples.
     """
-    from jaxplan.dwa import clearance_table
-    from jaxplan.grid import collision_map
     from jaxplan.mppi import MPPIConfig, MPPIParams, default_params
 
     space = space or {"obstacle": (0.05, 5.0), "dynamic": (0.05, 5.0), "path_follow": (0.05, 5.0),
@@ -613,36 +626,8 @@ def mppi_objective(grid, train: Split, test: Split, space: Mapping | None = None
     steps = int(math.ceil(max_time / config.period))
     slots = _slots(bounds)
     defaults = np.clip(np.array([float(base[n]) for n, _ in slots], np.float32), bounds.low, bounds.high)
-    table = clearance_table(collision_map(grid))
-    radius = float(config.robot.footprint.radius) if hasattr(config.robot.footprint, "radius") else 0.25
-    eps = {k: dwa_scenarios(grid, sp.starts, sp.goals, sp.seeds, n_discs) for k, sp in
-           (("train", train), ("test", test))}
-    base_j = {k: jnp.asarray(v, jnp.float32) for k, v in base.items()}
-
-    def program(split_name: str):
-        ep = eps[split_name]
-        sp = dict(train=train, test=test)[split_name]
-        N, R = len(sp.starts), len(sp.seeds)
-
-        def run(pop):
-            def one(x):
-                p = MPPIParams(**_scatter(base_j, slots, x))
-                tr = mppi_episodes(table, config, p, ep, steps, tolerance)
-                return _episode_metrics(tr, steps, config.period, radius)
-
-            metrics = {k: v.reshape(pop.shape[0], N, R) for k, v in jax.vmap(one)(pop).items()}
-            cost = sum(w * metrics[k] for k, w in weights.items())
-            return cost, metrics
-
-        return run
-
-    def memory(population: int, split_name: str) -> MemoryEstimate:
-        sp = {"train": train, "test": test}[split_name]
-        robots = population * len(sp.starts) * len(sp.seeds)
-        est = dwa_memory(robots, config.samples, config.points, obstacles=n_discs, chunk=None,
-                         map_cells=int(np.asarray(grid.free).size))
-        return _per_member(est, population, {"episode traces": robots * steps * 4 * 4})
-
+    program, memory, _ = _episode_programs(grid, train, test, config, base, slots, weights, steps, tolerance,
+                                           n_discs, MPPIParams, mppi_episodes, config.points)
     return Objective(name or "mppi_weights", "mppi", "mppi", bounds, defaults, weights,
                      {"train": train, "test": test}, program, base, memory=memory)
 
