@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from jaxplan.core.export import require_pandas
-from jaxplan.core.io import atomic_path
+from jaxplan.core.io import atomic_file, atomic_path
 
 __all__ = ["FORMATS", "run_tables", "trials_dataframe", "export_run"]
 
@@ -175,7 +175,7 @@ def export_run(run_dir: str | os.PathLike, out: str | os.PathLike | None = None,
         path = Path(out) if out is not None else run_dir / "export.npz"
         path.parent.mkdir(parents=True, exist_ok=True)
         cols = {f"{t}.{c}": _npz_column(v) for t, tab in tables.items() for c, v in tab.items()}
-        with atomic_path(path) as tmp, open(tmp, "wb") as f:
+        with atomic_file(path, "wb") as f:
             np.savez_compressed(f, **cols)
         return [path]
     folder = Path(out) if out is not None else run_dir / "export"
