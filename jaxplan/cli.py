@@ -282,19 +282,18 @@ def cmd_figures(args: argparse.Namespace) -> int:
 
 
 def _reproduce_study(args: argparse.Namespace, results: str):
-    """li2026's optimiser study (not an experiment config): its page and figure, then the index rewritten."""
+    """li2026's optimiser study (not an experiment config): its page and figure (`cmd_reproduce` rewrites the
+    index after it)."""
     import time
 
     from jaxplan import benchmark_functions as bf
     from jaxplan.experiments.reproduce import Reproduced, describe_error
-    from jaxplan.experiments.results import load_notes, write_index_page
 
     t0 = time.perf_counter()
     try:
         page = bf.write_study(results, args.figures, bf.QUICK if args.quick else bf.FULL)
     except Exception as e:  # noqa: BLE001 - reported like a config's failure, after the others
         return Reproduced(Path(bf.NAME), None, time.perf_counter() - t0, 0.0, 0, (), describe_error(e))
-    write_index_page(results, load_notes(Path(args.configs) / "results" / "notes.toml"), quick=args.quick)
     return Reproduced(Path(bf.NAME), None, time.perf_counter() - t0, 0.0, 1, (), page=page)
 
 
@@ -326,6 +325,12 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
                      progress=not args.no_progress, results=results)
     if studies:
         done.append(_reproduce_study(args, results))
+    if results is not None and any(r.page is not None for r in done):
+        from jaxplan.experiments.results import load_notes, write_index_page
+
+        # Once more, last: the study's page is in it and the wall time is the whole command's.
+        write_index_page(results, load_notes(Path(args.configs) / "results" / "notes.toml"), quick=args.quick,
+                         wall_s=time.perf_counter() - t0, cache=not args.no_cache)
     rows = [(r.config.name, "FAILED" if r.error else r.run_dir.name if r.run_dir else "-", f"{r.run_s:.1f}",
              f"{r.figures_s:.1f}", str(r.figures)) for r in done]
     heads = ("config", "run folder", "run (s)", "figures (s)", "figures")

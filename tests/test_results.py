@@ -233,6 +233,8 @@ def test_optimiser_study_curves_and_page(tmp_path):
     assert (tmp_path / "figures" / "li2026_fig7-quick" / "fig7_fitness.png").stat().st_size > 5_000
     index = write_index_page(tmp_path / "results", Notes(), quick=True).read_text()
     assert "[li2026_fig7](li2026/fig7-quick.md)" in index
+    timed = write_index_page(tmp_path / "results", Notes(), quick=True, wall_s=90.0, cache=False).read_text()
+    assert "wall time of the call that wrote this index: 1.5 min (no compilation cache)" in timed
 
 
 def test_notes_highlight_renders_a_table_and_refuses_stray_keys(cfg, tmp_path):
