@@ -155,6 +155,10 @@ def _why_failed(grid, start, goal, planner: str, params: dict, res) -> str:
     return reach
 
 
+_RESOLUTION_HELP = ("metres per cell (default: 1.0 for a MovingAI .map; a ROS .yaml map keeps its own, and with a "
+                   "value it is resampled: a coarse cell is blocked if any fine cell it covers is)")
+
+
 def cmd_plan(args: argparse.Namespace) -> int:
     """``jaxplan plan MAP --start X Y --goal X Y``: one path, a table, and with ``--out`` a .json/.csv/.png file."""
     from jaxplan.experiments.tables import PATH_ROWS, path_column, text_table
@@ -225,7 +229,7 @@ def cmd_navigate(args: argparse.Namespace) -> int:
     grid = load_map(args.map, resolution=args.resolution)
     start, goal = tuple(args.start), tuple(args.goal)
     res = float(grid.resolution)
-    avoid = (np.array([start, goal], np.float64) + 0.5) * res
+    avoid = grid.centre(np.array([start, goal], np.float64))  # world metres, as random_obstacles takes
     obs = None if args.walkers == 0 else random_obstacles(
         grid, n=args.walkers, speed=args.walker_speed, radius=args.walker_radius, seed=args.seed, avoid=avoid,
         avoid_radius=1.5)
@@ -238,7 +242,8 @@ def cmd_navigate(args: argparse.Namespace) -> int:
     if args.out is not None:
         from jaxplan.experiments.outputs import write_episode
 
-        record = {"map": str(args.map), "resolution_m": res, "start": list(start), "goal": list(goal),
+        record = {"map": str(args.map), "resolution_m": res, "origin_m": [float(v) for v in grid.origin],
+                  "start": list(start), "goal": list(goal),
                   "pipeline": args.pipeline, "seed": args.seed, "overrides": overrides, "walkers":
                   {"n": args.walkers, "speed": args.walker_speed, "radius": args.walker_radius}}
         print(f"wrote {write_episode(args.out, ep, grid, record)}")
@@ -392,7 +397,7 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--no-progress", action="store_true", help="no progress bar on stderr (drawn only on a terminal)")
     d.set_defaults(func=cmd_demo)
     q = sub.add_parser("plan", help="plan one path on a map; --out writes .json, .csv or .png")
-    q.add_argument("map", help="map file (MovingAI .map)")
+    q.add_argument("map", help="map file: MovingAI .map or ROS map_server .yaml")
     q.add_argument("--start", type=int, nargs=2, required=True, metavar=("X", "Y"), help="start cell (column, row)")
     q.add_argument("--goal", type=int, nargs=2, required=True, metavar=("X", "Y"), help="goal cell (column, row)")
     q.add_argument("--planner", default="astar", help="a planner of jaxplan.planners() (default astar)")
@@ -403,14 +408,14 @@ def build_parser() -> argparse.ArgumentParser:
                                                                    "bspline, or a chain such as los,fillet")
     q.add_argument("--connectivity", type=int, default=None, choices=(4, 8, 16),
                    help="grid moves per cell (default: the planner's own, 8 for the grid planners)")
-    q.add_argument("--resolution", type=float, default=1.0, help="metres per cell")
+    q.add_argument("--resolution", type=float, default=None, help=_RESOLUTION_HELP)
     q.add_argument("--out", default=None, metavar="FILE", help="write the plan: .json (path in cells and metres, "
                    "metrics, planner and parameters, provenance), .csv (path points) or .png/.svg/.pdf (path on map)")
     q.add_argument("--no-progress", action="store_true", help="no progress spinner on stderr")
     q.set_defaults(func=cmd_plan)
     v = sub.add_parser("navigate", help="one two-level navigation episode among random walkers; --out writes .json, "
                                         ".gif or .png")
-    v.add_argument("map", help="map file (MovingAI .map)")
+    v.add_argument("map", help="map file: MovingAI .map or ROS map_server .yaml")
     v.add_argument("--start", type=int, nargs=2, required=True, metavar=("X", "Y"), help="start cell (column, row)")
     v.add_argument("--goal", type=int, nargs=2, required=True, metavar=("X", "Y"), help="goal cell (column, row)")
     v.add_argument("--pipeline", default="iaco_dwa", help="a pipeline of jaxplan.pipelines() (default iaco_dwa)")
@@ -420,7 +425,7 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--walker-speed", type=float, default=0.5, help="walkers' speed in m/s (default 0.5)")
     v.add_argument("--walker-radius", type=float, default=0.25, help="walkers' radius in m (default 0.25)")
     v.add_argument("--time-limit", type=float, default=None, help="seconds (default: from the path length)")
-    v.add_argument("--resolution", type=float, default=1.0, help="metres per cell")
+    v.add_argument("--resolution", type=float, default=None, help=_RESOLUTION_HELP)
     v.add_argument("--out", default=None, metavar="FILE", help="write the episode: .json (trajectory, controls, "
                    "metrics, walkers, provenance), .gif (animation; needs Pillow) or .png/.svg/.pdf")
     v.add_argument("--no-progress", action="store_true", help="no progress stages on stderr")

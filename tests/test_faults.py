@@ -4,7 +4,8 @@ Each observation of the issue is a test here: it failed at a0085ce and passes no
 records (`_record`) are the rows of ``docs/guide/reliability.md``; the last test checks that every row
 names a test of this file and that the message it quotes is the one the test saw.
 
-The parsers (``.map``, ``.scen``, ``.tsp``, ``.tour``, experiment and tuning TOML) are fuzzed with
+The parsers (``.map``, ``.scen``, ``.tsp``, ``.tour``, ROS map YAML with its PGM/PNG image, experiment and
+tuning TOML) are fuzzed with
 hypothesis in a worker process under an address-space limit (``RLIMIT_AS``): any input must give a
 result or a `ValueError` with a message — never another exception, never a hang (a time limit per input),
 never more memory than the bound. ``JAXPLAN_FUZZ_EXAMPLES`` sets the examples per parser (default 40).
@@ -181,9 +182,9 @@ def test_figures_refuse_a_chunk_whose_arrays_are_missing_or_truncated(run_copy, 
 # Parsers under an address-space limit (also the fuzzing worker)
 
 _WORKER = r"""
-import json, os, resource, sys, tempfile, traceback
+import base64, json, os, resource, sys, tempfile, traceback
 from pathlib import Path
-from jaxplan.grid import parse_map, parse_scenarios
+from jaxplan.grid import load_ros_map, parse_map, parse_scenarios
 from jaxplan.aco import load_tour, load_tsplib
 from jaxplan.experiments.config import parse_config
 from jaxplan.tune import parse_tune_config
@@ -212,6 +213,11 @@ for line in sys.stdin:
             f = tmp / f"in.{kind}"
             f.write_bytes(text.encode("utf-8", "surrogatepass"))
             out = load_tsplib(f).n if kind == "tsp" else len(load_tour(f))
+        elif kind == "ros":  # a ROS map: its YAML and the image it names, sent as JSON (the image in base64)
+            case = json.loads(text)
+            (tmp / "m.yaml").write_bytes(case["yaml"].encode("utf-8", "surrogatepass"))
+            (tmp / case["name"]).write_bytes(base64.b64decode(case["image"]))
+            out = load_ros_map(tmp / "m.yaml").shape
         elif kind == "experiment":
             out = parse_config(text, data_dir=data).name
         elif kind == "tune":
@@ -894,6 +900,60 @@ def tsplib_texts(draw):
     return _mutate(draw, "\n".join(lines))
 
 
+_ROS_YAML = "resolution: 0.05\norigin: [-1.5, 2.0, 0.0]\nnegate: {neg}\noccupied_thresh: 0.65\nfree_thresh: 0.196\n" \
+            "mode: {mode}\n"
+
+
+def _mutate_bytes(draw, data: bytes) -> bytes:
+    """``data`` with 0-3 edits: a byte changed, the file cut short, or a huge, zero or negative number inserted."""
+    b = bytearray(data)
+    for _ in range(draw(st.integers(0, 3))):
+        if not b:
+            break
+        k = draw(st.integers(0, len(b) - 1))
+        op = draw(st.sampled_from(["byte", "cut", "digits"]))
+        if op == "byte":
+            b[k] = draw(st.integers(0, 255))
+        elif op == "cut":
+            del b[k:]
+        else:
+            b[k:k] = draw(st.sampled_from([b"999999999", b"0", b"65536", b"-1", b"46341"]))
+    return bytes(b)
+
+
+@st.composite
+def ros_map_cases(draw):
+    """A ROS map as the worker takes it (JSON: the YAML, the image's name and its bytes in base64): a valid YAML
+    (trinary or scale, negate 0 or 1) with `_mutate`'s edits under an ``image:`` line naming the image, which is
+    a PGM (P2 or P5, 8 or 16 bit) or a PNG (grey or RGBA) with `_mutate_bytes`' edits."""
+    import base64
+    import io
+
+    h, w = draw(st.integers(1, 6)), draw(st.integers(1, 8))
+    fmt = draw(st.sampled_from(["P2", "P5", "P5-16", "png-L", "png-RGBA"]))
+    maxval = 65535 if fmt == "P5-16" else 255
+    px = [[draw(st.sampled_from([0, 1, 50, 128, 205, 254, maxval])) for _ in range(w)] for _ in range(h)]
+    if fmt == "P2":
+        name, image = "m.pgm", f"P2\n# fuzz\n{w} {h}\n255\n" + "\n".join(" ".join(map(str, r)) for r in px) + "\n"
+        image = _mutate(draw, image).encode("utf-8", "surrogatepass")
+    elif fmt.startswith("P5"):
+        size = 2 if maxval > 255 else 1
+        body = b"".join(v.to_bytes(size, "big") for r in px for v in r)
+        name, image = "m.pgm", _mutate_bytes(draw, f"P5\n{w} {h}\n{maxval}\n".encode() + body)
+    else:
+        from PIL import Image
+
+        mode = fmt[4:]
+        im = Image.new(mode, (w, h))
+        im.putdata([v if mode == "L" else (v, v, v, draw(st.sampled_from([0, 255]))) for r in px for v in r])
+        buf = io.BytesIO()
+        im.save(buf, format="PNG")
+        name, image = "m.png", _mutate_bytes(draw, buf.getvalue())
+    yaml = _ROS_YAML.format(neg=draw(st.sampled_from([0, 1])), mode=draw(st.sampled_from(["trinary", "scale"])))
+    yaml = f"image: {name}\n" + _mutate(draw, yaml)  # the image line kept: every case names a file that exists
+    return json.dumps({"yaml": yaml, "name": name, "image": base64.b64encode(image).decode()})
+
+
 def _toml_value(draw, depth: int = 0) -> str:
     kind = draw(st.sampled_from(["int", "float", "str", "bool", "list", "table"] if depth < 2 else
                                 ["int", "float", "str", "bool"]))
@@ -979,6 +1039,12 @@ def test_fuzz_tsp_parser(worker, text):
 @given(text=tsplib_texts())
 def test_fuzz_tour_parser(worker, text):
     _fuzz(worker, "tour", text)
+
+
+@FUZZ
+@given(text=ros_map_cases())
+def test_fuzz_ros_map_parser(worker, text):
+    _fuzz(worker, "ros", text)
 
 
 @FUZZ

@@ -363,7 +363,8 @@ class MapSpec:
       generator: a `GENERATORS` name (None for a file).
       params: the generator's settings.
       seed: the generator's key.
-      resolution: metres per cell.
+      resolution: metres per cell; None for a ROS map (``.yaml``) without one: it keeps its own (the loaded
+        grid's ``resolution`` is the value used).
       scenarios: how this map's scenarios are chosen.
       tsplib: absolute ``.tsp`` path of a TSP instance (None for a map).
       tour: absolute ``.opt.tour`` path of the instance's optimal tour, or None.
@@ -377,7 +378,7 @@ class MapSpec:
     generator: str | None
     params: Mapping[str, Any]
     seed: int
-    resolution: float
+    resolution: float | None
     scenarios: ScenarioSpec
     tsplib: Path | None = None
     tour: Path | None = None
@@ -475,8 +476,8 @@ class MapTable:
 
     name: str = setting("str", None, "label in tables and figures; unique among maps and instances",
                         default_text="the file's stem or the generator's name")
-    path: str = setting("str", None, "a MovingAI .map file, relative to the data folder (`--data-dir`, "
-                        "`$JAXPLAN_DATA`) or absolute")
+    path: str = setting("str", None, "a MovingAI .map file or a ROS map_server map's .yaml, relative to the data "
+                        "folder (`--data-dir`, `$JAXPLAN_DATA`) or absolute")
     scen: str = setting("str", None, "its .scen file (MovingAI maps only)",
                         default_text="MAP.scen, else STEM-random-1.scen beside the map")
     generator: str = setting("str", None, "a map generator of `jaxplan.grid`", choices=GENERATORS,
@@ -485,7 +486,9 @@ class MapTable:
                                         "warehouse_yu2020: size (30 or 35); warehouse_chen2023_risk: lam (chen2023's "
                                         "Poisson risk rate)")
     seed: int = setting("int", 0, "the generator's key (generated maps only)", ge=0)
-    resolution: float = setting("float", 1.0, "metres per cell", gt=0)
+    resolution: float = setting("float", None, "metres per cell; a ROS map is resampled to it (a coarse cell is "
+                                "blocked if any fine cell it overlaps is)", gt=0,
+                                default_text="1.0 for a MovingAI or generated map; a ROS map's own")
     scenarios: Any = setting("section", None, "this map's scenario keys, replacing those of `[scenarios]`",
                              section=ScenarioSpec)
 
@@ -653,6 +656,8 @@ def read_maps(r: Reader, raw: Mapping[str, Any], data_dir: Path, required: bool 
         default_scen = None
     r.table(default_scen, "scenarios", scen_keys)
     gens = _generators()
+    from jaxplan.grid import is_ros_map
+
     out, names = [], {}
     for i, (p, m) in enumerate(entries):
         t = r.section(m, p, MapTable, skip=("name", "path", "scen", "generator", "params"))
@@ -662,6 +667,8 @@ def read_maps(r: Reader, raw: Mapping[str, Any], data_dir: Path, required: bool 
         if has_path == has_gen:
             r.bad(p, "give exactly one of 'path' (a MovingAI .map) or 'generator'")
         resolution, seed = t["resolution"], t["seed"]
+        if resolution is None and not (has_path and isinstance(m["path"], str) and is_ros_map(m["path"])):
+            resolution = 1.0  # a MovingAI or generated map's default; a ROS map keeps its own (None)
         map_path = scen_path = gen = None
         params: dict = {}
         label = None

@@ -87,8 +87,9 @@ def min_clearance(grid, ep, robot_radius: float, window: int = 3) -> float:
     res = float(grid.resolution)
     free = np.asarray(grid.free)
     H, W = free.shape
-    pos = np.asarray(ep.trajectory[:, :2], np.float64)
-    p = pos / res - 0.5  # cell coordinates: cell (x, y) is the unit square centred on (x, y)
+    pos = np.asarray(ep.trajectory[:, :2], np.float64)  # world metres
+    # cell coordinates (map frame): cell (x, y) is the unit square centred on (x, y)
+    p = np.asarray(grid.to_local(pos), np.float64) / res - 0.5
     off = np.stack(np.meshgrid(np.arange(-window, window + 1), np.arange(-window, window + 1)), -1).reshape(-1, 2)
     cells = np.round(p).astype(np.int64)[:, None, :] + off[None]  # [T, K, 2]
     inside = (cells[..., 0] >= 0) & (cells[..., 0] < W) & (cells[..., 1] >= 0) & (cells[..., 1] < H)
@@ -123,11 +124,10 @@ def _figure(result: DemoResult, grid, path: Path) -> list[str]:
     fig, (a, b) = plt.subplots(1, 2, figsize=(13, 4.8), gridspec_kw={"width_ratios": [1.6, 1]},
                                constrained_layout=True)
     plots.plot_map(a, grid, title="executed trajectories (solid) over global paths (dashed)")
-    res = float(grid.resolution)
     for k, (name, ep) in enumerate(result.episodes.items()):
         c = f"C{k}"
         if len(ep.plan):
-            pl = (np.asarray(ep.plan) + 0.5) * res
+            pl = grid.centre(np.asarray(ep.plan))
             a.plot(pl[:, 0], pl[:, 1], ls="--", lw=1.0, color=c)
         a.plot(ep.trajectory[:, 0], ep.trajectory[:, 1], lw=2.0, color=c,
                label=f"{name}: {'goal' if ep.success else ep.reason}")
@@ -217,8 +217,7 @@ def run_demo(out_dir: str | Path = "figures", *, seed: int = 0, quick: bool = Fa
 
     scene, cfg, overrides, o = _settings(quick)
     grid = scene.grid
-    res = float(grid.resolution)
-    avoid = (np.stack([np.asarray(scene.start), np.asarray(scene.goal)]) + 0.5) * res
+    avoid = grid.centre(np.stack([np.asarray(scene.start), np.asarray(scene.goal)]))
     obs = random_obstacles(grid, n=o["n"], speed=o["speed"], radius=o["radius"], seed=seed, avoid=avoid,
                            avoid_radius=1.5)
     episodes, wall = {}, {}

@@ -116,12 +116,10 @@ def obstacle_fn(mw: MapWork, m: int, pc: PlannerConfig, run_idx: np.ndarray) -> 
         return None
     from jaxplan.nav import random_obstacles
 
-    res = float(mw.grid.resolution)
-
     def fn(e: int, seed: int):
         sc = int(run_idx[e])
         s = int(np.random.SeedSequence([o.seed, m, sc, int(seed)]).generate_state(1)[0])
-        avoid = (np.stack([mw.starts[sc], mw.goals[sc]]) + 0.5) * res
+        avoid = mw.grid.centre(np.stack([mw.starts[sc], mw.goals[sc]]))  # world metres, as random_obstacles takes
         return random_obstacles(mw.grid, n=o.n, speed=o.speed, radius=o.radius, seed=s, waypoints=o.waypoints,
                                 avoid=avoid, avoid_radius=o.avoid_radius, loop=o.loop, behavior=o.behavior)
 

@@ -265,7 +265,6 @@ def _paths(run, spec):
     fig, axes = panel_grid(len(mi), w=6.0, h=4.8)
     for ax, m in zip(axes[0], mi, strict=True):
         mw = run.prep.maps[m]
-        res = float(mw.grid.resolution)
         paths, labels, smoothed, smoothed_labels = [], [], [], []
         for p in pi:
             got = run.arrays(m, p, sc)
@@ -278,15 +277,15 @@ def _paths(run, spec):
                 pts, n = a["plans"][i, r], int(a["n_plan"][i, r])
             else:
                 continue
-            paths.append(cell_path_m(pts, n, res))
+            paths.append(cell_path_m(pts, n, mw.grid))
             labels.append(run.config.planners[p].label)
             if smoother and n > 0:
                 sm = smooth(np.asarray(pts[:n], np.float64), mw.grid, smoother)
-                smoothed.append(cell_path_m(np.asarray(sm.points), int(sm.n), res))
+                smoothed.append(cell_path_m(np.asarray(sm.points), int(sm.n), mw.grid))
                 smoothed_labels.append(f"{labels[-1]} ({smoother})")
         plots.plot_map(ax, mw.grid, layer=map_layer(mw.grid), title=f"{mw.spec.name}, scenario {sc}, seed {seed}")
-        plots.plot_paths(ax, mw.grid, paths, labels=labels, start=cell_path_m(mw.starts[sc][None], 1, res)[0],
-                         goal=cell_path_m(mw.goals[sc][None], 1, res)[0], coords="m")
+        plots.plot_paths(ax, mw.grid, paths, labels=labels, start=cell_path_m(mw.starts[sc][None], 1, mw.grid)[0],
+                         goal=cell_path_m(mw.goals[sc][None], 1, mw.grid)[0], coords="m")
         if smoothed:
             lines_before = len(ax.lines)
             plots.plot_paths(ax, mw.grid, smoothed, labels=smoothed_labels, coords="m", lw=1.4)
@@ -335,7 +334,7 @@ def _nav_trial(run, m, p, sc, r):
     steps = int(a["steps"][i, r])
     pos = np.asarray(a["positions"][i, r, :steps + 1], np.float64)
     states = np.asarray(a["states"][i, r, :steps + 1], np.float64) if "states" in a else None
-    plan = cell_path_m(a["plans"][i, r], int(a["n_plan"][i, r]), float(run.prep.maps[m].grid.resolution))
+    plan = cell_path_m(a["plans"][i, r], int(a["n_plan"][i, r]), run.prep.maps[m].grid)
     return pos, states, steps, plan
 
 
@@ -348,7 +347,6 @@ def _trajectories(run, spec):
     k = 0
     for m in mi:
         mw = run.prep.maps[m]
-        res = float(mw.grid.resolution)
         for p in pi:
             ax = axes[0][k]
             k += 1
@@ -371,7 +369,7 @@ def _trajectories(run, spec):
                     ax.add_patch(plt.Circle(tuple(d[t_close, j]), radii[j], color="tab:red", alpha=0.5))
                     ax.plot(*pos[t_close], "x", color="tab:red", ms=5)
             plots.plot_paths(ax, mw.grid, [plan, pos], labels=["global path", "executed"],
-                             start=pos[0], goal=cell_path_m(mw.goals[sc][None], 1, res)[0], coords="m", lw=1.5)
+                             start=pos[0], goal=cell_path_m(mw.goals[sc][None], 1, mw.grid)[0], coords="m", lw=1.5)
     fig.suptitle(figure_title(spec, f"Executed trajectories, scenario {sc}, seed {seed}"))
     return fig, (f"Executed trajectories (scenario {sc}, seed {seed}) over the global path; dotted: the moving "
                  "discs' tracks, red discs where each disc was at the robot's closest approach (x).")

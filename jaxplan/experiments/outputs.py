@@ -1,12 +1,13 @@
 """The files `jaxplan plan --out` and `jaxplan navigate --out` write, chosen by suffix.
 
 One plan (`plan_record`, `write_plan`):
-  * ``.json``: the map, start and goal, the planner with every parameter (defaults and ``--set`` overrides), the
-    seed, the result (success, length m, cost, turns, history, time), the path in cells and in metres (cell
-    centres), the smoothed path when asked, the path metrics (DESIGN §6), why a failed plan failed, and the
-    provenance record (`jaxplan.core.provenance`: jaxplan version, git revision, library versions, machine).
-    Non-finite numbers (the ``inf`` length of a failed plan) are ``null``.
-  * ``.csv``: one row per path point: ``step, x, y`` (cells) and ``x_m, y_m`` (metres); the smoothed polyline
+  * ``.json``: the map (size, resolution, origin), start and goal, the planner with every parameter (defaults and
+    ``--set`` overrides), the seed, the result (success, length m, cost, turns, history, time), the path in cells
+    and in world metres (cell centres, the map's origin included: `GridMap.centre`), the smoothed path when asked,
+    the path metrics (DESIGN §6), why a failed plan failed, and the provenance record (`jaxplan.core.provenance`:
+    jaxplan version, git revision, library versions, machine). Non-finite numbers (the ``inf`` length of a failed
+    plan) are ``null``.
+  * ``.csv``: one row per path point: ``step, x, y`` (cells) and ``x_m, y_m`` (world metres); the smoothed polyline
     when smoothing was asked, else the grid path.
   * ``.png`` (or ``.svg``, ``.pdf``): the map with the path (and the smoothed path) over it, start and goal.
 
@@ -28,16 +29,10 @@ import numpy as np
 from jaxplan.core.export import json_text, plain
 from jaxplan.core.io import atomic_write
 
-__all__ = ["PLAN_SUFFIXES", "EPISODE_SUFFIXES", "cells_to_metres", "plan_record", "write_plan", "write_episode"]
+__all__ = ["PLAN_SUFFIXES", "EPISODE_SUFFIXES", "plan_record", "write_plan", "write_episode"]
 
 PLAN_SUFFIXES = (".json", ".csv", ".png", ".svg", ".pdf")
 EPISODE_SUFFIXES = (".json", ".gif", ".png", ".svg", ".pdf")
-
-
-def cells_to_metres(points: Any, grid: Any) -> np.ndarray:
-    """``[..., 2]`` cell coordinates ``(x, y)`` (cell centres at integers) as metres (DESIGN §2: centre of cell
-    ``(x, y)`` is ``((x + 0.5)·res, (y + 0.5)·res)``)."""
-    return (np.asarray(points, np.float64) + 0.5) * float(grid.resolution)
 
 
 def check_suffix(path: str | os.PathLike, suffixes: tuple[str, ...], what: str) -> Path:
@@ -58,19 +53,19 @@ def plan_record(*, map_path: str, grid: Any, start, goal, planner: str, seed: in
     info = {k: v for k, v in result.info.items() if k != "tau"}
     rec = {
         "map": {"path": str(map_path), "height": int(grid.shape[0]), "width": int(grid.shape[1]),
-                "resolution_m": float(grid.resolution)},
+                "resolution_m": float(grid.resolution), "origin_m": [float(v) for v in grid.origin]},
         "start": [int(v) for v in start], "goal": [int(v) for v in goal],
         "planner": planner, "seed": int(seed), "parameters": plain(dict(params)), "overrides": plain(dict(overrides)),
         "success": bool(result.success), "length_m": float(result.length), "cost": float(result.cost),
         "turns": int(result.turns), "iterations": int(len(result.history)), "history": plain(result.history),
         "time_s": float(result.time_s), "info": plain(info),
-        "path_cells": path.tolist(), "path_m": cells_to_metres(path, grid).tolist(),
+        "path_cells": path.tolist(), "path_m": grid.centre(path).tolist(),
         "metrics": plain(dict(metrics)) if metrics is not None else None,
     }
     if smoothed is not None:
         pts = np.asarray(smoothed.points).reshape(-1, 2)
         rec["smoothed"] = {"method": smooth_method, "points_cells": pts.tolist(),
-                           "points_m": cells_to_metres(pts, grid).tolist(), "removed": int(smoothed.removed),
+                           "points_m": grid.centre(pts).tolist(), "removed": int(smoothed.removed),
                            "fallbacks": int(smoothed.fallbacks)}
     if failure is not None:
         rec["failure"] = failure
@@ -82,7 +77,7 @@ def _csv_points(points: np.ndarray, grid: Any) -> bytes:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["step", "x", "y", "x_m", "y_m"])
-    m = cells_to_metres(points, grid)
+    m = grid.centre(points)
     for k, (p, q) in enumerate(zip(points, m, strict=True)):
         w.writerow([k, *(repr(float(v)) if points.dtype.kind == "f" else int(v) for v in p), *map(repr, q.tolist())])
     return buf.getvalue().encode()

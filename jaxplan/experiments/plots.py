@@ -1,8 +1,9 @@
 """Plot helpers (matplotlib only, Agg backend; no metric logic here).
 
 Everything is drawn in world coordinates (m) with row 0 at the top, as in MovingAI files:
-cell ``(x, y)`` covers ``[x·res, (x + 1)·res] × [y·res, (y + 1)·res]`` and its centre lies at
-``((x + 0.5)·res, (y + 0.5)·res)`` (DESIGN §2). Each helper draws onto a given ``ax`` and
+cell ``(x, y)`` covers ``origin + [x·res, (x + 1)·res] × [y·res, (y + 1)·res]`` and its centre lies at
+`GridMap.centre`, ``origin + ((x + 0.5)·res, (y + 0.5)·res)`` (DESIGN §2; ``origin`` is ``(0, 0)`` unless
+the map has one, as a ROS map does). Each helper draws onto a given ``ax`` and
 returns it, so a figure is composed from small calls::
 
     import matplotlib.pyplot as plt
@@ -53,10 +54,11 @@ BANDS = ("iqr", "sd", "minmax")
 
 
 def _extent(grid: GridMap) -> tuple[float, float, float, float]:
-    """``(left, right, bottom, top)`` in metres for ``imshow`` (row 0 at the top)."""
+    """``(left, right, bottom, top)`` in world metres for ``imshow`` (row 0 at the top; the origin included)."""
     H, W = grid.shape
     res = float(grid.resolution)
-    return (0.0, W * res, H * res, 0.0)
+    x0, y0 = (float(v) for v in grid.origin)
+    return (x0 + 0.0, x0 + W * res, y0 + H * res, y0 + 0.0)
 
 
 def _frame(ax: plt.Axes, grid: GridMap, title: str | None) -> None:
@@ -108,8 +110,8 @@ def _draw_turn_rule(ax: plt.Axes, grid: GridMap) -> None:
     ys, xs = np.nonzero((np.asarray(grid.turn_rule) == 1) & np.asarray(grid.free))
     if len(xs) == 0:
         return
-    res = float(grid.resolution)
-    ax.plot((xs + 0.5) * res, (ys + 0.5) * res, ls="none", marker="o", ms=3, mfc="none", mec="tab:purple",
+    c = grid.centre(np.stack([xs, ys], axis=-1))
+    ax.plot(c[:, 0], c[:, 1], ls="none", marker="o", ms=3, mfc="none", mec="tab:purple",
             mew=0.8, label="right-turn rule")
 
 
@@ -196,9 +198,9 @@ def _as_path_list(paths: ArrayLike | Sequence[ArrayLike], lengths: ArrayLike | N
 
 
 def _to_metres(points: np.ndarray, grid: GridMap, coords: str) -> np.ndarray:
-    """``[..., 2]`` cell coordinates (cell centres at integers) or metres -> metres."""
+    """``[..., 2]`` cell coordinates (cell centres at integers) or world metres -> world metres."""
     if coords == "cells":
-        return (points + 0.5) * float(grid.resolution)
+        return grid.centre(points)
     return points
 
 
@@ -218,18 +220,18 @@ def plot_paths(
 
     Args:
       ax: matplotlib axes (usually after `plot_map`).
-      grid: the map (for its resolution).
+      grid: the map (for its resolution and origin).
       paths: a list of ``[L_i, 2]`` arrays, one ``[L, 2]`` array (one path), or an array
         ``[P, L, 2]`` of padded paths with ``lengths`` (numpy or jax arrays; e.g.
         ``BatchResult.paths[i]`` with ``n_cells[i]``, or a smoother's ``points``/``n``). Points are ``(x, y)``;
         integer cells or floats (smoothed / any-angle paths), in cell coordinates where ``(x, y)`` is
-        the centre of cell ``(x, y)``, or in metres with ``coords="m"``. Empty paths
+        the centre of cell ``(x, y)``, or in world metres with ``coords="m"``. Empty paths
         (failed plans) draw nothing.
       labels: one legend label per path.
       start, goal: ``[2]`` points (same ``coords``), drawn as a circle and a star.
       lengths: ``int[P]`` points to draw of each path (a scalar for one ``[L, 2]`` path);
         the rest is padding and is ignored.
-      coords: ``"cells"`` (drawn at ``(p + 0.5) · res`` metres) or ``"m"`` (drawn as given).
+      coords: ``"cells"`` (drawn at ``GridMap.centre(p)``, world metres) or ``"m"`` (drawn as given).
       lw: line width.
 
     Returns:

@@ -220,7 +220,7 @@ def spec_scenarios(spec: MapSpec, grid, start0, goal0) -> tuple[np.ndarray, np.n
         return s, g, opt, np.full(len(s), -1, np.int64)
     scen = load_scenarios(spec.scen, grid=grid)
     keep = np.ones(len(scen.starts), bool)
-    opt_file = np.asarray(scen.optimal, np.float64) * spec.resolution
+    opt_file = np.asarray(scen.optimal, np.float64) * float(grid.resolution)
     if sc.min_bucket is not None:
         keep &= scen.buckets >= sc.min_bucket
     if sc.max_bucket is not None:

@@ -156,7 +156,8 @@ def report_markdown(a: Analysis, cfg: ExperimentConfig, prep: "Prepared", meta: 
                f"random connected pairs (seed {sc.seed}, >= {sc.min_distance:g} m apart)",
                "scene": "the generator's start and goal"}[sc.source]
         H, W = mw.grid.shape
-        out.append(f"- **{s.name}**: {src}, {W}x{H} cells at {s.resolution:g} m; {len(mw.starts)} scenarios: {how}")
+        res = float(mw.grid.resolution)
+        out.append(f"- **{s.name}**: {src}, {W}x{H} cells at {res:g} m; {len(mw.starts)} scenarios: {how}")
     out += ["", "Planners:", ""]
     for pc in cfg.planners:
         extra = ""

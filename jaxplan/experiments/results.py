@@ -495,7 +495,7 @@ def _setup_lines(prep: Any) -> list[str]:
             continue
         H, W = mw.grid.shape
         src = s.path.name if s.path is not None else f"generator {s.generator} (seed {s.seed})"
-        out.append(f"{s.name}: {src}, {W}x{H} cells of {s.resolution:g} m; {len(mw.starts)} scenario"
+        out.append(f"{s.name}: {src}, {W}x{H} cells of {float(mw.grid.resolution):g} m; {len(mw.starts)} scenario"
                    f"{'s' if len(mw.starts) != 1 else ''}.")
     return out
 

@@ -254,9 +254,10 @@ def scenario_seed(run: RunData, spec: FigureSpec, maps: Sequence[int] = ()) -> t
     return sc, seed, seeds.index(seed)
 
 
-def cell_path_m(path: np.ndarray, n: int, res: float) -> np.ndarray:
-    """``[n, 2]`` cell-coordinate points -> metres (cell centres)."""
-    return (np.asarray(path[:n], np.float64) + 0.5) * res
+def cell_path_m(path: np.ndarray, n: int, grid) -> np.ndarray:
+    """The first ``n`` cell-coordinate points of ``path`` -> ``f64[n, 2]`` world metres (cell centres, the map's
+    origin included: `GridMap.centre`)."""
+    return grid.centre(np.asarray(path[:n], np.float64))
 
 
 def trial_obstacles(run: RunData, m: int, p: int, sc: int, seed: int):
