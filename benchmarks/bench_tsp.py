@@ -12,6 +12,31 @@ Speed: median time per iteration with 500 ants on eil51 (``aco`` with ants=500, 
 single-colony ``praco`` with 500 ants), compilation excluded, over ``--speed-seeds`` runs of
 ``--speed-iterations`` iterations. Reference: scikit-opt's ``ACA_TSP`` takes about 0.7 s per
 iteration for 500 ants on a problem this size; the target is >= 90x faster (<= 7.7 ms).
+
+Against the C reference: Ant System with 500 ants on eil51, no local search, in jaxplan and in
+ACOTSP (Stützle's reference implementation of the ACO algorithms for the TSP, v1.03, GPL: not part
+of this repository), same run, same rules: alpha = 1, beta = 5 (jaxplan's AS default; ACOTSP is
+told ``-b 5``), rho = 0.5, tau0 = 1 / (rho L_nn) with L_nn the nearest-neighbour tour from city 0
+(ACOTSP starts it from a random city), every ant deposits 1 / L (``q = 1``), each ant starts at a
+random city. Left different: ACOTSP's heuristic is 1 / (d + 0.1), jaxplan's 1 / d; ACOTSP computes
+in double precision, jaxplan in float32. Rows: the full candidate list (``-g n-1``; jaxplan's default,
+bit-identical to every earlier release) and ``--candidates`` (``-g k``, jaxplan's ``candidates=k``).
+Per row: median time per iteration over ``--ref-seeds`` runs of ``--ref-iterations`` iterations
+(jaxplan: wall time, compilation excluded; ACOTSP: its own trial timer, user CPU time of the trial,
+which excludes waiting for a core and so favours ACOTSP on a loaded machine), the ratio, and the
+tour quality of both (mean and best final length, mean gap to the optimum 426). The ACOTSP runs
+and the jaxplan runs alternate seed by seed, so load changes hit both.
+
+ACOTSP is found through ``$ACOTSP_BIN`` (a built ``acotsp``; several, separated by ``:``, give a
+row each, e.g. two builds with different compiler flags) or built from ``$ACOTSP_SRC`` (its
+unpacked sources, e.g. ``git archive`` of commit f8e47e7 of github.com/juherask/ACOTSP, "the version
+from ACOTSP.V1.03.tgz by Thomas Stützle") into a temporary folder with its own Makefile:
+``make TIMER=unix CFLAGS="-O -fcommon"`` (the Makefile's -O; -fcommon because GCC >= 10 rejects the
+1.03 sources' tentative definitions otherwise; ``$ACOTSP_CFLAGS`` replaces these flags). Without
+either, the section says so and is skipped.
+
+For a fair comparison on a shared machine, also run it pinned to one core
+(``taskset -c 0 python benchmarks/bench_tsp.py --reference-only``): both then get the same core.
 """
 
 from __future__ import annotations
@@ -19,7 +44,12 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
+import shutil
 import statistics
+import subprocess
+import tempfile
+import time
 from pathlib import Path
 
 import jax
@@ -27,7 +57,7 @@ import numpy as np
 from _timing import Steal, machine_line
 
 from jaxplan.aco._tsp import solve_tsp
-from jaxplan.aco._tsplib import load_tsplib
+from jaxplan.aco._tsplib import TSPProblem, load_tsplib, tour_length
 
 REFERENCE_S_PER_ITERATION = 0.7  # scikit-opt ACA_TSP, 500 ants (the issue's figure)
 TARGET_SPEEDUP = 90.0
@@ -40,6 +70,97 @@ def _manifest(folder: Path) -> dict[str, float]:
     return {r["file"][: -len(".tsp")]: float(r["optimum"]) for r in rows if r["file"].endswith(".tsp")}
 
 
+def _acotsp_binaries(build_dir: Path) -> list[tuple[str, Path]]:
+    """(label, path) of the ACOTSP binaries to compare with: ``$ACOTSP_BIN`` (``:``-separated), else one built
+    from ``$ACOTSP_SRC`` into ``build_dir``; empty (with a message) when neither is set or the build fails."""
+    if os.environ.get("ACOTSP_BIN"):
+        found = [Path(b) for b in os.environ["ACOTSP_BIN"].split(os.pathsep) if b]
+        missing = [str(b) for b in found if not (b.is_file() and os.access(b, os.X_OK))]
+        if missing:
+            print(f"ACOTSP_BIN: not an executable file: {', '.join(missing)}")
+        return [(b.name, b) for b in found if str(b) not in missing]
+    src = os.environ.get("ACOTSP_SRC")
+    if not src:
+        print("ACOTSP comparison skipped: set ACOTSP_BIN to a built acotsp, or ACOTSP_SRC to its sources (see the "
+              "docstring).")
+        return []
+    cflags = os.environ.get("ACOTSP_CFLAGS", "-O -fcommon")
+    for f in Path(src).iterdir():
+        if f.suffix in (".c", ".h") or f.name == "Makefile":
+            shutil.copy(f, build_dir / f.name)
+    proc = subprocess.run(["make", "TIMER=unix", f"CFLAGS={cflags}"], cwd=build_dir, capture_output=True, text=True)
+    binary = build_dir / "acotsp"
+    if proc.returncode != 0 or not binary.exists():
+        print(f"ACOTSP comparison skipped: building {src} failed:\n{proc.stderr[-2000:]}")
+        return []
+    return [(f"acotsp ({cflags})", binary)]
+
+
+def _nearest_neighbour_length(prob: TSPProblem) -> float:
+    """Length of the nearest-neighbour tour from city 0 (ACOTSP's ``nn_tour``, which starts at a random city)."""
+    d = np.asarray(prob.dist, np.float64)
+    tour, seen = [0], np.zeros(prob.n, bool)
+    seen[0] = True
+    for _ in range(prob.n - 1):
+        nxt = int(np.argmin(np.where(seen, np.inf, d[tour[-1]])))
+        tour.append(nxt)
+        seen[nxt] = True
+    return tour_length(prob, tour)
+
+
+def _run_acotsp(binary: Path, tsp: Path, ants: int, g: int, iterations: int, seed: int, beta: float, rho: float,
+                cwd: Path) -> tuple[float, float]:
+    """(seconds per iteration by ACOTSP's own trial timer, best tour length) of one ACOTSP Ant System run."""
+    cmd = [str(binary), "--as", "-m", str(ants), "-l", "0", "-g", str(g), "-a", "1", "-b", f"{beta:g}", "-e",
+           f"{rho:g}", "-r", "1", "-s", str(ants * iterations), "-t", "0", "-o", "0", "--seed", str(seed), "--quiet",
+           "-i", str(tsp)]
+    out = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, check=True).stdout
+    total = re.search(r"t_avgtotal = ([0-9.eE+-]+)", out)
+    best = re.search(r"Best Solution in try 0 is (\d+)", out)
+    if total is None or best is None:
+        raise RuntimeError(f"unexpected ACOTSP output of {' '.join(cmd)}:\n{out[-2000:]}")
+    return float(total.group(1)) / iterations, float(best.group(1))
+
+
+def reference_section(folder: Path, optimum: float, args: argparse.Namespace) -> None:
+    """Ant System in jaxplan against ACOTSP, same run (see the module docstring)."""
+    ants, its, beta, rho = 500, args.ref_iterations, 5.0, 0.5
+    print(f"\nAnt System against ACOTSP: eil51, {ants} ants, {its} iterations per run, {args.ref_seeds} seeds, "
+          f"no local search; alpha 1, beta {beta:g}, rho {rho:g}, tau0 = 1/(rho L_nn), deposit 1/L")
+    with tempfile.TemporaryDirectory(prefix="acotsp-") as tmp:
+        binaries = _acotsp_binaries(Path(tmp))
+        if not binaries:
+            return
+        tsp = folder / "eil51.tsp"
+        prob = load_tsplib(tsp)
+        tau0 = 1.0 / (rho * _nearest_neighbour_length(prob))
+        print(f"{'candidate list':<16}{'code':<42}{'ms/iteration':>13}{'ratio':>7}{'mean':>8}{'best':>6}"
+              f"{'mean gap':>10}")
+        for k in [None] + args.candidates:
+            g = prob.n - 1 if k is None else k
+            over = dict(ants=ants, iterations=its, alpha=1.0, beta=beta, rho=rho, q=1.0, tau0=tau0, candidates=k)
+            first = solve_tsp(prob, "aco", seed=0, **over)  # compiles
+            ours: list[tuple[float, float]] = []
+            theirs: dict[str, list[tuple[float, float]]] = {label: [] for label, _ in binaries}
+            for s in range(args.ref_seeds):  # alternate, so load changes hit both
+                r = solve_tsp(prob, "aco", seed=s + 1, **over)
+                ours.append((r.time_s / its, r.length))
+                for label, binary in binaries:
+                    theirs[label].append(_run_acotsp(binary, tsp, ants, g, its, s + 1, beta, rho, Path(tmp)))
+            mine = statistics.median(t for t, _ in ours)
+            name = "full (default)" if k is None else f"k = {k}"
+            devices = first.info["devices"]
+            rows = [(f"jaxplan solve_tsp aco, {devices} device{'s' * (devices > 1)}", ours)] + list(theirs.items())
+            for label, res in rows:
+                per_it = statistics.median(t for t, _ in res)
+                lengths = np.array([length for _, length in res])
+                ratio = "" if res is ours else f"{per_it / mine:>6.2f}x"
+                print(f"{name:<16}{label[:41]:<42}{1e3 * per_it:>13.3f}{ratio:>7}{lengths.mean():>8.1f}"
+                      f"{lengths.min():>6.0f}{100 * (lengths.mean() / optimum - 1):>9.2f}%")
+        print(f"(ratio: ACOTSP's time per iteration over jaxplan's; ACOTSP -g {prob.n - 1} is the full list on eil51; "
+              f"compile {first.info['compile_s']:.2f} s, excluded)")
+
+
 def main() -> None:
     root = Path(__file__).resolve().parents[1]
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -48,11 +169,21 @@ def main() -> None:
     ap.add_argument("--speed-iterations", type=int, default=50)
     ap.add_argument("--speed-seeds", type=int, default=5)
     ap.add_argument("--local-search", action="store_true", help="add praco with local_search='2opt' (slow)")
+    ap.add_argument("--ref-iterations", type=int, default=200, help="iterations per run against ACOTSP")
+    ap.add_argument("--ref-seeds", type=int, default=5, help="seeds per row against ACOTSP")
+    ap.add_argument("--candidates", type=int, nargs="*", default=[20],
+                    help="candidate-list lengths compared with ACOTSP's -g besides the full list")
+    ap.add_argument("--reference-only", action="store_true", help="only the comparison with ACOTSP")
     args = ap.parse_args()
     folder = Path(args.data_dir) / "tsplib"
     optima = _manifest(folder)
     steal = Steal()
-    print(f"machine: {machine_line()}; {jax.devices()}")
+    print(f"machine: {machine_line()}; {jax.devices()}; load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}; "
+          f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}")
+    if args.reference_only:
+        reference_section(folder, optima["eil51"], args)
+        print(steal.summary())
+        return
     print(f"\n{'instance':<10}{'planner':<12}{'runs':>5}{'mean':>9}{'min':>7}{'max':>7}{'mean gap':>10}"
           f"{'opt hits':>9}{'conv it':>8}{'run s':>7}{'ms/it':>7}{'compile s':>10}")
     for name in ("eil51", "berlin52"):
@@ -85,6 +216,7 @@ def main() -> None:
               f"{first.info['compile_s']:>11.2f}")
     target_ms = math.floor(1e4 * REFERENCE_S_PER_ITERATION / TARGET_SPEEDUP) / 10
     print(f"(target: >= {TARGET_SPEEDUP:.0f}x, i.e. <= {target_ms} ms per iteration)")
+    reference_section(folder, optima["eil51"], args)
     print(steal.summary())
 
 
