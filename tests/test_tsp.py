@@ -448,3 +448,17 @@ def test_construction_split_over_devices_equals_one_device(tsplib):
     assert out["devices"] == 3 and out["differ"] == []
     assert "8 ants do not split evenly over the mesh's 3 devices" in out["uneven"]
     assert out["auto"] == 3 and out["auto_small"] == 1
+
+
+def test_candidate_runs_batched_over_seeds_equal_solve_tsp(eil51):
+    """An experiment's TSP chunk vmaps `run_tsp` over the seeds' keys with `tsp_config`: same tours as `solve_tsp`."""
+    from jaxplan.aco._tsp import TSP_STATIC_PARAMS, resolve_tsp, run_tsp, tsp_config
+
+    p = resolve_tsp("aco", dict(ants=6, iterations=4, candidates=6))
+    cfg = tsp_config("aco", p, eil51.n)
+    params = {k: jnp.asarray(v, jnp.float32) for k, v in p.items() if k not in TSP_STATIC_PARAMS}
+    keys = jax.random.wrap_key_data(jnp.stack([jax.random.key_data(jax.random.key(s)) for s in (2, 9)]))
+    out = jax.jit(jax.vmap(lambda k: run_tsp(cfg, jnp.asarray(eil51.dist, jnp.float32), params, k)))(keys)
+    for i, s in enumerate((2, 9)):
+        r = solve_tsp(eil51, "aco", seed=s, ants=6, iterations=4, candidates=6)
+        np.testing.assert_array_equal(np.asarray(out.history[i], np.float64), r.history)
