@@ -163,7 +163,8 @@ def _construct(weights: jnp.ndarray, seed: jnp.ndarray, m: int, ant: jnp.ndarray
         city is drawn among the unvisited candidates of the current city in proportion to their
         weights; when all k are visited, the ant takes the unvisited city of largest weight (first in
         city order on ties) — ``neighbour_choose_and_move_to_next`` and ``choose_best_next`` in ACOTSP
-        1.03's ``ants.c``.
+        1.03's ``ants.c``; a draw that float32 rounding pushes onto a visited candidate takes the best
+        unvisited candidate (its ``neighbour_choose_best_next``).
 
     Returns:
       ``i32[B, n]`` tours (city order).
@@ -188,6 +189,12 @@ def _construct(weights: jnp.ndarray, seed: jnp.ndarray, m: int, ant: jnp.ndarray
         w = jnp.where(visited, -1.0, weights[row0 + pos])
         return jnp.min(jnp.where(w == jnp.max(w, axis=1, keepdims=True), cities, n), axis=1).astype(jnp.int32)
 
+    def best_candidate(p, choice):
+        """The unvisited candidate of largest weight, first in list order on ties (ACOTSP's
+        neighbour_choose_best_next, for a draw that rounding pushed past the last candidate)."""
+        first = jnp.min(jnp.where(p == jnp.max(p, axis=1, keepdims=True), slots, width), axis=1)
+        return jnp.take_along_axis(choice, first[:, None], axis=1)[:, 0]
+
     def step(carry, t):
         pos, visited = carry
         if nn is None:
@@ -209,8 +216,9 @@ def _construct(weights: jnp.ndarray, seed: jnp.ndarray, m: int, ant: jnp.ndarray
         nxt = jnp.take_along_axis(choice, slot[:, None], axis=1)[:, 0] if nn is not None else slot
         if nn is None:  # the highest-numbered unvisited city (as before candidate lists existed)
             other = lambda: jnp.max(jnp.where(visited, -1, cities), axis=1)  # noqa: E731
-        else:
-            other = lambda: best_unvisited(pos, visited)  # noqa: E731
+        else:  # ACOTSP: the best unvisited candidate if there is one, else the best unvisited city
+            other = lambda: jnp.where(cum[:, -1] > 0, best_candidate(p, choice),  # noqa: E731
+                                      best_unvisited(pos, visited))
         nxt = jax.lax.cond(jnp.any(bad), lambda: jnp.where(bad, other(), nxt), lambda: nxt)
         return (nxt, visited | (cities[None, :] == nxt[:, None])), nxt
 
