@@ -1,6 +1,6 @@
 """TSP mode: tour quality against TSPLIB optima, and time per iteration.
 
-Run:  python benchmarks/bench_tsp.py [--seeds 10] [--data-dir ../shared/benchmarks]
+Run:  python benchmarks/bench_tsp.py [--seeds 10] [--data-dir ../shared/benchmarks] [--only quality speed reference]
 
 Quality: for eil51 and berlin52 (optima 426 and 7542 from the MANIFEST), runs ``praco``
 (yu2020's defaults: 5 colonies x 35 ants, 200 iterations) and ``aco`` (Ant System: 50 ants,
@@ -37,7 +37,7 @@ from ACOTSP.V1.03.tgz by Thomas Stützle") into a temporary folder with its own 
 either, the section says so and is skipped.
 
 For a fair comparison on a shared machine, also run it pinned to one core
-(``taskset -c 0 python benchmarks/bench_tsp.py --reference-only``): both then get the same core.
+(``taskset -c 0 python benchmarks/bench_tsp.py --only reference``): both then get the same core.
 """
 
 from __future__ import annotations
@@ -63,6 +63,7 @@ from jaxplan.aco._tsplib import TSPProblem, load_tsplib, tour_length
 
 REFERENCE_S_PER_ITERATION = 0.7  # scikit-opt ACA_TSP, 500 ants (the issue's figure)
 TARGET_SPEEDUP = 90.0
+SECTIONS = ("quality", "speed", "reference")
 
 
 def _manifest(folder: Path) -> dict[str, float]:
@@ -198,17 +199,24 @@ def main() -> None:
     ap.add_argument("--ref-seeds", type=int, default=5, help="seeds per row against ACOTSP")
     ap.add_argument("--candidates", type=int, nargs="*", default=[20],
                     help="candidate-list lengths compared with ACOTSP's -g besides the full list")
-    ap.add_argument("--reference-only", action="store_true", help="only the comparison with ACOTSP")
+    ap.add_argument("--only", nargs="+", choices=SECTIONS, default=list(SECTIONS), help="sections to run")
     args = ap.parse_args()
     folder = Path(args.data_dir) / "tsplib"
     optima = _manifest(folder)
     steal = Steal()
     print(f"machine: {machine_line()}; {jax.devices()}; load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}; "
           f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}")
-    if args.reference_only:
+    if "quality" in args.only:
+        quality_section(folder, optima, args)
+    if "speed" in args.only:
+        speed_section(folder, args)
+    if "reference" in args.only:
         reference_section(folder, optima["eil51"], args)
-        print(steal.summary())
-        return
+    print(steal.summary())
+
+
+def quality_section(folder: Path, optima: dict[str, float], args: argparse.Namespace) -> None:
+    """praco and aco tour quality on eil51 and berlin52 (see the module docstring)."""
     print(f"\n{'instance':<10}{'planner':<12}{'runs':>5}{'mean':>9}{'min':>7}{'max':>7}{'mean gap':>10}"
           f"{'opt hits':>9}{'conv it':>8}{'run s':>7}{'ms/it':>7}{'compile s':>10}")
     for name in ("eil51", "berlin52"):
@@ -228,6 +236,9 @@ def main() -> None:
     print(f"(optima: eil51 {optima['eil51']:.0f}, berlin52 {optima['berlin52']:.0f}; target: praco mean gap <= 5 %; "
           f"no local search unless marked +2opt)")
 
+
+def speed_section(folder: Path, args: argparse.Namespace) -> None:
+    """Time per iteration with 500 ants on eil51 against the scikit-opt figure (see the module docstring)."""
     prob = load_tsplib(folder / "eil51.tsp")
     its = args.speed_iterations
     print(f"\n500 ants on eil51, {its} iterations per run, median of {args.speed_seeds} runs (compilation excluded):")
@@ -243,8 +254,6 @@ def main() -> None:
               f"{first.info['compile_s']:>11.2f}")
     target_ms = math.floor(1e4 * REFERENCE_S_PER_ITERATION / TARGET_SPEEDUP) / 10
     print(f"(target: >= {TARGET_SPEEDUP:.0f}x, i.e. <= {target_ms} ms per iteration)")
-    reference_section(folder, optima["eil51"], args)
-    print(steal.summary())
 
 
 if __name__ == "__main__":
