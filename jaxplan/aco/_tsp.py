@@ -216,9 +216,11 @@ def _construct(weights: jnp.ndarray, seed: jnp.ndarray, m: int, ant: jnp.ndarray
         nxt = jnp.take_along_axis(choice, slot[:, None], axis=1)[:, 0] if nn is not None else slot
         if nn is None:  # the highest-numbered unvisited city (as before candidate lists existed)
             other = lambda: jnp.max(jnp.where(visited, -1, cities), axis=1)  # noqa: E731
-        else:  # ACOTSP: the best unvisited candidate if there is one, else the best unvisited city
-            other = lambda: jnp.where(cum[:, -1] > 0, best_candidate(p, choice),  # noqa: E731
-                                      best_unvisited(pos, visited))
+        else:  # ACOTSP: the best unvisited city if all candidates are visited (common), else the best candidate (rare)
+            rounded = bad & (cum[:, -1] > 0)
+            other = lambda: jax.lax.cond(  # noqa: E731
+                jnp.any(rounded), lambda: jnp.where(rounded, best_candidate(p, choice), best_unvisited(pos, visited)),
+                lambda: best_unvisited(pos, visited))
         nxt = jax.lax.cond(jnp.any(bad), lambda: jnp.where(bad, other(), nxt), lambda: nxt)
         return (nxt, visited | (cities[None, :] == nxt[:, None])), nxt
 
