@@ -13,7 +13,7 @@ import pytest
 from conftest import manifest
 from scipy import stats
 
-from jaxplan.aco._tsp import TourResult, _construct, solve_tsp, tsp_defaults, two_opt
+from jaxplan.aco._tsp import TourResult, _construct, candidate_lists, solve_tsp, tsp_defaults, two_opt
 from jaxplan.aco._tsplib import load_tour, load_tsplib, tour_length
 
 OPTIMA = {"eil51": 426, "berlin52": 7542}
@@ -323,3 +323,141 @@ def test_bad_planner_seed_and_problem(eil51):
     with pytest.raises(ValueError, match="finite, non-negative"):
         solve_tsp(eil51._replace(dist=-eil51.dist), "aco")
     assert tsp_defaults("praco")["colonies"] == 5 and tsp_defaults("aco")["rho"] == 0.5
+
+
+# ---------------------------------------------------------------------------------------------
+# Candidate lists (ACOTSP's -g) and the construction split over devices.
+
+
+def test_candidate_lists_are_the_nearest_cities(eil51):
+    dist = jnp.asarray(eil51.dist, jnp.float32)
+    nn = np.asarray(candidate_lists(dist, 7))
+    assert nn.shape == (51, 7) and nn.dtype == np.int32
+    for i in range(51):
+        assert i not in nn[i]
+        # Nearest first, ties by city number; no other city is nearer than the last candidate.
+        assert [(eil51.dist[i, j], j) for j in nn[i]] == sorted((eil51.dist[i, j], j) for j in nn[i])
+        others = np.setdiff1d(np.arange(51), np.append(nn[i], i))
+        assert eil51.dist[i, others].min() >= eil51.dist[i, nn[i][-1]]
+
+
+@pytest.mark.parametrize("planner", sorted(SMALL))
+def test_candidate_tours_valid_and_deterministic(eil51, planner):
+    a = solve_tsp(eil51, planner, seed=5, candidates=8, **SMALL[planner])
+    b = solve_tsp(eil51, planner, seed=5, candidates=8, **SMALL[planner])
+    _check_result(eil51, a, SMALL[planner]["iterations"])
+    np.testing.assert_array_equal(a.tour, b.tour)
+    np.testing.assert_array_equal(a.history, b.history)
+    assert a.info["params"]["candidates"] == 8
+    # Longer than n − 1 is the full list in distance order (cut to n − 1: the same program).
+    c = solve_tsp(eil51, planner, seed=5, candidates=50, **SMALL[planner])
+    d = solve_tsp(eil51, planner, seed=5, candidates=500, **SMALL[planner])
+    _check_result(eil51, c, SMALL[planner]["iterations"])
+    np.testing.assert_array_equal(c.tour, d.tour)
+    assert d.info["compile_s"] == 0.0
+
+
+def test_candidate_lists_sample_the_pheromone_distribution():
+    """With k candidates the second city is drawn among the start's k nearest in proportion to their weights;
+    with k = n − 1 that is the full list's distribution (drawn in distance order, so not the same draws)."""
+    n, A = 6, 30000
+    w = np.array([0.3, 1.0, 0.5, 0.25, 2.0, 0.05])
+    weights = jnp.asarray(np.tile(w, (n, 1)), jnp.float32)
+    x = np.array([0.0, 1.0, 3.0, 6.0, 10.0, 15.0])
+    dist = jnp.asarray(np.abs(x[:, None] - x[None, :]), jnp.float32)
+    for k in (2, n - 1):
+        nn = candidate_lists(dist, k)
+        tours = np.asarray(jax.jit(lambda s, nn=nn: _construct(weights, s, A, None, nn))(jnp.uint32(11)))
+        assert (np.sort(tours, axis=1) == np.arange(n)).all()
+        for s in range(n):
+            second = tours[tours[:, 0] == s, 1]
+            p = np.zeros(n)
+            p[np.asarray(nn[s])] = w[np.asarray(nn[s])]
+            seen = np.bincount(second, minlength=n)
+            assert seen[p == 0].sum() == 0
+            expected = p[p > 0] / p[p > 0].sum() * len(second)
+            assert stats.chisquare(seen[p > 0], expected).pvalue > 1e-3
+
+
+def test_all_candidates_visited_falls_back_to_the_best_unvisited_city():
+    """k = 1 makes the construction deterministic after the start: the nearest city if unvisited, else the
+    unvisited city of largest weight, first in city order on ties (ACOTSP's choose_best_next)."""
+    rng = np.random.default_rng(3)
+    n, A = 9, 40
+    pts = rng.random((n, 2))
+    dist = np.sqrt(((pts[:, None] - pts[None]) ** 2).sum(-1))
+    w = np.round(rng.random((n, n)), 1)  # ties on purpose
+    np.fill_diagonal(w, 0.0)
+    nn = candidate_lists(jnp.asarray(dist, jnp.float32), 1)
+    tours = np.asarray(_construct(jnp.asarray(w, jnp.float32), jnp.uint32(2), A, None, nn))
+    for t in tours:
+        seen = {int(t[0])}
+        for step in range(1, n):
+            cur, near = int(t[step - 1]), int(nn[t[step - 1], 0])
+            if near not in seen:
+                want = near
+            else:
+                vals = [(w[cur, c], -c) for c in range(n) if c not in seen]
+                want = -max(vals)[1]
+            assert t[step] == want
+            seen.add(want)
+
+
+@pytest.mark.parametrize("k", [0, -3, 2.5, True, "20"])
+def test_bad_candidates(eil51, k):
+    with pytest.raises(ValueError, match="candidates must be None"):
+        solve_tsp(eil51, "aco", candidates=k)
+
+
+def test_default_runs_are_unchanged(eil51):
+    """The full list (default) gives the tours it gave before candidate lists and device splits existed."""
+    r = solve_tsp(eil51, "aco", seed=3, ants=8, iterations=5)
+    assert r.length == 522.0 and r.history.tolist() == [566.0, 541.0, 522.0, 522.0, 522.0]
+    r = solve_tsp(eil51, "praco", seed=0, colonies=2, ants=6, iterations=5)
+    assert r.length == 517.0 and r.history.tolist() == [554.0, 554.0, 517.0, 517.0, 517.0]
+
+
+def test_construction_split_over_devices_equals_one_device(tsplib):
+    """3 host devices, each building a third of the ants' tours: every result equals the one-device run, bit for
+    bit (full list, candidate lists, 2-opt, P-RACO's colonies); an uneven split is refused."""
+    code = """
+        import json
+        import numpy as np, jax
+        import jaxplan as jp
+        from jaxplan.scale import batch_mesh
+        prob = jp.load_tsplib(%r)
+        out = {"devices": len(jax.devices()), "differ": []}
+        for planner, over in (("aco", dict(ants=12, iterations=4)),
+                              ("praco", dict(colonies=2, ants=6, iterations=3, candidates=10, local_search="2opt"))):
+            a = jp.solve_tsp(prob, planner, seed=7, mesh=None, **over)
+            b = jp.solve_tsp(prob, planner, seed=7, mesh=batch_mesh(), **over)
+            assert a.info["devices"] == 1 and b.info["devices"] == 3
+            if not (np.array_equal(a.tour, b.tour) and np.array_equal(a.history, b.history)):
+                out["differ"].append(planner + str(over))
+        try:
+            jp.solve_tsp(prob, "aco", ants=8, iterations=2, mesh=batch_mesh())
+        except ValueError as e:
+            out["uneven"] = str(e)
+        out["auto"] = jp.solve_tsp(prob, "aco", ants=192, iterations=1).info["devices"]
+        out["auto_small"] = jp.solve_tsp(prob, "aco", ants=12, iterations=4).info["devices"]  # cached program
+        print(json.dumps(out))
+    """
+    from test_scale import _child
+    out = _child(code % str(tsplib / "eil51.tsp"), devices=3)
+    assert out["devices"] == 3 and out["differ"] == []
+    assert "8 ants do not split evenly over the mesh's 3 devices" in out["uneven"]
+    assert out["auto"] == 3 and out["auto_small"] == 1
+
+
+def test_candidate_runs_batched_over_seeds_equal_solve_tsp(eil51):
+    """An experiment's TSP chunk vmaps `run_tsp` over the seeds' keys with `tsp_config`: same tours as `solve_tsp`."""
+    from jaxplan.aco._tsp import TSP_STATIC_PARAMS, resolve_tsp, run_tsp, tsp_config
+
+    p = resolve_tsp("aco", dict(ants=6, iterations=4, candidates=6))
+    cfg = tsp_config("aco", p, eil51.n)
+    params = {k: jnp.asarray(v, jnp.float32) for k, v in p.items() if k not in TSP_STATIC_PARAMS}
+    keys = jax.random.wrap_key_data(jnp.stack([jax.random.key_data(jax.random.key(s)) for s in (2, 9)]))
+    out = jax.jit(jax.vmap(lambda k: run_tsp(cfg, jnp.asarray(eil51.dist, jnp.float32), params, k)))(keys)
+    for i, s in enumerate((2, 9)):
+        r = solve_tsp(eil51, "aco", seed=s, ants=6, iterations=4, candidates=6)
+        np.testing.assert_array_equal(np.asarray(out.history[i], np.float64), r.history)

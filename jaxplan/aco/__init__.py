@@ -15,14 +15,17 @@ from jaxplan.aco._planners import (
     split_params,
 )
 from jaxplan.aco._tsp import (
+    TSP_MIN_ANTS_PER_DEVICE,
     TSP_PLANNERS,
     TSP_STATIC_PARAMS,
     TourResult,
     TSPConfig,
     TSPOutput,
+    candidate_lists,
     resolve_tsp,
     run_tsp,
     solve_tsp,
+    tsp_config,
     tsp_defaults,
     two_opt,
 )
@@ -31,8 +34,10 @@ from jaxplan.aco._walk import Ants, draw, hash_uniform, walk
 from jaxplan.aco._walk_numba import sharing_cores
 
 __all__ = [
-    "METRICS", "TSPConfig", "TSPOutput", "TSPProblem", "TSP_PLANNERS", "TSP_STATIC_PARAMS", "TourResult", "load_tour",
-    "load_tsplib", "resolve_tsp", "run_tsp", "solve_tsp", "tour_length", "tsp_defaults", "tsp_distances", "two_opt",
+    "METRICS", "TSP_MIN_ANTS_PER_DEVICE", "TSPConfig", "candidate_lists",
+    "TSPOutput", "TSPProblem", "TSP_PLANNERS", "TSP_STATIC_PARAMS", "TourResult", "load_tour",
+    "load_tsplib", "resolve_tsp", "run_tsp", "solve_tsp", "tour_length", "tsp_config", "tsp_defaults", "tsp_distances",
+    "two_opt",
     "Ants", "BatchResult", "COLONIES", "Colony", "ColonyState", "GoalTables", "MapTables", "RunConfig", "RunOutput",
     "STATIC_PARAMS", "UNIT_PARAMS", "aco_defaults", "cached_map_tables", "goal_tables", "map_tables",
     "plan_batch", "plan_memory", "run", "run_batch", "seed_keys", "sharing_cores", "split_params", "draw",

@@ -194,11 +194,11 @@ def _run_tsp(mw: MapWork, pc: PlannerConfig, seeds: tuple[int, ...], metrics: Se
     import jax
     import jax.numpy as jnp
 
-    from jaxplan.aco import TSP_STATIC_PARAMS, TSPConfig, resolve_tsp, tour_length
+    from jaxplan.aco import TSP_STATIC_PARAMS, resolve_tsp, tour_length, tsp_config
 
     problem = mw.problem
     p = resolve_tsp(pc.name, {k: tuple(v) if isinstance(v, tuple) else v for k, v in pc.overrides.items()})
-    cfg = TSPConfig(pc.name, int(p.get("colonies", 1)), int(p["ants"]), int(p["iterations"]), p["local_search"])
+    cfg = tsp_config(pc.name, p, problem.n)
     params = {k: jnp.asarray(v, jnp.float32) for k, v in p.items() if k not in TSP_STATIC_PARAMS}
     dist = jnp.asarray(np.asarray(problem.dist, np.float64), jnp.float32)
     keys = jax.random.wrap_key_data(jnp.stack([jax.random.key_data(jax.random.key(int(s))) for s in seeds]))
