@@ -303,7 +303,9 @@ class TeamSpec:
     """A team of robots sharing one episode (`jaxplan.navigate_multi`; li2026 Table 3's multi-robot cooperation
     mode). Robot 0 takes the scenario's start and goal; robots 1.. draw theirs per scenario from
     ``(seed, map, scenario)`` (the same teams for every planner), as the map's random scenarios are drawn: connected
-    pairs at least ``min_distance`` apart, cells ``min_clearance`` from obstacles (the map's `ScenarioSpec`)."""
+    pairs at least ``min_distance`` apart, cells ``min_clearance`` from obstacles (the map's `ScenarioSpec`). A trial's
+    row holds team metrics (`jaxplan.experiments.team`): success = every robot arrived, ``arrived`` = the share that
+    did, counts, energy and path length summed over the robots, time_s the makespan, max_curvature the largest."""
 
     robots: int = setting("int", doc="robots per episode (robot 0: the scenario's own start and goal)", required=True,
                           ge=2)
