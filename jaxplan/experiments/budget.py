@@ -65,6 +65,8 @@ def chunk_memory(prep: Prepared, m: int, p: int) -> MemoryEstimate:
         return tsp_memory(int(mw.problem.n), int(q.get("colonies", 1)), int(q["ants"]), int(q["iterations"]), R,
                           local_search=q["local_search"] == "2opt")
     runs = _chunk_scenarios(prep, m, p) * R
+    if pc.kind == "navigate" and pc.team is not None:
+        runs *= int(pc.team.robots)  # a team trial is N robot episodes (and N global plans)
     ov = _overrides(pc)
     if pc.kind == "plan":
         est = plan_memory(mw.grid, pc.name, runs, **ov)

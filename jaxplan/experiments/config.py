@@ -52,9 +52,10 @@ from jaxplan.experiments.schema import (
 )
 
 __all__ = [
-    "ConfigError", "ExperimentConfig", "MapSpec", "ScenarioSpec", "PlannerConfig", "ObstacleSpec", "StatsSpec",
-    "FigureSpec", "PaperValue", "QuickSpec", "Metric", "METRICS", "GENERATORS", "DEPRECATED_GENERATORS",
-    "FIGURE_KINDS", "KINDS", "ACCURACY_GAP", "SCENARIO_SOURCES", "SPREADS", "RUN_NAME", "ExperimentFile",
+    "ConfigError", "ExperimentConfig", "MapSpec", "ScenarioSpec", "PlannerConfig", "ObstacleSpec", "TeamSpec",
+    "StatsSpec", "FigureSpec", "PaperValue", "QuickSpec", "Metric", "METRICS", "GENERATORS", "DEPRECATED_GENERATORS",
+    "FIGURE_KINDS", "KINDS", "ACCURACY_GAP", "SCENARIO_SOURCES", "SPREADS", "ROBOT_KEYS", "ROBOT_MODELS", "RUN_NAME",
+    "ExperimentFile",
     "ExperimentTable", "MapTable", "InstanceTable", "FigureTable", "PaperTable", "PaperValueTable", "load_config",
     "parse_config", "read_config_text", "default_data_dir", "nav_config", "apply_quick", "applies", "read_maps",
     "scenario_bound",
@@ -129,7 +130,12 @@ METRICS: Mapping[str, Metric] = MappingProxyType({m.name: m for m in (
     Metric("cost", _P, "", "the planner's own objective"),
     Metric("converged_iteration", _PT, "", "plan: first iteration within 0.1 % of the final best cost; tsp: first "
                                            "iteration whose best tour is the final best (0-based)"),
-    Metric("collisions", _N, "", "contacts with the map or moving discs"),
+    Metric("collisions", _N, "", "contacts with the map or moving discs (a team: with other robots too, summed "
+                                 "over its robots)"),
+    Metric("arrived", _N, "", "share of the robots at their goals without collision in time (one robot: success; "
+                              "a team: its robots that succeeded / robots)", default=False),
+    Metric("robot_contacts", _N, "", "robot-robot contacts of a team, each pair's contact once (0 for one robot)",
+           default=False),
     Metric("active_contacts", _N, "", "contacts begun while the robot moved faster than 0.05 m/s", default=False),
     Metric("passive_contacts", _N, "", "contacts begun with the robot at rest", default=False),
     Metric("time_s", _N, "s", "simulated time to the goal", given_success=True),
@@ -198,8 +204,12 @@ _FUNCTION_PARAMS = {"warehouse_chen2023": (), "warehouse_yu2020": ("size",), "de
 
 SCENARIO_SOURCES = ("scen", "random", "scene")
 SPREADS = ("first", "even", "random")
-ROBOT_KEYS = ("v_min", "v_max", "omega_max", "accel", "decel", "alpha", "radius")
-"""The ``robot`` keys of a navigate planner: `jaxplan.dwa.Unicycle` limits, and ``radius`` for its `Disc`."""
+ROBOT_KEYS = ("model", "v_min", "v_max", "omega_max", "accel", "decel", "alpha", "wheelbase", "steer_max", "radius")
+"""The ``robot`` keys of a navigate planner: ``model`` (one of `ROBOT_MODELS`), the model's limits
+(`jaxplan.dwa.Unicycle`, or `jaxplan.dwa.Ackermann` with ``wheelbase`` and ``steer_max``), and ``radius`` for a `Disc`
+footprint (default: the model's own footprint)."""
+ROBOT_MODELS = ("unicycle", "ackermann")
+"""``robot.model`` of a navigate planner: a differential drive (cui2025) or li2026's car-like robot."""
 RUN_NAME = SAFE_NAME
 """What an experiment's or tuning run's name (and a figure's name) must match: it names the run folder (the
 figure's files), which must stay inside the output folder (`jaxplan.core.io.SAFE_NAME`)."""
@@ -289,6 +299,22 @@ class ObstacleSpec:
 
 
 @dataclass(frozen=True)
+class TeamSpec:
+    """A team of robots sharing one episode (`jaxplan.navigate_multi`; li2026 Table 3's multi-robot cooperation
+    mode). Robot 0 takes the scenario's start and goal; robots 1.. draw theirs per scenario from
+    ``(seed, map, scenario)`` (the same teams for every planner), as the map's random scenarios are drawn: connected
+    pairs at least ``min_distance`` apart, cells ``min_clearance`` from obstacles (the map's `ScenarioSpec`). A trial's
+    row holds team metrics (`jaxplan.experiments.team`): success = every robot arrived, ``arrived`` = the share that
+    did, counts, energy and path length summed over the robots, time_s the makespan, max_curvature the largest."""
+
+    robots: int = setting("int", doc="robots per episode (robot 0: the scenario's own start and goal)", required=True,
+                          ge=2)
+    spacing: float = setting("float", 2.0, "every start and goal of the team at least this far (m) from its "
+                             "teammates' starts and goals (more than two footprint radii)", ge=0)
+    seed: int = setting("int", 0, "mixed into every team's draw", ge=0)
+
+
+@dataclass(frozen=True)
 class PlannerConfig:
     """A planner to compare: a column of the result tables. ``kind = "plan"``: a registered grid planner
     (`jaxplan.plan_batch`); ``"navigate"``: a two-level pipeline (`jaxplan.navigate_batch`); ``"tsp"``: a TSP
@@ -302,7 +328,8 @@ class PlannerConfig:
                                            "defaults (navigate: the pipeline's global planner)")
     nav: Mapping[str, Any] = setting("table", doc="navigate: `NavConfig` fields (scalars)", keys=_nav_fields)
     dwa: Mapping[str, Any] = setting("table", doc="navigate: `DWAConfig` fields (scalars)", keys=_dwa_fields)
-    robot: Mapping[str, Any] = setting("table", doc="navigate: `Unicycle` limits; radius: its `Disc` footprint (m)",
+    robot: Mapping[str, Any] = setting("table", doc="navigate: model ('unicycle' or 'ackermann', li2026) and its "
+                                       "limits (`Unicycle`, `Ackermann`); radius: a `Disc` footprint (m)",
                                        keys=ROBOT_KEYS)
     params: Mapping[str, Any] = setting("table", doc="navigate: the local planner's weights (`DWAParams`, or "
                                         "`MPPIParams` for an MPPI pipeline)", keys=_dwa_weights)
@@ -310,6 +337,8 @@ class PlannerConfig:
                                              section=ObstacleSpec)
     mppi: Mapping[str, Any] = setting("table", doc="navigate: `MPPIConfig` fields (scalars) of an MPPI pipeline",
                                       keys=_mppi_fields)
+    team: TeamSpec | None = setting("section", None, "navigate: a team of robots in one shared episode (one trial "
+                                    "= one team episode, team metrics)", section=TeamSpec)
 
     @property
     def global_planner(self) -> str:
@@ -782,7 +811,9 @@ def _check_generator(r: Reader, path: str, name: str, entry: tuple, params: dict
         r.bad(path, f"generator {name!r}: {e}")
 
 
-_NAVIGATE_ONLY = ("nav", "dwa", "robot", "params", "obstacles")
+_NAVIGATE_ONLY = ("nav", "dwa", "robot", "params", "obstacles", "team")
+_TEAM_REFUSED = ("hausdorff", "accuracy")
+"""Metrics of one robot's global path against the scenario's exact path: a team trial has N paths, so none."""
 
 
 def _read_planners(r: Reader, raw: dict) -> tuple[PlannerConfig, ...]:
@@ -828,16 +859,22 @@ def _read_planners(r: Reader, raw: dict) -> tuple[PlannerConfig, ...]:
                                     "table columns, give each a unique one")
         labels.setdefault(label, i)
         nav = dwa = robot = params = mppi = {}
-        obstacles = None
+        obstacles = team = None
         if kind == "navigate":
             nav, dwa, robot, params, mppi = (r.value(e, p, setting_of(PlannerConfig, k))
                                              for k in ("nav", "dwa", "robot", "params", "mppi"))
             if "obstacles" in e:
                 obstacles = ObstacleSpec(**r.section(e["obstacles"], join(p, "obstacles"), ObstacleSpec))
+            if "team" in e:
+                t_team = r.section(e["team"], join(p, "team"), TeamSpec)
+                team = TeamSpec(**t_team) if t_team.get("robots") is not None else None
+            _check_robot(r, join(p, "robot"), robot)
             if name in pipes:
                 _check_nav(r, p, name, nav, dwa, robot, params, mppi)
+                if team is not None:
+                    _check_team(r, join(p, "team"), name, nav, dwa, robot, params, mppi, team)
         out.append(PlannerConfig(label, kind or "plan", name or "", frozen(overrides), frozen(nav), frozen(dwa),
-                                 frozen(robot), frozen(params), obstacles, frozen(mppi)))
+                                 frozen(robot), frozen(params), obstacles, frozen(mppi), team))
     return tuple(out)
 
 
@@ -895,15 +932,49 @@ def _tuple(v: Any) -> Any:
     return tuple(v) if isinstance(v, list) else v
 
 
+def _check_robot(r: Reader, path: str, robot: Mapping) -> None:
+    """``robot.model`` is a known model, and only an Ackermann robot has a wheelbase and a steering limit."""
+    model = robot.get("model", "unicycle")
+    if model not in ROBOT_MODELS:
+        r.bad(join(path, "model"), f"unknown robot model {model!r} (known: {', '.join(ROBOT_MODELS)})"
+              + did_you_mean(str(model), list(ROBOT_MODELS)))
+    elif model != "ackermann":
+        for k in ("wheelbase", "steer_max"):
+            if k in robot:
+                r.bad(join(path, k), f"only applies to model = 'ackermann' (this robot is a {model!r})")
+
+
+def _check_team(r: Reader, path: str, pipeline: str, nav: Mapping, dwa: Mapping, robot: Mapping, params: Mapping,
+                mppi: Mapping, team: TeamSpec) -> None:
+    """A team's spacing keeps teammates apart by more than two footprint radii (`jaxplan.navigate_multi` refuses
+    robots overlapping at their starts or sharing a goal)."""
+    from jaxplan.dwa import footprint_radius
+
+    if _nav_problem(pipeline, nav, dwa, robot, params, mppi) is not None:
+        return  # reported by _check_nav
+    probe = PlannerConfig("probe", "navigate", pipeline, robot=frozen(dict(robot)), dwa=frozen(dict(dwa)),
+                          nav=frozen(dict(nav)))
+    rad = float(footprint_radius(nav_config(probe)[0].dwa.robot.footprint))
+    if team.spacing <= 2 * rad:
+        r.bad(join(path, "spacing"), f"{team.spacing:g} m does not keep teammates apart: it must exceed two footprint "
+                                     f"radii ({2 * rad:.4g} m)")
+
+
 def nav_config(planner: PlannerConfig):
-    """The `NavConfig` and DWA params mapping of a navigate planner (raises ValueError/TypeError on bad values)."""
-    from jaxplan.dwa import Disc
+    """The `NavConfig` and DWA params mapping of a navigate planner (raises ValueError/TypeError on bad values).
+
+    ``robot.model = "ackermann"`` starts from `jaxplan.dwa.Ackermann`'s defaults (li2026's car-like robot, its
+    rectangular footprint) instead of the `NavConfig` default `Unicycle`; the other ``robot`` keys replace fields."""
+    from jaxplan.dwa import Ackermann, Disc
     from jaxplan.nav import NavConfig
 
     base = NavConfig()
     robot_kw = dict(planner.robot)
     radius = robot_kw.pop("radius", None)
-    robot = base.dwa.robot
+    model = robot_kw.pop("model", "unicycle")
+    if model not in ROBOT_MODELS:
+        raise ValueError(f"unknown robot model {model!r} (known: {', '.join(ROBOT_MODELS)})")
+    robot = Ackermann() if model == "ackermann" else base.dwa.robot
     if robot_kw or radius is not None:
         changes = dict(robot_kw)
         if radius is not None:
@@ -941,6 +1012,15 @@ def _nav_problem(pipeline: str, nav: Mapping, dwa: Mapping, robot: Mapping, para
     except (ValueError, TypeError) as e:
         return str(e)
     return None
+
+
+def _check_team_metrics(r: Reader, planners: tuple[PlannerConfig, ...], metrics: tuple[str, ...]) -> None:
+    """A team planner has no single global path to compare with the scenario's exact one."""
+    refused = [m for m in metrics if m in _TEAM_REFUSED]
+    for i, pc in enumerate(planners):
+        if pc.team is not None and refused:
+            r.bad(f"planners[{i}].team", f"metrics {', '.join(map(repr, refused))} compare one robot's path with the "
+                                         "scenario's exact path and are not defined for a team: drop them")
 
 
 def _read_metrics(r: Reader, raw: dict, kinds: frozenset) -> tuple[str, ...]:
@@ -1238,6 +1318,7 @@ def parse_config(text: str, *, data_dir: str | os.PathLike | None = None, source
     _check_sites(r, maps, planners)
     kinds = frozenset(p.kind for p in planners if p.kind)
     metrics = _read_metrics(r, raw, kinds)
+    _check_team_metrics(r, planners, metrics)
     stats = _read_stats(r, raw, metrics)
     map_names, labels = {m.name for m in maps}, {p.label for p in planners}
     figures = _read_figures(r, raw, metrics, map_names, labels, maps, planners)

@@ -25,6 +25,7 @@ import numpy as np
 from jaxplan.core.cache import Built, memoize
 from jaxplan.experiments.config import PlannerConfig, nav_config
 from jaxplan.experiments.prepare import ID_COLUMNS, MapWork, Prepared, Unit, trial_columns
+from jaxplan.experiments.team import team_cells, team_values
 from jaxplan.experiments.trial_metrics import (
     INT_METRICS,
     LOS_KEYS,
@@ -119,7 +120,10 @@ def obstacle_fn(mw: MapWork, m: int, pc: PlannerConfig, run_idx: np.ndarray) -> 
     def fn(e: int, seed: int):
         sc = int(run_idx[e])
         s = int(np.random.SeedSequence([o.seed, m, sc, int(seed)]).generate_state(1)[0])
-        avoid = mw.grid.centre(np.stack([mw.starts[sc], mw.goals[sc]]))  # world metres, as random_obstacles takes
+        # world metres, as random_obstacles takes them; a team's discs keep clear of every robot of the team
+        cells = (np.stack([mw.starts[sc], mw.goals[sc]]) if pc.team is None
+                 else np.concatenate(team_cells(mw, m, pc.team, sc)))
+        avoid = mw.grid.centre(cells)
         return random_obstacles(mw.grid, n=o.n, speed=o.speed, radius=o.radius, seed=s, waypoints=o.waypoints,
                                 avoid=avoid, avoid_radius=o.avoid_radius, loop=o.loop, behavior=o.behavior)
 
@@ -127,8 +131,8 @@ def obstacle_fn(mw: MapWork, m: int, pc: PlannerConfig, run_idx: np.ndarray) -> 
 
 
 NAV_KEYS = ("success", "collisions", "active_contacts", "passive_contacts", "time_s", "rmse", "max_curvature", "energy",
-            "path_length", "recoveries", "replans")
-_INT_NAV = ("success", "collisions", "active_contacts", "passive_contacts", "recoveries", "replans")
+            "path_length", "recoveries", "replans", "arrived", "robot_contacts")
+_INT_NAV = ("success", "collisions", "active_contacts", "passive_contacts", "recoveries", "replans", "robot_contacts")
 
 
 def _run_navigate(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, seeds: tuple[int, ...], chunk: int,
@@ -139,6 +143,8 @@ def _run_navigate(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, seeds
     run_idx = _pad(idx, chunk)
     cfg, weights = nav_config(pc)
     overrides = {k: tuple(v) if isinstance(v, tuple) else v for k, v in pc.overrides.items()}
+    if pc.team is not None:
+        return _run_team(mw, m, pc, idx, run_idx, seeds, metrics, cfg, weights, overrides)
     eb = navigate_batch(mw.grid, mw.starts[run_idx], mw.goals[run_idx], pipeline=pc.name, seeds=list(seeds),
                         obstacles=obstacle_fn(mw, m, pc, run_idx), config=cfg, params=weights or None,
                         **overrides)
@@ -146,7 +152,8 @@ def _run_navigate(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, seeds
     out: dict[str, np.ndarray] = {}
     for k in NAV_KEYS:
         if k in metrics:
-            v = getattr(eb, k)[:n, :, 0]
+            v = (eb.success if k == "arrived" else np.zeros_like(eb.collisions) if k == "robot_contacts"
+                 else getattr(eb, k))[:n, :, 0]
             out[k] = v.astype(np.int64) if k in _INT_NAV else \
                 np.asarray(v, np.float64)
     if "hausdorff" in metrics:
@@ -163,6 +170,37 @@ def _run_navigate(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, seeds
             "success": eb.success[:n, :, 0]}
     timing = {"compile_s": float(eb.compile_s), "time_s": float(eb.run_time_s), "plan_time_s": float(eb.plan_time_s),
               "step_time_s": float(eb.step_time_s)}
+    return out, keep, timing
+
+
+def _run_team(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, run_idx: np.ndarray, seeds: tuple[int, ...],
+              metrics: Sequence[str], cfg, weights: dict, overrides: dict) -> tuple[dict, dict, dict]:
+    """`_run_navigate` for a team planner: one `navigate_multi` call for the chunk's ``E`` teams × seeds, team
+    metrics ``[n, R]`` (`jaxplan.experiments.team`); robot 0's arrays are kept as a single robot's, and every
+    robot's positions as ``team_positions [n, R, N, T, 2]``."""
+    from jaxplan.nav import navigate_multi
+
+    cells = [team_cells(mw, m, pc.team, int(sc)) for sc in run_idx]  # N cells per team: host work, not a hot path
+    starts, goals = np.stack([c[0] for c in cells]), np.stack([c[1] for c in cells])  # [E, N, 2]
+    eb = navigate_multi(mw.grid, starts, goals, pipeline=pc.name, seeds=list(seeds),
+                        obstacles=obstacle_fn(mw, m, pc, run_idx), config=cfg, params=weights or None, **overrides)
+    n = len(idx)
+    out = team_values(eb, n, metrics)
+    # The team's first failure reason in robot order ("goal" when every robot arrived).
+    reason = np.asarray(eb.reason[:n], object)  # [n, R, N]
+    first_bad = np.argmax(~np.asarray(eb.success[:n], bool), axis=-1)
+    out["reason"] = np.where(out["success"] == 1, "goal",
+                             np.take_along_axis(reason, first_bad[..., None], axis=-1)[..., 0])
+    T = int(eb.steps[:n].max()) + 1
+    keep = {"positions": eb.states[:n, :, 0, :T, :2].astype(np.float32),
+            "states": eb.states[:n, :, 0, :T].astype(np.float32), "steps": eb.steps[:n, :, 0].astype(np.int32),
+            "plans": eb.plans[:n, :, 0].astype(np.float32), "n_plan": eb.n_plan[:n, :, 0].astype(np.int32),
+            "success": out["success"].astype(bool), "team_positions": eb.states[:n, :, :, :T, :2].astype(np.float32),
+            "team_steps": eb.steps[:n].astype(np.int32), "team_starts": starts[:n].astype(np.int32),
+            "team_goals": goals[:n].astype(np.int32)}
+    # plan_time_s per trial, as for the other kinds: a team trial plans for its N robots.
+    timing = {"compile_s": float(eb.compile_s), "time_s": float(eb.run_time_s),
+              "plan_time_s": float(eb.plan_time_s) * starts.shape[1], "step_time_s": float(eb.step_time_s)}
     return out, keep, timing
 
 

@@ -305,12 +305,21 @@ def _spec_doc(spec: MapSpec) -> dict:
     return doc
 
 
+def _planner_doc(pc) -> dict:
+    """A planner's part of the fingerprint; ``team`` is left out while unset, so a planner's fingerprint is the one
+    written before teams (a run folder of then still resumes)."""
+    doc = _plain(pc)
+    if doc.get("team") is None:
+        doc.pop("team", None)
+    return doc
+
+
 def fingerprint(prep: Prepared) -> str:
     """SHA-256 of everything that shapes trials.csv (not stats, figures or paper numbers)."""
     cfg = prep.config
     doc = {
         "seeds": list(cfg.seeds), "chunk": cfg.chunk, "columns": list(trial_columns(cfg)),
         "maps": [{"spec": _spec_doc(m.spec), "digest": m.digest} for m in prep.maps],
-        "planners": _plain(cfg.planners), "quick": cfg.is_quick,
+        "planners": [_planner_doc(pc) for pc in cfg.planners], "quick": cfg.is_quick,
     }
     return sha256(json.dumps(doc, sort_keys=True).encode())
