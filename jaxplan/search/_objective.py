@@ -302,7 +302,8 @@ def objective_cost_to_go(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pla
     by move k (slot k of `jaxplan.neighbour_table` at the planner's connectivity): its later moves, turns and
     cells under ``planner``'s cost and move rules, as `exact_objective` minimises them
     (`jaxplan.grid.state_cost_to_go`); 0 on the goal, inf where it cannot be reached. So
-    ``exact_objective(start, goal).cost`` is ``cell[start] + min_k (w_len·step[k] + cell[v_k] + h[v_k, k])`` over the moves allowed from the start.
+    ``exact_objective(start, goal).cost`` is ``cell[start] + min_k (w_len·step[k] + cell[v_k] + h[v_k, k])``
+    over the moves allowed from the start.
     The starts matter only for ``iaco`` (its L0). It is the table behind the colonies' ``heuristic="objective"``.
 
     Args and raises: as `exact_objectives`.
