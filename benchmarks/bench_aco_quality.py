@@ -131,6 +131,7 @@ def main() -> None:
     ap.add_argument("--only-defaults", action="store_true", help="only the defaults / geodesic / risk-layer rows")
     ap.add_argument("--papers", action="store_true", help="only the paper configs' colony rows (--seeds seeds)")
     ap.add_argument("--floor", action="store_true", help="only the objective heuristic with β raised / more iterations")
+    ap.add_argument("--planners", default=None, help="comma-separated colonies: only their rows")
     ap.add_argument("--heuristic", default=None, choices=("euclidean", "geodesic", "objective"),
                     help="with --only-defaults: only the rows with this heuristic")
     args = ap.parse_args()
@@ -142,6 +143,8 @@ def main() -> None:
                                            if any(m.startswith(x) for x in args.maps.split(","))]
     settings = [] if args.only_defaults or args.floor else list(SETTINGS)
     settings += [x for x in (FLOOR if args.floor else DEFAULTS) if x not in settings]
+    if args.planners is not None:
+        settings = [(n, o) for n, o in settings if n in args.planners.split(",")]
     if args.heuristic is not None:
         settings = [(n, o) for n, o in settings if o.get("heuristic", "euclidean") == args.heuristic]
     print(f"{'planner':<10}{'overrides':<62}{'map':<26}{'runs':>6}{'success':>9}{'mean gap':>10}"
