@@ -2,7 +2,8 @@
 
 Run:  python benchmarks/bench_aco_quality.py [--rows 20] [--seeds 10] [--data-dir ../shared/benchmarks]
                                              [--walk-backend auto|jax|numba] [--maps warehouse,random-32,...]
-                                             [--only-defaults]
+                                             [--only-defaults [--heuristic euclidean|geodesic|objective]]
+                                             [--floor] [--planners aco,opt_ant]
 
 For warehouse-10-20-10-2-1, random-32-32-20 and room-64-64-8, takes up to ``--rows``
 scenario rows whose optimal length is at most 64 cells (spread evenly over the
