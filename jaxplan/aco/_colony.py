@@ -7,6 +7,7 @@ vmaps it over scenarios and seeds, so a whole experiment grid is one call.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from dataclasses import dataclass
 from typing import Callable, NamedTuple
@@ -17,6 +18,7 @@ import jax.numpy as jnp
 from jaxplan.aco import _rules as R
 from jaxplan.aco import _walk_numba
 from jaxplan.aco._context import GoalTables, MapTables
+from jaxplan.aco._objective import ETA_COST_FLOOR
 from jaxplan.aco._walk import DEAD_END_RULES, GOAL, Ants, move_lut, walk
 from jaxplan.aco._walk_numba import WALK_BACKENDS, HookTables
 from jaxplan.metrics import converged_iteration
@@ -24,7 +26,7 @@ from jaxplan.metrics import diversity as run_diversity
 
 __all__ = ["Colony", "RunConfig", "ColonyState", "RunOutput", "run", "run_batch", "HEURISTICS"]
 
-HEURISTICS = ("euclidean", "geodesic")
+HEURISTICS = ("euclidean", "geodesic", "objective")
 
 
 @dataclass(frozen=True)
@@ -67,7 +69,9 @@ class RunConfig:
       iterations: iterations of the scan.
       max_steps: moves an ant may make before it is stopped.
       width: map columns (to turn flat cell indices back into moves).
-      heuristic: ``"euclidean"`` (the papers') or ``"geodesic"`` (exact goal distance).
+      heuristic: ``"euclidean"`` (the papers'), ``"geodesic"`` (exact goal distance) or ``"objective"``
+        (η = 1 / (the move's own cost + the exact cost of the rest), `jaxplan.aco._objective`; the goal
+        tables must carry its tables).
       dead_end: ``"die"`` (stuck ants stop), ``"retreat"`` (step back one cell) or
         ``"alert"`` (step back, and true dead ends become pseudo-obstacles for the rest of the run).
       penalise: yu2020's dead-corner penalty on retreat edges (param ``lambda_p``).
@@ -160,7 +164,7 @@ class RunOutput(NamedTuple):
 
 def goal_distances(tables: MapTables, goal: GoalTables, heuristic: str) -> jnp.ndarray:
     """``f32[C]`` distance of each cell to the goal (m): straight line or exact (inf unreachable)."""
-    if heuristic == "geodesic":
+    if heuristic in ("geodesic", "objective"):  # "objective": only opt_ant's hook could read it, and it does not
         return goal.goal_dist
     return jnp.linalg.norm(tables.xy - tables.xy[goal.goal], axis=1)
 
@@ -190,13 +194,14 @@ def _init_state(colony: Colony, cfg: RunConfig, tables: MapTables, params: dict)
     )
 
 
-def _move_table(colony: Colony, tables: MapTables, params: dict, tau: jnp.ndarray, log_eta: jnp.ndarray) -> jnp.ndarray:
-    """``f32[S, C, K]``: normalised move weights, or logits when the colony has a hook."""
+def _move_table(colony: Colony, tables: MapTables, params: dict, tau: jnp.ndarray, log_eta: jnp.ndarray, *,
+                hooked: bool) -> jnp.ndarray:
+    """``f32[S, C, K]``: normalised move weights, or logits when the walk has a hook (``hooked``)."""
     logits = params["alpha"] * jnp.log(jnp.maximum(tau, R.TAU_FLOOR))
     if not colony.heuristic_in_hook:
         logits = logits + params["beta"] * log_eta
     logits = jnp.where(tables.valid, logits, -jnp.inf)
-    if colony.hook is not None:
+    if hooked:
         return logits
     # Per-cell normalised weights: the step loop then needs no exp or log.
     mx = jnp.max(logits, axis=2, keepdims=True)
@@ -307,7 +312,7 @@ def _finish(colony: Colony, params: dict, tau: jnp.ndarray, penalty: jnp.ndarray
 def walk_backend(colony: Colony, cfg: RunConfig) -> str:
     """The walk this run uses, ``"jax"`` or ``"numba"`` (``"auto"`` resolved for the default device)."""
     backend = _walk_numba.resolve_backend(cfg.walk_backend)
-    if backend == "numba" and colony.hook is not None and colony.hook_logits is None:
+    if backend == "numba" and colony.hook is not None and colony.hook_logits is None and cfg.heuristic != "objective":
         if cfg.walk_backend == "numba":
             raise ValueError(f"colony {colony.name!r}: its walk hook has no table form for walk_backend='numba'")
         return "jax"
@@ -338,8 +343,21 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
     C, K = tables.index.shape
     goal_b = jax.tree_util.tree_map(lambda a: jnp.repeat(a, R_, axis=0), goals)
     key_b = keys[jnp.tile(jnp.arange(R_), N)]
-    h_cell = jax.vmap(lambda g: goal_distances(tables, g, cfg.heuristic))(goal_b)  # [B, C]
-    log_eta = -jnp.log(jnp.maximum(h_cell, 0.5 * tables.resolution))[:, tables.index]  # [B, C, K]
+    objective = cfg.heuristic == "objective"
+    if objective:
+        if goals.move_cost is None:
+            raise ValueError("heuristic='objective' needs the goal tables' move_cost (goal_tables(..., objective=...))")
+        # β·log η per turn-cost variant: [V, B * C, K] (see `jaxplan.aco._objective`).
+        q = goal_b.move_cost[:, None] + goal_b.turn_cost[:, :, None, None]  # [B, V, C, K]
+        eta_v = params["beta"] * -jnp.log(jnp.maximum(q, ETA_COST_FLOOR))
+        eta_v = jnp.swapaxes(eta_v, 0, 1)  # [V, B, C, K]
+        variant = goal_b.variant[0]
+        colony = dataclasses.replace(colony, heuristic_in_hook=True)
+        h_cell = None
+        log_eta = jnp.zeros((B, 1, 1), jnp.float32)  # unused: the hook adds β·log η
+    else:
+        h_cell = jax.vmap(lambda g: goal_distances(tables, g, cfg.heuristic))(goal_b)  # [B, C]
+        log_eta = -jnp.log(jnp.maximum(h_cell, 0.5 * tables.resolution))[:, tables.index]  # [B, C, K]
     state0 = _init_state(colony, cfg, tables, params)
     state = jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (B,) + a.shape), state0)
     nbr = jnp.where(tables.valid, tables.index, -1)
@@ -353,7 +371,11 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
     start, goal = goal_b.start[run_of], goal_b.goal[run_of]
     hook = None
     backend = walk_backend(colony, cfg)
-    if colony.hook is not None and backend == "jax":
+    rules = colony.hook is not None  # opt_ant keeps chu2024's move rules under any heuristic
+    hooked = rules or objective
+    if objective and backend == "jax":
+        hook = functools.partial(R.hook_objective, tables, eta_v.reshape(-1, B * C, K), variant, rules)
+    elif colony.hook is not None and backend == "jax":
         hook = functools.partial(colony.hook, tables, params, h_cell.reshape(B * C))
     # One seed per run and iteration, all drawn before the loop in one threefry call per run: the
     # walk's uniforms are hashed from it (`hash_uniform`). Keeping key splits and draws out of the
@@ -366,14 +388,17 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
     stat_tables = _walk_numba.stat_tables(tables) if native_update else None
 
     def iteration(state: ColonyState, seeds):
-        table = jax.vmap(functools.partial(_move_table, colony, tables, params))(state.tau, log_eta)
+        table = jax.vmap(functools.partial(_move_table, colony, tables, params, hooked=hooked))(state.tau, log_eta)
         walk_args = (nbr, table.reshape(B * S * C, K), start, goal, row0, cell0, seeds[run_of], local,
                      state.alert.reshape(B * C) if cfg.dead_end == "alert" else None)
         sizes = dict(max_steps=L, width=cfg.width, lut=lut, dead_end=cfg.dead_end,
                      penalty_size=B * S * C * K if cfg.penalise else 0)
         if backend == "numba":
             hook_tables = None
-            if colony.hook is not None:
+            if objective:
+                logits = (table[None] + eta_v[:, :, None]).reshape(-1, B * S * C, K)  # [V, B * S * C, K]
+                hook_tables = HookTables(logits, tables.right_turn, tables.turn_rule, variant, rules)
+            elif colony.hook is not None:
                 logits = colony.hook_logits(tables, params, h_cell, table)
                 hook_tables = HookTables(logits, tables.right_turn, tables.turn_rule)
             ants = _walk_numba.walk(*walk_args, **sizes, hook=hook_tables, stats=stat_tables, bits=bits)

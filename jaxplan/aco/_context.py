@@ -7,12 +7,13 @@ goal distance). Both are pytrees, so a batch of scenarios is just a stacked
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, Mapping, NamedTuple
 
 import jax.numpy as jnp
 import numpy as np
 from numpy.typing import ArrayLike
 
+from jaxplan.aco._objective import objective_tables
 from jaxplan.grid import GridMap, check_cell, check_cells, clearance_field, distance_from, neighbour_table, passable
 
 __all__ = ["MapTables", "GoalTables", "map_tables", "goal_tables"]
@@ -59,11 +60,16 @@ class MapTables(NamedTuple):
 class GoalTables(NamedTuple):
     """Per-scenario arrays: ``start``, ``goal`` (flat cell indices, i32) and
     ``goal_dist`` (``f32[C]`` exact distance to the goal in metres, inf where unreachable;
-    zeros when the heuristic does not need it)."""
+    zeros when the heuristic does not need it); for ``heuristic="objective"`` only (else None),
+    ``move_cost`` ``f32[C, K]``, ``turn_cost`` ``f32[V]`` and ``variant`` ``i32[(K + 1)·K]``
+    (`jaxplan.aco._objective.ObjectiveTables`)."""
 
     start: jnp.ndarray
     goal: jnp.ndarray
     goal_dist: jnp.ndarray
+    move_cost: jnp.ndarray | None = None
+    turn_cost: jnp.ndarray | None = None
+    variant: jnp.ndarray | None = None
 
 
 def map_tables(grid: GridMap, connectivity: int = 8, vehicle_height: float | None = None) -> MapTables:
@@ -126,8 +132,12 @@ def goal_tables(
     connectivity: int = 8,
     vehicle_height: float | None = None,
     geodesic: bool = False,
+    objective: tuple[str, Mapping[str, Any]] | None = None,
 ) -> GoalTables:
     """Per-scenario tables for ``starts``/``goals`` ``int[N, 2]``, stacked on a leading axis.
+
+    ``objective``: ``(colony name, its resolved parameters)`` adds the tables of ``heuristic="objective"``
+    (`jaxplan.aco._objective.objective_tables`: the colony's exact cost-to-go, ``[N, C, K]`` floats).
 
     Raises:
       ValueError: a start or goal outside the map or blocked, or a start equal to its goal.
@@ -150,10 +160,16 @@ def goal_tables(
         gd = np.stack([fields[tuple(c)] for c in g.tolist()]).astype(np.float32)
     else:
         gd = np.zeros((len(g), grid.n_cells), np.float32)
+    extra = {}
+    if objective is not None:
+        ot = objective_tables(objective[0], grid, s, g, objective[1])
+        extra = dict(move_cost=jnp.asarray(ot.move_cost), turn_cost=jnp.asarray(ot.turn_cost),
+                     variant=jnp.asarray(ot.variant, jnp.int32))
     return GoalTables(
         start=jnp.asarray(s[:, 1] * W + s[:, 0], jnp.int32),
         goal=jnp.asarray(g[:, 1] * W + g[:, 0], jnp.int32),
         goal_dist=jnp.asarray(gd),
+        **extra,
     )
 
 

@@ -39,8 +39,9 @@ from jax.sharding import PartitionSpec as P
 from numpy.typing import ArrayLike
 
 from jaxplan.aco import _rules as R
-from jaxplan.aco._colony import Colony, RunConfig, run_batch, walk_backend
+from jaxplan.aco._colony import HEURISTICS, Colony, RunConfig, run_batch, walk_backend
 from jaxplan.aco._context import GoalTables, MapTables, check_one, goal_tables, map_tables
+from jaxplan.aco._objective import objective_variants
 from jaxplan.aco._walk_numba import WALK_BACKENDS, sharing_cores
 from jaxplan.core.cache import Built, digest, memoize
 from jaxplan.core.progress import ProgressBar
@@ -133,6 +134,8 @@ def _validate(name: str):
             raise ValueError(f"planner {name!r}: max_steps must be a positive integer or None, got {p['max_steps']!r}")
         if p["connectivity"] not in (4, 8, 16):
             raise ValueError(f"planner {name!r}: connectivity must be one of (4, 8, 16), got {p['connectivity']!r}")
+        if p["heuristic"] not in HEURISTICS:
+            raise ValueError(f"planner {name!r}: heuristic must be one of {HEURISTICS}, got {p['heuristic']!r}")
         if p.get("walk_backend", "auto") not in WALK_BACKENDS:
             raise ValueError(f"planner {name!r}: walk_backend must be one of {WALK_BACKENDS}, "
                              f"got {p['walk_backend']!r}")
@@ -351,9 +354,11 @@ def _seed_count(seeds) -> int:
 
 def _colony_memory(name: str, grid: GridMap, cfg: RunConfig, connectivity: int, runs: int) -> MemoryEstimate:
     colony = COLONIES[name]
+    variants = objective_variants(name, connectivity) if cfg.heuristic == "objective" else 0
     return aco_memory(grid.n_cells, connectivity, runs, cfg.colonies, cfg.ants, cfg.max_steps, cfg.iterations,
                       keep_pheromone=cfg.keep_pheromone, hook=colony.hook is not None, penalty=cfg.penalise,
-                      alert=cfg.dead_end == "alert", jax_walk=walk_backend(colony, cfg) == "jax")
+                      alert=cfg.dead_end == "alert", jax_walk=walk_backend(colony, cfg) == "jax",
+                      objective_variants=variants)
 
 
 def _colony_what(name: str, grid: GridMap, cfg: RunConfig) -> str:
@@ -393,7 +398,8 @@ def _run_colony(name: str, grid: GridMap, starts: np.ndarray, goals: np.ndarray,
                  unit="runs (scenarios x seeds)" + (" per device" if devices > 1 else ""))
     tables = cached_map_tables(grid, connectivity, vh)
     keys = seed_keys(seeds)
-    gt = goal_tables(grid, starts, goals, connectivity, vh, geodesic=cfg.heuristic == "geodesic")
+    gt = goal_tables(grid, starts, goals, connectivity, vh, geodesic=cfg.heuristic == "geodesic",
+                     objective=(name, p) if cfg.heuristic == "objective" else None)
     if mesh is not None:
         gt = pad_leading(gt, padded_size(N, mesh))  # copies of the last scenario, sliced off below
     if bar is not None:

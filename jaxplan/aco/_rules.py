@@ -251,6 +251,11 @@ def hook_opt_ant(tables: MapTables, params, h_flat, pos, prev, nb, ok, logits, g
     flat = 1.0 / (1.0 + jnp.abs(tables.height[safe] - tables.height[pos][:, None]))
     eta = dist_term + straight + flat
     logits = logits + params["beta"] * jnp.log(eta)
+    return logits, _opt_ant_rules(tables, pos, prev, nb, ok, goal)
+
+
+def _opt_ant_rules(tables: MapTables, pos, prev, nb, ok, goal):
+    """chu2024's move rules: the right-hand rule on right-turn cells; an adjacent goal before anything."""
     is_goal = (nb == goal[:, None]) & ok
     # Right-hand rule.
     right = tables.right_turn[jnp.maximum(prev, 0)]
@@ -258,7 +263,23 @@ def hook_opt_ant(tables: MapTables, params, h_flat, pos, prev, nb, ok, logits, g
     on_rule = tables.turn_rule[pos] & (prev >= 0) & right_ok
     only_right = jnp.arange(nb.shape[1])[None, :] == right[:, None]
     ok = jnp.where(on_rule[:, None], ok & only_right, ok)
-    ok = jnp.where(jnp.any(is_goal, axis=1, keepdims=True), is_goal, ok)
+    return jnp.where(jnp.any(is_goal, axis=1, keepdims=True), is_goal, ok)
+
+
+def hook_objective(tables: MapTables, eta, variant, rules: bool, pos, prev, nb, ok, logits, goal, cell0):
+    """``heuristic="objective"`` (`jaxplan.aco._objective`) as a walk hook: adds β·log η of the ant's move
+    given its previous move, and, for ``opt_ant`` (``rules``), chu2024's move rules.
+
+    Args:
+      eta: ``f32[V, B * C, K]`` β·log η per turn-cost variant, run (``cell0``) and cell, move.
+      variant: ``i32[(K + 1) · K]`` the variant of move k after move m at ``(m + 1)·K + k``.
+    """
+    K = nb.shape[1]
+    ks = jnp.arange(K)[None, :]
+    v = variant[(prev[:, None] + 1) * K + ks]  # [A, K]
+    logits = logits + eta[v, (cell0 + pos)[:, None], ks]
+    if rules:
+        ok = _opt_ant_rules(tables, pos, prev, nb, ok, goal)
     return logits, ok
 
 

@@ -128,7 +128,7 @@ def _walk_call(frame):
     d, s = _buffer(args, 1)
     table = numba.carray(_F32P(d), (_dim(s, 0), K))
     d, s = _buffer(args, 2)
-    hook_l = numba.carray(_F32P(d), (2, _dim(s, 1), K))
+    hook_l = numba.carray(_F32P(d), (_dim(s, 0), _dim(s, 1), K))
     d, s = _buffer(args, 3)
     right_turn = numba.carray(_I32P(d), (K,))
     d, s = _buffer(args, 4)
@@ -165,8 +165,11 @@ def _walk_call(frame):
     stats = numba.carray(_F32P(d), (N_STATS, A))
     d, s = _buffer(args, 12)
     vbits = numba.carray(_U8P(d), (_dim(s, 0),))
-    walk_all(nbr, table, hook_l, right_turn, turn_rule, ints[0], ints[1], ints[2], ints[3], seed, ints[4], alert,
-             vbits, L, np.int64(cfg[1]), lut, np.int64(cfg[2]), cfg[3] != 0, cfg[4] != 0, np.int64(cfg[5]), movef,
+    d, s = _buffer(args, 13)
+    hook_v = numba.carray(_I32P(d), (_dim(s, 0),))
+    walk_all(nbr, table, hook_l, hook_v, right_turn, turn_rule, ints[0], ints[1], ints[2], ints[3], seed, ints[4],
+             alert, vbits, L, np.int64(cfg[1]), lut, np.int64(cfg[2]), np.int64(cfg[3]), cfg[4] != 0,
+             np.int64(cfg[5]), movef,
              cellf, cells, moves, per_ant[0], per_ant[1], per_ant[2], penalty, marks, stats)
     loop_counters(per_ant[2], L, counters)
     return _null()

@@ -46,7 +46,7 @@ import numpy as np
 
 from jaxplan.aco._walk import Ants
 from jaxplan.aco._walk_ffi import register
-from jaxplan.aco._walk_numba_kernels import ALERT, MODES
+from jaxplan.aco._walk_numba_kernels import ALERT, HOOK_RULES, HOOK_TABLE, MODES, NO_HOOK
 from jaxplan.aco._walk_numba_update import N_STATS
 
 __all__ = ["WALK_BACKENDS", "N_STATS", "HookTables", "StatTables", "resolve_backend", "stat_tables", "walk",
@@ -59,15 +59,21 @@ class HookTables(NamedTuple):
     """What the numba walk needs for chu2024's hook (`jaxplan.aco._rules.hook_opt_ant`).
 
     Attributes:
-      logits: ``f32[2, G * C, K]`` the hook's logits of each colony's cell and move:
-        ``[0]`` when the move changes the ant's heading, ``[1]`` when it keeps it.
+      logits: ``f32[V, G * C, K]`` the hook's logits of each colony's cell and move, one table per variant:
+        chu2024's ``[0]`` when the move changes the ant's heading, ``[1]`` when it keeps it.
       right_turn: ``i32[K]`` the move a quarter turn to the right of each move.
       turn_rule: ``bool[C]`` right-hand-rule cells.
+      variant: ``i32[(K + 1) · K]`` the table of move k for an ant whose previous move is m, at
+        ``(m + 1)·K + k`` (m = −1: no move yet); None: chu2024's two (``k == m``).
+      rules: apply chu2024's move rules (an adjacent goal first, the right-hand rule); False for
+        ``heuristic="objective"`` of the other colonies, whose tables only depend on the previous move.
     """
 
     logits: jnp.ndarray
     right_turn: jnp.ndarray
     turn_rule: jnp.ndarray
+    variant: jnp.ndarray | None = None
+    rules: bool = True
 
 
 def resolve_backend(name: str) -> str:
@@ -229,16 +235,19 @@ def walk(
     L = max_steps
     mode = MODES[dead_end]
     i32 = functools.partial(jnp.asarray, dtype=jnp.int32)
+    straight = np.concatenate([np.zeros(K, np.int32), np.eye(K, dtype=np.int32).ravel()])  # chu2024's k == prev
     if hook is None:
-        hook_l = jnp.zeros((2, 1, K), jnp.float32)
+        hook_l, hook_v = jnp.zeros((2, 1, K), jnp.float32), jnp.asarray(straight)
         right_turn, turn_rule = jnp.zeros((K,), jnp.int32), jnp.zeros((1,), bool)
     else:
         hook_l, right_turn, turn_rule = hook.logits, hook.right_turn, hook.turn_rule
+        hook_v = jnp.asarray(straight) if hook.variant is None else i32(hook.variant)
         table = jnp.zeros((1, K), jnp.float32)  # unused
     n_marks = alert.shape[0] if mode == ALERT else 0
     if stats is None:
         stats = StatTables(jnp.ones((K + K * K,), jnp.float32), jnp.ones((3, C), jnp.float32))
-    cfg = np.array([L, width, mode, hook is not None, penalty_size > 0, _n_chunks(A)], np.int32)
+    hook_mode = NO_HOOK if hook is None else HOOK_RULES if hook.rules else HOOK_TABLE
+    cfg = np.array([L, width, mode, hook_mode, penalty_size > 0, _n_chunks(A)], np.int32)
     bits = move_bits(nbr) if bits is None else jnp.asarray(bits, jnp.uint8)
     if bits.shape != ((C,) if K == 8 else (1,)):  # the native walk sizes its tabu grid from it
         raise ValueError(f"bits must be move_bits(nbr), of shape {(C,) if K == 8 else (1,)}, got {bits.shape}")
@@ -257,7 +266,7 @@ def walk(
         i32(nbr), jnp.asarray(table, jnp.float32), jnp.asarray(hook_l, jnp.float32), i32(right_turn),
         jnp.asarray(turn_rule, bool), jnp.stack([i32(start), i32(goal), i32(row0), i32(cell0), i32(local)]),
         jnp.asarray(seed, jnp.uint32), i32(lut), jnp.asarray(alert, bool) if n_marks else jnp.zeros((1,), bool),
-        jnp.asarray(cfg), stats.movef, stats.cellf, bits,
+        jnp.asarray(cfg), stats.movef, stats.cellf, bits, hook_v,
     )
     return Ants(cells=cells, moves=moves, n=per_ant[0], status=per_ant[1],
                 penalty=penalty if penalty_size else None, ant_steps=per_ant[2], loop_steps=counters[0],

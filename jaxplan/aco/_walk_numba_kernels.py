@@ -16,11 +16,15 @@ from jaxplan.aco._walk import COMPACT_FACTOR, COMPACT_MIN_ANTS, DEAD_END, GOAL, 
 from jaxplan.aco._walk_numba_intrinsics import TINY, draw8, exp_xla, move_between, uniform, visited3x3
 from jaxplan.aco._walk_numba_update import N_STATS, ant_stats
 
-__all__ = ["MODES", "DIE", "RETREAT", "ALERT", "walk_all", "loop_counters"]
+__all__ = ["MODES", "DIE", "RETREAT", "ALERT", "NO_HOOK", "HOOK_RULES", "HOOK_TABLE", "walk_all", "loop_counters"]
 
 DIE, RETREAT, ALERT = 0, 1, 2
 MODES = {"die": DIE, "retreat": RETREAT, "alert": ALERT}
 """The dead-end rules' codes (`jaxplan.aco._walk.DEAD_END_RULES`)."""
+NO_HOOK, HOOK_RULES, HOOK_TABLE = 0, 1, 2
+"""The walk's ``has_hook`` codes: no hook (one weight table), chu2024's hook (logit tables chosen by the ant's
+previous move, with its move rules), logit tables chosen by the previous move without move rules
+(``heuristic="objective"`` of the other colonies)."""
 
 _F = np.float32
 _NEG_INF = np.float32(-np.inf)
@@ -49,7 +53,7 @@ def _walk_ant_for(moves_per_cell: int):
     # One function of ~110 lines on purpose: the step loop is the hot path, and numba keeps the reference
     # counting of array arguments inside a loop that calls a helper (inlined or not) on every step.
     @njit(nogil=True)
-    def walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
+    def walk_ant(a, nbr, table, hook_l, hook_v, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
                  max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
                  steps_out, penalty, marks, stats, seen, p, ok, is_goal):
         """Walks ant ``a`` to its end and sums its path statistics if it reached the goal (zeros
@@ -98,23 +102,25 @@ def _walk_ant_for(moves_per_cell: int):
                     if alerting:
                         o = o & (not alert[c0 + safe])
                     ok[k] = o
-                # chu2024's hook: an adjacent goal wins (judged on the moves allowed so far), else
-                # on a right-turn cell the quarter turn right of the heading is forced when allowed.
-                any_goal = False
-                for k in range(K):
-                    is_goal[k] = ok[k] and nbr[pos, k] == g
-                    any_goal = any_goal or is_goal[k]
-                if any_goal:
+                if has_hook == HOOK_RULES:
+                    # chu2024's hook: an adjacent goal wins (judged on the moves allowed so far), else
+                    # on a right-turn cell the quarter turn right of the heading is forced when allowed.
+                    any_goal = False
                     for k in range(K):
-                        ok[k] = is_goal[k]
-                elif prev >= 0 and turn_rule[pos]:
-                    right = right_turn[prev]
-                    if ok[right]:
+                        is_goal[k] = ok[k] and nbr[pos, k] == g
+                        any_goal = any_goal or is_goal[k]
+                    if any_goal:
                         for k in range(K):
-                            ok[k] = k == right
+                            ok[k] = is_goal[k]
+                    elif prev >= 0 and turn_rule[pos]:
+                        right = right_turn[prev]
+                        if ok[right]:
+                            for k in range(K):
+                                ok[k] = k == right
                 mx = _NEG_INF
+                vrow = (prev + 1) * K
                 for k in range(K):
-                    v = hook_l[1 if k == prev else 0, row, k] if ok[k] else _NEG_INF
+                    v = hook_l[hook_v[vrow + k], row, k] if ok[k] else _NEG_INF
                     p[k] = v
                     mx = max(mx, v)
                 shift = mx if np.isfinite(mx) else _F(0.0)
@@ -322,9 +328,9 @@ def _walk_pair8(c, n_chunks, table, vbits, start, goal, row0, seed, local, max_s
 
 
 @njit(nogil=True)
-def _walk_chunk(c, n_chunks, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
-                vbits, max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
-                steps_out, part, marks, stats):
+def _walk_chunk(c, n_chunks, nbr, table, hook_l, hook_v, right_turn, turn_rule, start, goal, row0, cell0, seed, local,
+                alert, vbits, max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out,
+                status_out, steps_out, part, marks, stats):
     """Walks ants c, c + n_chunks, ... one after another (a sequential function: called from a
     parallel loop, its array set-up must not become a parallel region of its own)."""
     A = start.shape[0]
@@ -339,44 +345,44 @@ def _walk_chunk(c, n_chunks, nbr, table, hook_l, right_turn, turn_rule, start, g
     is_goal = np.empty(K, np.bool_)
     for a in range(c, A, n_chunks):
         if K == 8:
-            _walk_ant_8(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
-                        max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out,
+            _walk_ant_8(a, nbr, table, hook_l, hook_v, right_turn, turn_rule, start, goal, row0, cell0, seed, local,
+                        alert, max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out,
                         status_out, steps_out, part, marks, stats, seen, p, ok, is_goal)
         else:
-            _walk_ant(a, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
-                      max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
-                      steps_out, part, marks, stats, seen, p, ok, is_goal)
+            _walk_ant(a, nbr, table, hook_l, hook_v, right_turn, turn_rule, start, goal, row0, cell0, seed, local,
+                      alert, max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out,
+                      status_out, steps_out, part, marks, stats, seen, p, ok, is_goal)
 
 
 @njit(nogil=True, parallel=True)
-def _walk_chunks(n_chunks, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
-                 vbits, max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out, status_out,
-                 steps_out, parts, marks, stats):
+def _walk_chunks(n_chunks, nbr, table, hook_l, hook_v, right_turn, turn_rule, start, goal, row0, cell0, seed, local,
+                 alert, vbits, max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out,
+                 status_out, steps_out, parts, marks, stats):
     """The chunks in parallel: this loop is the kernel's only parallel region (each region is a
     fork and a join of numba's threads, which costs a scheduler time slice on a busy machine)."""
     for c in prange(n_chunks):
         part = parts[c] if penalise else parts[0]
-        _walk_chunk(c, n_chunks, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local,
-                    alert, vbits, max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out,
-                    status_out, steps_out, part, marks, stats)
+        _walk_chunk(c, n_chunks, nbr, table, hook_l, hook_v, right_turn, turn_rule, start, goal, row0, cell0, seed,
+                    local, alert, vbits, max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves,
+                    n_out, status_out, steps_out, part, marks, stats)
 
 
 @njit(nogil=True)
-def walk_all(nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert, vbits,
-             max_steps, width, lut, mode, has_hook, penalise, n_chunks, movef, cellf,
-             cells, moves, n_out, status_out, steps_out, penalty, marks, stats):
+def walk_all(nbr, table, hook_l, hook_v, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert, vbits,
+             max_steps, width, lut, mode, has_hook, penalise, n_chunks, movef, cellf, cells, moves, n_out, status_out,
+             steps_out, penalty, marks, stats):
     """Walks every ant; chunk c takes ants c, c + n_chunks, ... (interleaved: ants of every run
     and colony are spread over the chunks, which evens out their different walk lengths). One
     chunk runs without numba's thread pool."""
     marks[:] = 0
     parts = np.zeros((n_chunks if penalise else 1, penalty.shape[0]), np.float32)
     if n_chunks == 1:
-        _walk_chunk(0, 1, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
-                    vbits, max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out,
+        _walk_chunk(0, 1, nbr, table, hook_l, hook_v, right_turn, turn_rule, start, goal, row0, cell0, seed, local,
+                    alert, vbits, max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out,
                     status_out, steps_out, parts[0], marks, stats)
     else:
-        _walk_chunks(n_chunks, nbr, table, hook_l, right_turn, turn_rule, start, goal, row0, cell0, seed, local, alert,
-                     vbits, max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out,
+        _walk_chunks(n_chunks, nbr, table, hook_l, hook_v, right_turn, turn_rule, start, goal, row0, cell0, seed, local,
+                     alert, vbits, max_steps, width, lut, mode, has_hook, penalise, movef, cellf, cells, moves, n_out,
                      status_out, steps_out, parts, marks, stats)
     # Counts of +1.0 are exact in float32 (below 2^24), so the chunk order does not matter.
     penalty[:] = 0.0

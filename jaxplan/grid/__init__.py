@@ -14,6 +14,7 @@ from jaxplan.grid._collision import (
     segment_free,
     segment_window,
 )
+from jaxplan.grid._cost_to_go import state_cost_to_go
 from jaxplan.grid._fields import clearance_field, goal_distance_field
 from jaxplan.grid._files import is_ros_map, load_map, save_map
 from jaxplan.grid._generators import (
@@ -59,5 +60,5 @@ __all__ = [
     "MountainGenerator", "RandomMapGenerator", "Scene", "UrbanGenerator", "WarehouseGenerator", "as_rng",
     "demo_warehouse", "poisson_risk", "warehouse_chen2023", "warehouse_yu2020",
     "is_ros_map", "load_movingai_map", "save_movingai_map", "load_ros_map", "save_ros_map", "read_ros_yaml",
-    "read_pgm", "occupancy_values", "resample", "resampled_shape",
+    "read_pgm", "occupancy_values", "resample", "resampled_shape", "state_cost_to_go",
 ]

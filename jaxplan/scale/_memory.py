@@ -58,7 +58,7 @@ class MemoryLimitError(MemoryError):
 
 def aco_memory(cells: int, moves: int, runs: int, colonies: int, ants: int, max_steps: int, iterations: int,
                *, keep_pheromone: bool = False, hook: bool = False, penalty: bool = False, alert: bool = False,
-               jax_walk: bool = False, threads: int = 2) -> MemoryEstimate:
+               jax_walk: bool = False, threads: int = 2, objective_variants: int = 0) -> MemoryEstimate:
     """Estimated working memory (bytes) of one `plan_batch` call of an ACO planner.
 
     Args:
@@ -71,6 +71,9 @@ def aco_memory(cells: int, moves: int, runs: int, colonies: int, ants: int, max_
       jax_walk: the JAX step loop (bit-packed tabu per ant) instead of the numba walk
         (one ``int32[C]`` stamp array per thread).
       threads: the numba walk's threads.
+      objective_variants: V > 0 for ``heuristic="objective"``: the colony's cost-to-go (``f64[B, C, K]`` on the
+        host while it is built, ``f32`` on the device), V ``[B·C, K]`` β·log η tables and V (instead of
+        chu2024's two) ``[B·S·C, K]`` logit tables per iteration.
     """
     B, S, m, C, K, L, I = runs, colonies, ants, cells, moves, max_steps, iterations
     A = B * S * m
@@ -85,7 +88,10 @@ def aco_memory(cells: int, moves: int, runs: int, colonies: int, ants: int, max_
     }
     if keep_pheromone:
         parts["returned pheromone"] = edge
-    if hook:
+    if objective_variants:
+        parts["objective cost-to-go"] = B * C * K * (8 + _F32) + objective_variants * B * C * K * _F32
+        parts["hook logits"] = objective_variants * edge
+    elif hook:
         parts["hook logits"] = 2 * edge
     if penalty:
         parts["retreat counts"] = edge

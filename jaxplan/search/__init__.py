@@ -16,6 +16,7 @@ from jaxplan.search._objective import (
     ObjectiveTerms,
     exact_objective,
     exact_objectives,
+    objective_cost_to_go,
     objective_terms,
     path_objective,
     path_objectives,
@@ -25,6 +26,7 @@ from jaxplan.search._sampling import mrbs_rrt, rrt_star
 __all__ = [
     "SearchGraph", "astar", "astar_kng", "dijkstra", "distance_from", "mrbs_rrt", "path_cost", "rrt_star",
     "search_graph", "shortest_lengths",
-    "NonAdditiveCost", "OBJECTIVE_PLANNERS", "ObjectiveTerms", "exact_objective", "exact_objectives", "objective_terms",
+    "NonAdditiveCost", "OBJECTIVE_PLANNERS", "ObjectiveTerms", "exact_objective", "exact_objectives",
+    "objective_cost_to_go", "objective_terms",
     "path_objective", "path_objectives",
 ]

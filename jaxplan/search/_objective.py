@@ -50,13 +50,21 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from jaxplan.grid import GridMap, check_cell, check_cells, clearance_field, neighbour_table, passable
+from jaxplan.grid import (
+    GridMap,
+    check_cell,
+    check_cells,
+    clearance_field,
+    neighbour_table,
+    passable,
+    state_cost_to_go,
+)
 from jaxplan.registry import resolve
 from jaxplan.result import PlanResult
 from jaxplan.search import _objective_kernels as OK
 
 __all__ = ["NonAdditiveCost", "OBJECTIVE_PLANNERS", "ObjectiveTerms", "objective_terms", "exact_objective",
-           "exact_objectives", "path_objective", "path_objectives"]
+           "exact_objectives", "objective_cost_to_go", "path_objective", "path_objectives"]
 
 OBJECTIVE_PLANNERS = ("aco", "iaco", "risk_aco", "opt_ant", "praco", "astar", "dijkstra")
 """Planners whose cost `exact_objective` minimises exactly (a sum over moves, turns and path cells)."""
@@ -284,6 +292,31 @@ def exact_objectives(grid: GridMap, starts: ArrayLike, goals: ArrayLike, planner
         mv.index, mv.valid, mv.step, mv.angle, mv.right.astype(np.int64), terms.cell, terms.turn_rule, terms.w_len,
         terms.w_angle, terms.w_turn, terms.goal_first, grid.width, _HEURISTIC[terms.connectivity],
         terms.w_len * float(grid.resolution), src.astype(np.int64), dst.astype(np.int64))
+
+
+def objective_cost_to_go(grid: GridMap, starts: ArrayLike, goals: ArrayLike, planner: str = "aco",
+                         **weights: Any) -> np.ndarray:
+    """``planner``'s exact cost-to-go ``f64[N, C, K]`` from every (cell, incoming move) state to each scenario's goal.
+
+    ``h[i, v, k]``: the least cost of the rest of a path to ``goals[i]`` for an ant on cell v that entered it
+    by move k (slot k of `jaxplan.neighbour_table` at the planner's connectivity): its later moves, turns and
+    cells under ``planner``'s cost and move rules, as `exact_objective` minimises them
+    (`jaxplan.grid.state_cost_to_go`); 0 on the goal, inf where it cannot be reached. So
+    ``exact_objective(start, goal).cost`` is ``cell[start] + min_k (w_len·step[k] + cell[v_k] + h[v_k, k])``
+    over the moves allowed from the start.
+    The starts matter only for ``iaco`` (its L0). It is the table behind the colonies' ``heuristic="objective"``.
+
+    Args and raises: as `exact_objectives`.
+    """
+    s = np.asarray(starts)
+    g = np.asarray(goals)
+    terms = objective_terms(grid, s, g, planner, **weights)
+    if len(np.atleast_2d(s)) == 0:
+        return np.zeros((0, grid.n_cells, terms.connectivity), np.float64)
+    _pairs(grid, s, g, terms.vehicle_height)  # the same checks as the forward search
+    return state_cost_to_go(grid, np.atleast_2d(g), terms.connectivity, terms.vehicle_height, w_len=terms.w_len,
+                            w_angle=terms.w_angle, w_turn=terms.w_turn, cell=terms.cell,
+                            goal_first=terms.goal_first, turn_rule=terms.turn_rule)
 
 
 def _move_indices(paths: np.ndarray, n: np.ndarray, offsets: np.ndarray) -> np.ndarray:
