@@ -82,6 +82,7 @@ def test_splits_must_be_disjoint(maze):
     (dict(speed=float("nan")), "speed must be a finite number > 0"),
     (dict(weights={"gap": 1.0}), "unknown metric 'gap'"),
     (dict(train_rows=(0, 999)), r"train_rows \[999\] outside"),
+    (dict(config=NavConfig(replan_group=0)), "replan_group = 0"),
 ])
 def test_bad_values_raise_clearly(maze, kw, match):
     kw = dict(kw)

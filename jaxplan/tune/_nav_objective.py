@@ -382,6 +382,9 @@ def nav_objective(maps: Sequence[NavMap], train_seeds: Sequence[int], test_seeds
     for what, v in (("speed", speed), ("walker_radius", walker_radius)):
         if not (math.isfinite(v) and v > 0):
             raise ValueError(f"nav_objective: {what} must be a finite number > 0, got {v!r}")
+    if config is not None and config.replan and config.replan_group == 0:
+        raise ValueError("nav_objective: NavConfig.replan_group = 0 shares re-planning slots over the whole batch, "
+                         "so the weight vectors of a population would change each other's episodes; set a group size")
     maps = tuple(maps)
     _check_splits(maps, train_seeds, test_seeds)
     if local == "dwa":
