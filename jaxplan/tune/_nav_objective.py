@@ -25,8 +25,10 @@ Layout (the design, written down):
   padded (episodes that do not run) to a whole number of `NavConfig.replan_group`, so that the
   re-planning groups — whose episodes share re-planning slots — are those of a `navigate_batch`
   call on that block, and members never share a group: a member's episodes are the episodes
-  `navigate_batch` runs with its weights. Choose rows × seeds a multiple of the group (25) to pay
-  for no padding.
+  `navigate_batch` runs with its weights — step for step with DWA; with MPPI, weights given per
+  episode rather than as broadcast scalars round differently in the last bits, which its softmax
+  carries on, so an episode's time may differ slightly (docs/decisions.md). Choose rows × seeds a
+  multiple of the group (25) to pay for no padding.
 * **Splits.** `Split` carries ``map_index`` (into `NavObjective.maps`) and ``rows`` (the
   scenario file's row numbers); train and held-out splits must be disjoint in (map, row) and in
   seeds (checked at construction: ``ValueError``).
