@@ -15,7 +15,14 @@
 from jaxplan.nav._checks import resolve_config
 from jaxplan.nav._config import NavConfig
 from jaxplan.nav._episode import run_episodes
-from jaxplan.nav._front import navigate, navigate_batch, navigate_multi, planning_grid
+from jaxplan.nav._front import (
+    PreparedEpisodes,
+    navigate,
+    navigate_batch,
+    navigate_multi,
+    planning_grid,
+    prepare_episodes,
+)
 from jaxplan.nav._moving import (
     MovingObstacles,
     concat_obstacles,
@@ -26,6 +33,7 @@ from jaxplan.nav._moving import (
     pad_obstacles,
     stack_obstacles,
     trajectories,
+    with_reactive,
 )
 from jaxplan.nav._pipelines import PIPELINES, Pipeline, get_pipeline, pipelines
 from jaxplan.nav._results import Episode, EpisodeBatch
@@ -34,8 +42,10 @@ from jaxplan.nav._traffic import crossing_traffic, head_on, random_obstacles
 
 __all__ = [
     "NavConfig", "REASONS", "EpisodeInputs", "EpisodeOutput", "run_episodes", "Episode", "EpisodeBatch", "navigate",
-    "navigate_batch", "navigate_multi", "planning_grid", "resolve_config", "MovingObstacles", "concat_obstacles",
+    "navigate_batch", "navigate_multi", "planning_grid", "prepare_episodes",
+    "PreparedEpisodes", "resolve_config", "MovingObstacles", "concat_obstacles",
     "crossing_traffic", "discs_at", "head_on", "moving_obstacles", "no_obstacles", "obstacle_state",
-    "pad_obstacles", "random_obstacles", "stack_obstacles", "trajectories", "PIPELINES", "Pipeline", "get_pipeline",
+    "pad_obstacles", "random_obstacles", "stack_obstacles", "trajectories", "with_reactive", "PIPELINES", "Pipeline",
+    "get_pipeline",
     "pipelines",
 ]

@@ -316,10 +316,11 @@ def _local_path(wp: jnp.ndarray, n: jnp.ndarray, index: jnp.ndarray, origin: jnp
 
 
 def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams | MPPIParams, inputs: EpisodeInputs,
-                   c: Carry, pos: jnp.ndarray, sub: jnp.ndarray, discs: _Discs, t: jnp.ndarray) -> tuple:
+                   c: Carry, pos: jnp.ndarray, sub: jnp.ndarray, discs: _Discs, t: jnp.ndarray,
+                   per_episode: bool = False) -> tuple:
     """Stage 6: the local planner's control ``u [B, N, 2]`` (zero once done), ``recovery bool[B, N]`` and the
     MPPI warm starts ``[B, N, T, 2]``; the top speed is capped near corners (not for MPPI) and while creeping,
-    unless a walker closes in."""
+    unless a walker closes in. ``per_episode``: every leaf of ``params`` has a leading episode axis ``[B]``."""
     dwa = config.dwa
     robot = dwa.robot
     obs = inputs.obstacles
@@ -363,21 +364,22 @@ def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams |
         keys = jax.vmap(lambda kd, r: jax.random.fold_in(jax.random.wrap_key_data(kd), c.t.astype(jnp.uint32) * N + r))(
             jnp.repeat(inputs.key, N, axis=0), robot_index)
 
-        def mppi(state, mean, key, subgoal, goal, d, path_, n_path_, vmax, finish_):
+        def mppi(state, mean, key, subgoal, goal, d, path_, n_path_, vmax, finish_, p=params):
             cfg = mcfg.replace(robot=dataclasses.replace(mcfg.robot, v_max=vmax))
-            return mppi_control(table, cfg, params, state, mean, key, subgoal, goal, d, path_, n_path_, finish_)
+            return mppi_control(table, cfg, p, state, mean, key, subgoal, goal, d, path_, n_path_, finish_)
 
-        u, info = jax.vmap(mppi)(flat(c.state), flat(c.plan), keys, flat(sub), flat(inputs.goal), obstacles, path,
-                                 n_path, v_top, finish)
+        args = (flat(c.state), flat(c.plan), keys, flat(sub), flat(inputs.goal), obstacles, path, n_path, v_top, finish)
+        u, info = jax.vmap(mppi)(*args, _per_robot(params, N)) if per_episode else jax.vmap(mppi)(*args)
         recovery = info.recovery.reshape(B, N)
         plan = jnp.where(c.done[..., None, None], c.plan, shift(info.sequence).reshape(c.plan.shape))
     elif config.local == "dwa":
 
-        def control(state, subgoal, d, wp, vmax, finish):
+        def control(state, subgoal, d, wp, vmax, finish, p=params):
             cfg = dataclasses.replace(dwa, robot=dataclasses.replace(robot, v_max=vmax))
-            return dwa_control(table, cfg, params, state, subgoal, d, wp if config.path_critic else None, finish)
+            return dwa_control(table, cfg, p, state, subgoal, d, wp if config.path_critic else None, finish)
 
-        u, info = jax.vmap(control)(flat(c.state), flat(sub), obstacles, flat(c.waypoints), v_top, finish)
+        args = (flat(c.state), flat(sub), obstacles, flat(c.waypoints), v_top, finish)
+        u, info = jax.vmap(control)(*args, _per_robot(params, N)) if per_episode else jax.vmap(control)(*args)
         recovery = info.recovery.reshape(B, N)
     else:
         u = jax.vmap(lambda s, g, vmax: follow(config, dataclasses.replace(robot, v_max=vmax), s, g))(
@@ -386,6 +388,11 @@ def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams |
     u = u.reshape(B, N, 2)
     u = jnp.where(c.done[..., None], 0.0, u)
     return u, recovery & ~c.done, plan
+
+
+def _per_robot(params, N: int):
+    """Per-episode params (leaves ``[B, ...]``) repeated for each of the ``N`` robots: leaves ``[B·N, ...]``."""
+    return jax.tree_util.tree_map(lambda x: jnp.repeat(jnp.asarray(x), N, axis=0), params)
 
 
 def _move_walkers(config: NavConfig, table: ClearanceTable, obs: MovingObstacles, c: Carry, discs: _Discs):
@@ -487,7 +494,7 @@ def _bookkeeping(config: NavConfig, inputs: EpisodeInputs, c: Carry, new: jnp.nd
 
 
 def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: DWAParams | MPPIParams,
-          inputs: EpisodeInputs, c: Carry):
+          inputs: EpisodeInputs, c: Carry, per_episode: bool = False):
     """One control period of every robot: the stages in the order of the module docstring."""
     t = c.t.astype(jnp.float32) * config.dwa.period
     discs = _seen_discs(config.dwa.robot, inputs.obstacles, c.state, t, c.walkers)
@@ -498,7 +505,7 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
     if config.replan:
         c = _replanning(config, free, table.resolution, inputs, c, pos, discs, crowded)
     sub, c = _subgoal(config, c, pos)
-    u, recovery, plan = _local_control(config, table, params, inputs, c, pos, sub, discs, t)
+    u, recovery, plan = _local_control(config, table, params, inputs, c, pos, sub, discs, t, per_episode)
     c = c._replace(plan=plan)
     walked = None
     if c.walkers is not None:
@@ -529,7 +536,7 @@ def _initial_plans(config: NavConfig, start: jnp.ndarray) -> jnp.ndarray:
 
 
 def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp.ndarray,
-                 params: DWAParams | MPPIParams, inputs: EpisodeInputs) -> EpisodeOutput:
+                 params: DWAParams | MPPIParams, inputs: EpisodeInputs, per_episode: bool = False) -> EpisodeOutput:
     """Runs ``B`` episodes of ``N`` robots (pure; jit with ``config`` and ``steps`` static).
 
     Args:
@@ -539,6 +546,9 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
       free: ``bool[H, W]`` the planning map (inflated) used when re-planning.
       params: `DWAParams` (`MPPIParams` when ``config.local == "mppi"``).
       inputs: `EpisodeInputs`.
+      per_episode: every leaf of ``params`` has a leading axis ``[B]``: episode b runs with its own weights
+        (static). Tuning evaluates a population of weight vectors as episodes of one batch this way
+        (`jaxplan.tune.nav_objective`); each episode's steps are those it would run with its weights alone.
     """
     B, N = inputs.start.shape[:2]
     chunk = config.chunk
@@ -564,8 +574,8 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
 
     def body(loop):
         c, st, ct, rc, wk, k = loop
-        c, (s, u, r, w) = lax.scan(lambda cc, _: _step(config, table, free, params, inputs, cc), c, None,
-                                   length=chunk)
+        c, (s, u, r, w) = lax.scan(lambda cc, _: _step(config, table, free, params, inputs, cc, per_episode), c,
+                                   None, length=chunk)
         st = lax.dynamic_update_slice(st, s, (k * chunk + 1, 0, 0, 0))
         ct = lax.dynamic_update_slice(ct, u, (k * chunk, 0, 0, 0))
         rc = lax.dynamic_update_slice(rc, r, (k * chunk, 0, 0))

@@ -27,7 +27,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import time
-from typing import Any, Mapping, Sequence
+from typing import Any, Mapping, NamedTuple, Sequence
 
 import jax
 import jax.numpy as jnp
@@ -51,7 +51,8 @@ from jaxplan.nav._results import Episode, EpisodeBatch
 from jaxplan.nav._state import GOAL, REASONS, EpisodeInputs
 from jaxplan.scale import BATCH_AXIS, auto_mesh, check_memory, episode_memory, pad_leading
 
-__all__ = ["navigate", "navigate_batch", "navigate_multi", "planning_grid", "CURVATURE_MIN_SPEED", "INFEASIBLE_START",
+__all__ = ["navigate", "navigate_batch", "navigate_multi", "planning_grid", "prepare_episodes", "PreparedEpisodes",
+           "CURVATURE_MIN_SPEED", "INFEASIBLE_START",
            "INFEASIBLE_GOAL", "UNREACHABLE", "PLAN_FAILED"]
 
 CURVATURE_MIN_SPEED = 0.1
@@ -370,12 +371,37 @@ def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | N
                           params, time_limit, overrides, mesh, bar if bar.active else None)
 
 
-def _run_steps(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | None,
-               global_planner: str | None, local_planner: str | None, seeds: Sequence[int], obstacles: Any,
-               config: NavConfig | None, params: DWAParams | MPPIParams | Mapping[str, float] | None,
-               time_limit: float | None, overrides: Mapping[str, Any], mesh: Mesh | str | None,
-               bar: ProgressBar | None) -> EpisodeBatch:
-    """`_run` with its stages shown on ``bar`` (or None)."""
+class PreparedEpisodes(NamedTuple):
+    """Steps 1-4 of a navigation call (the module docstring) before the episode program runs: what
+    `run_episodes` takes, and how the episodes were laid out. Built by `prepare_episodes`.
+
+    Attributes:
+      config: the resolved `NavConfig`; steps: the buffer length (`NavConfig.steps`).
+      table: the map's `ClearanceTable`; free: ``bool[H, W]`` the planning map (inflated to d_safe).
+      params: the checked default local-planner params (`DWAParams` / `MPPIParams`).
+      inputs: `EpisodeInputs` of the ``B = E·R`` episodes (scenario-major, then seed) of ``N`` robots.
+      reason: ``object[E·N, R]`` why a robot does not run (``""``: it runs).
+      E, R, N: scenarios, seeds, robots per episode.
+    """
+
+    config: NavConfig
+    steps: int
+    table: Any
+    free: np.ndarray
+    params: Any
+    inputs: EpisodeInputs
+    reason: np.ndarray
+    E: int
+    R: int
+    N: int
+
+
+def _prepare(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | None,
+             global_planner: str | None, local_planner: str | None, seeds: Sequence[int], obstacles: Any,
+             config: NavConfig | None, params: DWAParams | MPPIParams | Mapping[str, float] | None,
+             time_limit: float | None, overrides: Mapping[str, Any], mesh: Mesh | str | None,
+             bar: ProgressBar | None) -> tuple:
+    """Steps 1-4 of `_run_steps` (checks, planning map, global plans, waypoints, obstacles, inputs)."""
     run_args = checked_run(grid, starts, goals, pipeline, global_planner, local_planner, seeds, config, params,
                             time_limit, mesh)
     pipe, cfg, seeds, starts, goals = run_args.pipe, run_args.cfg, run_args.seeds, run_args.starts, run_args.goals
@@ -417,11 +443,52 @@ def _run_steps(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: s
         # Episode (scenario e, seed s) draws its MPPI noise from the key data (s, e).
         key=jnp.asarray(np.array([[s, e] for e in range(E) for s in seeds], np.uint32).reshape(E * R, 2)),
     )
+    return run_args, pf, inputs, active, reason, plans, n_plan, wp_m, n_wp, obs, plan_time, origin
+
+
+def prepare_episodes(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline: str | None = "iaco_dwa",
+                     seeds: Sequence[int] = range(1), obstacles: Any = None, *, global_planner: str | None = None,
+                     local_planner: str | None = None, config: NavConfig | None = None,
+                     params: DWAParams | MPPIParams | Mapping[str, float] | None = None,
+                     time_limit: float | None = None, mesh: Mesh | str | None = "auto",
+                     **overrides: Any) -> PreparedEpisodes:
+    """What `navigate_batch` runs, before it runs it: the checked arguments, the global plans, waypoints,
+    obstacles and `EpisodeInputs` of ``starts, goals int[E, 2]`` × ``seeds`` (arguments as `navigate_batch`).
+
+    ``run_episodes(p.config, p.steps, p.table, p.free, p.params, p.inputs)`` then gives exactly the
+    episodes `navigate_batch` runs (on one device). Tuning reuses the global plans — they do not depend on the
+    local planner's weights — for every weight vector (`jaxplan.tune.nav_objective`).
+    """
+    s, g = np.asarray(starts), np.asarray(goals)
+    if s.ndim != 2 or s.shape[-1] != 2 or g.shape != s.shape:
+        raise ValueError(f"starts and goals must both be [E, 2] cells, got {s.shape} and {g.shape}")
+    if pipeline is not None and global_planner is not None:
+        pipeline = None
+    run_args, pf, inputs, _, reason, *_ = _prepare(grid, s[:, None], g[:, None], pipeline, global_planner,
+                                                   local_planner, list(seeds), obstacles, config, params,
+                                                   time_limit, overrides, mesh, None)
+    cfg = run_args.cfg
+    return PreparedEpisodes(cfg, cfg.steps, table_of(grid), pf, run_args.params, inputs, reason, len(s),
+                            len(run_args.seeds), 1)
+
+
+def _run_steps(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | None,
+               global_planner: str | None, local_planner: str | None, seeds: Sequence[int], obstacles: Any,
+               config: NavConfig | None, params: DWAParams | MPPIParams | Mapping[str, float] | None,
+               time_limit: float | None, overrides: Mapping[str, Any], mesh: Mesh | str | None,
+               bar: ProgressBar | None) -> EpisodeBatch:
+    """`_run` with its stages shown on ``bar`` (or None)."""
+    run_args, pf, inputs, active, reason, plans, n_plan, wp_m, n_wp, obs, plan_time, origin = _prepare(
+        grid, starts, goals, pipeline, global_planner, local_planner, seeds, obstacles, config, params, time_limit,
+        overrides, mesh, bar)
+    cfg = run_args.cfg
+    E, N = run_args.starts.shape[:2]
+    R = len(run_args.seeds)
     out, compile_s, run_s = _execute(cfg, grid, pf, run_args.params, inputs, mesh, bar)
 
     # 5. Metrics, back to [E, R, N, ...]; metres in world coordinates (the map's origin added).
     batch = _episode_batch(out, E, R, N, active, reason, plans, n_plan, wp_m, n_wp, obs, float(cfg.dwa.period),
-                           (plan_time, compile_s, run_s), pipe.name, res)
+                           (plan_time, compile_s, run_s), run_args.pipe.name, float(grid.resolution))
     return batch if origin is None else _batch_to_world(batch, origin)
 
 

@@ -5,6 +5,8 @@ optimisers.
 * `_objective`: `Objective` — a population ``f32[P, D]`` of weight vectors evaluated over a
   training split of scenarios × seeds in ONE compiled call (`aco_objective`, `dwa_objective`,
   `function_objective`); a held-out test split kept apart.
+* `_nav_objective`: `nav_objective` — the local planner's weights scored on full two-level navigation episodes
+  among blind and seeing walkers over several MovingAI maps (one compiled call per map).
 * `_base`: the one `Strategy` interface (``init/ask/tell``) and the helpers every state shares;
   `_search`, `_evosax`, `_sparrow`, `_gradients`: grid and random search, CMA-ES and SNES
   (evosax), li2026's ISSA and the plain SSA, the score-function (REINFORCE) and surrogate routes;
@@ -32,6 +34,15 @@ from jaxplan.tune._gradients import (
     relaxed_dwa_loss,
     score_function_grad,
     surrogate,
+)
+from jaxplan.tune._nav_objective import (
+    NAV_METRICS,
+    WALKER_KINDS,
+    NavMap,
+    NavObjective,
+    nav_map,
+    nav_objective,
+    spread_rows,
 )
 from jaxplan.tune._objective import (
     ACO_METRICS,
@@ -73,6 +84,7 @@ __all__ = [
     "RelaxedResult", "quadratic_features", "reinforce", "relaxed_dwa", "relaxed_dwa_loss", "score_function_grad",
     "surrogate", "ACO_METRICS", "DWA_METRICS", "DWAEpisodes", "Evaluation", "Objective", "Split", "aco_objective",
     "dwa_episodes", "dwa_objective", "dwa_scenarios", "function_objective",
+    "NAV_METRICS", "WALKER_KINDS", "NavMap", "NavObjective", "nav_map", "nav_objective", "spread_rows",
     "TuneConfig", "TuneFile", "apply_tune_quick", "load_tune_config", "parse_tune_config", "TuneResult",
     "build_objective",
     "compare", "fragment_toml", "plot_tuning", "run_tuning", "tune_loop",

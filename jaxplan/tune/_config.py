@@ -33,9 +33,11 @@ from jaxplan.experiments.schema import ConfigError, Reader, Setting, declaration
 __all__ = ["TuneConfig", "load_tune_config", "parse_tune_config", "apply_tune_quick", "KINDS", "TuneFile",
            "TuneTable", "TuneQuickTable"]
 
-KINDS = ("aco", "dwa", "mppi")
+KINDS = ("aco", "dwa", "mppi", "nav")
 _DWA_PLANNERS = ("weighted", "fuzzy")
 _MPPI_PLANNERS = ("mppi",)
+_NAV_PLANNERS = ("dwa", "mppi")
+_WALKERS = ("blind", "seeing")
 
 
 def _aco_planners() -> tuple[str, ...]:
@@ -45,7 +47,7 @@ def _aco_planners() -> tuple[str, ...]:
 
 
 def _planners() -> tuple[str, ...]:
-    return _aco_planners() + _DWA_PLANNERS + _MPPI_PLANNERS
+    return _aco_planners() + _DWA_PLANNERS + _MPPI_PLANNERS + ("dwa",)
 
 
 def _strategies() -> tuple[str, ...]:
@@ -55,14 +57,15 @@ def _strategies() -> tuple[str, ...]:
 
 
 def _metrics(kind: str | None = None) -> tuple[str, ...]:
+    from jaxplan.tune._nav_objective import NAV_METRICS
     from jaxplan.tune._objective import ACO_METRICS, DWA_METRICS
 
-    return {"aco": ACO_METRICS, "dwa": DWA_METRICS, "mppi": DWA_METRICS}.get(
-        kind, tuple(dict.fromkeys(ACO_METRICS + DWA_METRICS)))
+    return {"aco": ACO_METRICS, "dwa": DWA_METRICS, "mppi": DWA_METRICS, "nav": NAV_METRICS}.get(
+        kind, tuple(dict.fromkeys(ACO_METRICS + DWA_METRICS + NAV_METRICS)))
 
 
 _DEFAULT_WEIGHTS = {"aco": {"gap": 1.0, "failure": 1.0}, "dwa": {"time": 1.0, "failure": 1.0},
-                    "mppi": {"time": 1.0, "failure": 1.0}}
+                    "mppi": {"time": 1.0, "failure": 1.0}, "nav": {"failure": 1.0, "time": 1.0}}
 _SPACE_JSON = {
     "type": "object", "minProperties": 1,
     "additionalProperties": {"oneOf": [
@@ -95,16 +98,20 @@ class TuneTable:
                         hint="it names the run folder")
     description: str = setting("str", "", "one line for the summary")
     kind: str = setting("str", "aco", "aco: a colony planner's weights; dwa: DWA critic weights; mppi: MPPI critic "
-                        "weights, temperature and noise", required=True, choices=KINDS)
+                        "weights, temperature and noise (both on local-planner-only episodes among crossing discs); "
+                        "nav: the local planner's weights on full navigation episodes among walkers, over several "
+                        "maps (`jaxplan.tune.nav_objective`)", required=True, choices=KINDS)
     planner: str = setting("str", None, "aco: a colony planner; dwa: the DWA evaluator (weighted or fuzzy); mppi: "
-                           "mppi", choices=_planners, default_text='`"iaco"`; dwa: `"weighted"`; mppi: `"mppi"`')
+                           "mppi; nav: the local planner (dwa or mppi)", choices=_planners,
+                           default_text='`"iaco"`; dwa: `"weighted"`; mppi: `"mppi"`; nav: `"dwa"`')
     strategy: str = setting("str", "cma_es", "the search strategy (`jaxplan.tune.STRATEGIES`)", choices=_strategies)
     population: int = setting("int", 16, "weight vectors per generation", ge=2)
     generations: int = setting("int", 10, "generations", ge=1)
     seed: int = setting("int", 0, "the strategy's PRNG seed", ge=0)
     checkpoint_every: int = setting("int", 2, "orbax checkpoint every k generations (and after the last)", ge=1)
     train_count: int = setting("int", 16, "the first train_count scenarios train; the rest are the held-out test "
-                               "set", ge=1)
+                               "set (nav: per map, the map's selected rows alternate train and held-out until "
+                               "train_count train)", ge=1)
     train_seeds: Any = setting("seeds", 4, "training seeds: a count n (0..n-1) or a list")
     test_seeds: Any = setting("seeds", None, "test seeds: a count or a list; must not meet train_seeds",
                               default_text="1000.. as many as train_seeds")
@@ -116,10 +123,19 @@ class TuneTable:
     overrides: Mapping[str, Any] = setting("table", doc="aco: planner settings; dwa: `DWAConfig` fields (n_v, "
                                            "n_omega, ...); mppi: `MPPIConfig` fields (samples, steps, ...)")
     options: Mapping[str, Any] = setting("table", doc="the strategy's own options")
-    max_time: float = setting("float", 20.0, "dwa: episode length (s)", gt=0)
+    max_time: float = setting("float", 20.0, "dwa, mppi: episode length (s); nav: `NavConfig.max_time`, the "
+                              "longest episode", gt=0, default_text="`20.0`; nav: `180.0` (`NavConfig`'s)")
+    time_limit: float = setting("float", None, "nav: every episode's time limit (s), at most max_time",
+                                gt=0, default_text="navigate_batch's: 60 s + 3 x the waypoint path at top speed")
+    walkers: tuple[str, ...] = setting("strings", ("blind", "seeing"), "nav: walker kinds, each scored: blind "
+                                       "(on their routes) and seeing (the social force model)", nonempty=True)
+    walker_count: int = setting("int", 5, "nav: walkers per episode", ge=1)
+    walker_speed: float = setting("float", 1.0, "nav: their speed (m/s)", gt=0)
     discs: int = setting("int", 2, "dwa: moving discs per episode", ge=0)
-    pipeline: str = setting("str", None, "dwa, mppi: the navigate pipeline the best-weights fragment names",
-                            default_text='`"astar_kng_dwa"`; fuzzy planner: `"iaco_dwa"`; mppi: `"astar_kng_mppi"`')
+    pipeline: str = setting("str", None, "dwa, mppi: the navigate pipeline the best-weights fragment names; nav: "
+                            "the pipeline the episodes run (its local planner must be planner's)",
+                            default_text='`"astar_kng_dwa"`; fuzzy planner: `"iaco_dwa"`; mppi and nav: '
+                                         '`"astar_kng_<planner>"`')
     space: Any = setting("custom", None, "the search box: name = [low, high], a vector weight one pair per "
                          "component (e.g. lambdas = [[0.0, 1.0], [0.0, 1.0], [0.0, 1.0]])", required=True,
                          type_text="table of [low, high] pairs", json=_SPACE_JSON)
@@ -131,8 +147,8 @@ class TuneFile:
     """A tuning config (`jaxplan tune CONFIG`)."""
 
     tune: Any = setting("section", None, "the tuning run", section=TuneTable, required=True)
-    maps: Any = setting("tables", None, "exactly one map, as in experiment configs", section=MapTable, required=True,
-                        nonempty=True)
+    maps: Any = setting("tables", None, "exactly one map, as in experiment configs (nav: one or more MovingAI "
+                        "maps with their .scen rows)", section=MapTable, required=True, nonempty=True)
     scenarios: Any = setting("section", None, "as in experiment configs; count = train + test scenarios",
                              section=ScenarioSpec)
 
@@ -166,6 +182,11 @@ class TuneConfig:
     is_quick: bool = False
     text: str = ""
     path: Path | None = None
+    maps: tuple[MapSpec, ...] = ()
+    time_limit: float | None = None
+    walkers: tuple[str, ...] = ("blind", "seeing")
+    walker_count: int = 5
+    walker_speed: float = 1.0
 
 
 def _space(r: Reader, t: Any, path: str) -> dict:
@@ -204,10 +225,9 @@ def parse_tune_config(text: str, *, data_dir: str | os.PathLike | None = None, s
     t = r.section(raw.get("tune"), "tune", TuneTable, defaults={"name": "unnamed"},
                   skip=("planner", "test_seeds", "weights", "pipeline"))
     kind = t["kind"]
-    planner = r.value(tt, "tune", dataclasses.replace(
-        setting_of(TuneTable, "planner"),
-        choices=_aco_planners() if kind == "aco" else _MPPI_PLANNERS if kind == "mppi" else _DWA_PLANNERS),
-        "iaco" if kind == "aco" else "mppi" if kind == "mppi" else "weighted")
+    choices = {"aco": _aco_planners(), "mppi": _MPPI_PLANNERS, "nav": _NAV_PLANNERS}.get(kind, _DWA_PLANNERS)
+    planner = r.value(tt, "tune", dataclasses.replace(setting_of(TuneTable, "planner"), choices=choices),
+                      {"aco": "iaco", "mppi": "mppi", "nav": "dwa"}.get(kind, "weighted"))
     train_seeds = t["train_seeds"]
     test_seeds = r.value(tt, "tune", setting_of(TuneTable, "test_seeds")) or _default_test_seeds(train_seeds)
     if set(train_seeds) & set(test_seeds):
@@ -218,8 +238,13 @@ def parse_tune_config(text: str, *, data_dir: str | os.PathLike | None = None, s
     quick = r.section(tt.get("quick"), "tune.quick", TuneQuickTable)
     dd = Path(data_dir) if data_dir is not None else default_data_dir()
     maps = read_maps(r, raw, dd)
-    if len(maps) > 1:
-        r.bad("maps", f"a tuning run uses exactly one map, got {len(maps)}")
+    if len(maps) > 1 and kind != "nav":
+        r.bad("maps", f"a tuning run uses exactly one map (kind = \"nav\" takes several), got {len(maps)}")
+    default_pipeline = ("astar_kng_dwa" if planner != "fuzzy" else "iaco_dwa") if kind != "nav" else \
+        f"astar_kng_{planner}"
+    pipeline = r.value(tt, "tune", setting_of(TuneTable, "pipeline"), default_pipeline)
+    if kind == "nav":
+        _check_nav(r, tt, t, planner, pipeline, maps)
     cfg = TuneConfig(
         name=t["name"], description=t["description"], kind=kind, planner=planner, strategy=t["strategy"],
         population=t["population"], generations=t["generations"], seed=t["seed"],
@@ -227,13 +252,15 @@ def parse_tune_config(text: str, *, data_dir: str | os.PathLike | None = None, s
         train_seeds=train_seeds, test_seeds=test_seeds,
         weights=MappingProxyType({k: float(v) for k, v in weights.items()}),
         overrides=frozen(t["overrides"]), options=frozen(t["options"]), max_time=t["max_time"], discs=t["discs"],
-        pipeline=r.value(tt, "tune", setting_of(TuneTable, "pipeline"),
-                         "astar_kng_dwa" if planner != "fuzzy" else "iaco_dwa"),
+        pipeline=pipeline,
         space=MappingProxyType(_space(r, tt.get("space"), "tune.space")),
         map=maps[0] if maps else None,
         quick=MappingProxyType(quick),
-        text=text, path=path,
+        text=text, path=path, maps=tuple(maps), time_limit=t["time_limit"], walkers=tuple(t["walkers"]),
+        walker_count=t["walker_count"], walker_speed=t["walker_speed"],
     )
+    if kind == "nav" and "max_time" not in tt:
+        cfg = dataclasses.replace(cfg, max_time=180.0)
     _check_options(r, cfg)
     if any(quick[k] is not None for k in ("train_seeds", "test_seeds")):
         shared = _shared_seeds(*_quick_seeds(train_seeds, test_seeds, quick))
@@ -243,6 +270,30 @@ def parse_tune_config(text: str, *, data_dir: str | os.PathLike | None = None, s
     if r.problems:
         raise ConfigError(r.problems, source)
     return cfg
+
+
+def _check_nav(r: Reader, tt: Mapping[str, Any], t: Mapping[str, Any], planner: str, pipeline: str,
+               maps: tuple[MapSpec, ...]) -> None:
+    """The nav kind's own rules: a pipeline of that local planner, known walker kinds, MovingAI maps with .scen rows,
+    a time limit within max_time, no dwa-kind keys."""
+    from jaxplan.nav import PIPELINES
+
+    pipe = PIPELINES.get(pipeline)
+    if pipe is None:
+        r.bad("tune.pipeline", f"unknown pipeline {pipeline!r}; choose from {', '.join(PIPELINES)}")
+    elif pipe.local != planner:
+        r.bad("tune.pipeline", f"{pipeline!r} runs the {pipe.local!r} local planner, but tune.planner is {planner!r}")
+    bad = [w for w in t["walkers"] if w not in _WALKERS]
+    if bad or len(set(t["walkers"])) != len(t["walkers"]):
+        r.bad("tune.walkers", f"must be distinct kinds among {list(_WALKERS)}, got {list(t['walkers'])}")
+    if "discs" in tt:
+        r.bad("tune.discs", "applies to kind = \"dwa\" and \"mppi\" only; nav uses walker_count")
+    limit, longest = t["time_limit"], t["max_time"] if "max_time" in tt else 180.0
+    if limit is not None and limit > longest:
+        r.bad("tune.time_limit", f"must be at most max_time ({longest:g} s), got {limit:g}")
+    for i, m in enumerate(maps):
+        if m.path is None or m.scen is None or m.scenarios.source != "scen":
+            r.bad(f"maps[{i}]", "kind = \"nav\" needs MovingAI maps (path) with their .scen rows (source = \"scen\")")
 
 
 def _check_options(r: Reader, cfg: TuneConfig) -> None:

@@ -62,12 +62,19 @@ FAIL_GAP = 1.0
 
 
 class Split(NamedTuple):
-    """Scenarios × seeds. starts, goals ``int[N, 2]`` cells; optimal ``f[N]`` m; seeds ``R`` ints."""
+    """Scenarios × seeds. starts, goals ``int[N, 2]`` cells; optimal ``f[N]`` m; seeds ``R`` ints.
+
+    An objective over several maps (`jaxplan.tune.nav_objective`) also gives each scenario its map,
+    ``map_index int[N]`` (into the objective's maps), and its row of that map's scenario file, ``rows int[N]``;
+    None for one map.
+    """
 
     starts: np.ndarray
     goals: np.ndarray
     optimal: np.ndarray
     seeds: tuple[int, ...]
+    map_index: np.ndarray | None = None
+    rows: np.ndarray | None = None
 
 
 class Evaluation(NamedTuple):

@@ -322,7 +322,8 @@ def fragment_toml(objective: Objective, x, *, label: str, overrides: dict | None
 
     ACO: ``kind = "plan"``, the planner with ``overrides`` = its settings plus the tuned weights.
     DWA: ``kind = "navigate"``, ``pipeline`` with ``params`` = the tuned critic weights (and
-    ``dwa`` = the DWAConfig settings the tuning used).
+    ``dwa`` = the DWAConfig settings the tuning used). MPPI and navigation objectives (`nav_objective`): the same
+    with the MPPI params (``mppi`` = the MPPIConfig settings); a navigation objective's own pipeline by default.
     """
     p = objective.params(np.asarray(x))
     head = "".join(f"# {line}\n" for line in comment.splitlines())
@@ -330,9 +331,11 @@ def fragment_toml(objective: Objective, x, *, label: str, overrides: dict | None
         ov = {**dict(overrides or {}), **p}
         return (f"{head}[[planners]]\nlabel = {_toml_value(label)}\nkind = \"plan\"\n"
                 f"name = {_toml_value(objective.planner)}\noverrides = {_inline(ov)}\n")
-    local = "mppi" if objective.kind == "mppi" else "dwa"
+    # a navigation objective (`nav_objective`) names its local planner and pipeline
+    local = "mppi" if objective.kind == "mppi" or getattr(objective, "local", "") == "mppi" else "dwa"
+    pipeline = pipeline or getattr(objective, "pipeline", "") or f"astar_kng_{local}"
     body = (f"{head}[[planners]]\nlabel = {_toml_value(label)}\nkind = \"navigate\"\n"
-            f"name = {_toml_value(pipeline or f'astar_kng_{local}')}\nparams = {_inline(p)}\n")
+            f"name = {_toml_value(pipeline)}\nparams = {_inline(p)}\n")
     if overrides:
         body += f"{local} = {_inline(dict(overrides))}\n"
     return body
@@ -374,11 +377,51 @@ def _splits(cfg, grid, starts, goals, optimal) -> tuple[Split, Split]:
             Split(starts[te], goals[te], optimal[te], tuple(cfg.test_seeds)))
 
 
+def _alternate(rows: np.ndarray, n_train: int, n_test: int | None) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """A map's selected rows (in their order) alternately train and held-out, until ``n_train`` train (the rest
+    held-out, at most ``n_test``): both splits spread over the selection, as `spread_rows` does."""
+    order = list(range(0, len(rows), 2)) + list(range(1, len(rows), 2))
+    pick = set(order[:n_train])
+    rest = [i for i in range(len(rows)) if i not in pick]
+    test = rest if n_test is None else rest[:n_test]
+    return tuple(int(rows[i]) for i in sorted(pick)), tuple(int(rows[i]) for i in test)
+
+
+def _nav_objective(cfg) -> Objective:
+    """The `nav_objective` of a ``kind = "nav"`` config: every map's selected scen rows split alternately."""
+    from jaxplan.experiments import load_map_spec, spec_scenarios
+    from jaxplan.grid import load_scenarios
+    from jaxplan.nav import NavConfig
+    from jaxplan.tune._nav_objective import NavMap, nav_objective
+
+    maps = []
+    for spec in cfg.maps:
+        grid, s0, g0, _ = load_map_spec(spec)
+        _, _, _, rows = spec_scenarios(spec, grid, s0, g0)
+        train, test = _alternate(rows, cfg.train_count, cfg.test_count)
+        if not train or not test:
+            raise ValueError(f"map {spec.name!r}: its {len(rows)} selected scenario rows leave no "
+                             f"{'held-out' if train else 'train'} rows (train_count = {cfg.train_count})")
+        scen = load_scenarios(spec.scen, grid)
+        maps.append(NavMap(spec.name, grid, np.asarray(scen.starts), np.asarray(scen.goals), np.asarray(scen.optimal),
+                           train, test))
+    base = NavConfig()
+    ov = dict(cfg.overrides)
+    nav = base.replace(max_time=cfg.max_time, **({"mppi": base.mppi.replace(**ov)} if cfg.planner == "mppi" else
+                                                 {"dwa": base.dwa.replace(**ov)}))
+    space = {k: (list(v) if isinstance(v, list) else tuple(v)) for k, v in cfg.space.items()}
+    return nav_objective(maps, cfg.train_seeds, cfg.test_seeds, cfg.planner, pipeline=cfg.pipeline,
+                         walkers=cfg.walkers, n_walkers=cfg.walker_count, speed=cfg.walker_speed, space=space,
+                         weights=dict(cfg.weights), config=nav, time_limit=cfg.time_limit, name=cfg.name)
+
+
 def build_objective(cfg) -> Objective:
     """The `Objective` of a `TuneConfig` (map loaded, scenarios chosen and split)."""
     from jaxplan.experiments import load_map_spec, spec_scenarios
     from jaxplan.tune._objective import aco_objective, dwa_objective, mppi_objective
 
+    if cfg.kind == "nav":
+        return _nav_objective(cfg)
     grid, s0, g0, _ = load_map_spec(cfg.map)
     starts, goals, optimal, _ = spec_scenarios(cfg.map, grid, s0, g0)
     train, test = _splits(cfg, grid, starts, goals, optimal)
