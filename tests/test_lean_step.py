@@ -1,5 +1,6 @@
-"""The lean single-robot DWA step: `make_stepper` and `dwa_step(full_info=False)` give `dwa_step`'s control bit for
-bit, reject the same bad input with the same errors, and never use another map's tables."""
+"""The lean single-robot steps: `make_stepper` and `dwa_step(full_info=False)` give `dwa_step`'s control bit for bit,
+reject the same bad input with the same errors and never use another map's tables; `mppi_step`'s lean front
+gives the same control and sequence as before."""
 
 from __future__ import annotations
 
@@ -148,3 +149,29 @@ def test_speed_limit_layer_is_part_of_the_cached_table():
 
 def test_stepper_repr_is_short():
     assert len(repr(make_stepper(_map()))) < 600
+
+
+# ---------------------------------------------------------------------------------------------
+# MPPI's front
+
+
+@pytest.mark.parametrize("origin", [(0.0, 0.0), (-3.125, 7.5)])
+def test_mppi_lean_front_gives_the_same_control_and_sequence(origin):
+    from jaxplan.mppi import MPPIConfig, initial_sequence
+
+    grid = _map(origin)
+    (st, sg), = zip(*_states(grid, 1, seed=2), strict=True)
+    held = np.asarray(initial_sequence(MPPIConfig(), np.asarray(st, np.float32)))
+    u0, info0 = jp.mppi_step(st, sg, grid, sequence=held, key=jax.random.key(5))
+    for key in (5, np.int64(5)):  # an int seed becomes the key inside the compiled step
+        u, info = jp.mppi_step(st, sg, grid, key=key)  # no sequence: the held velocity, built in numpy
+        assert _bits(u) == _bits(u0)
+        for name in ("sequence", "costs", "weights", "controls", "chosen"):
+            assert _bits(getattr(info, name)) == _bits(getattr(info0, name)), name
+        lean, only = jp.mppi_step(st, sg, grid, key=key, full_info=False)
+        assert _bits(lean) == _bits(u0) and _bits(only.sequence) == _bits(info0.sequence)
+        assert only.costs is None and only.controls is None
+    for key in (0, -3, 2 ** 31 - 1):
+        a, ia = jp.mppi_step(st, sg, grid, sequence=info0.sequence, key=key)
+        b, ib = jp.mppi_step(st, sg, grid, sequence=info0.sequence, key=jax.random.key(key))
+        assert _bits(a) == _bits(b) and _bits(ia.costs) == _bits(ib.costs)
