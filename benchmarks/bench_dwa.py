@@ -364,7 +364,8 @@ def measure(robots: list[int], repeat: int, sharded: bool) -> dict:
     jax.block_until_ready(episode(*args))
     out["episode_step_ms"] = median_time(lambda: jax.block_until_ready(episode(*args)), repeat) / steps * 1e3
     out["lean_front_ms"] = median_time(lambda: dwa_step(states[0], goals[0], grid, full_info=False), repeat * 5) * 1e3
-    out["pythonrobotics"] = measure_pythonrobotics(repeat)
+    if not sharded:  # the sharded child splits batches: its single-robot rows are not printed
+        out["pythonrobotics"] = measure_pythonrobotics(repeat)
     return out
 
 
