@@ -23,7 +23,19 @@ For 1, 64 and 1,024 robots it prints:
     slower to run on a CPU);
   * for one robot: the step inside a compiled 50-step closed-loop episode (`lax.scan` of
     `dwa_control` and `advance`, as the navigation episodes run it: no per-call dispatch)
-    and the host front `dwa_step` (validation, every rollout kept and copied to numpy).
+    and the host front `dwa_step` (validation, every rollout kept and copied to numpy);
+  * for one robot on PythonRobotics' own DWA scenario (PathPlanning/DynamicWindowApproach: its
+    15 point obstacles, start (0, 0, π/8, 0, 0), goal (10, 10)): the Python-facing step from
+    `make_stepper`, `dwa_step(full_info=False)` and `dwa_step`, beside the same step inside a
+    compiled 50-step episode and beside PythonRobotics' own `dwa_control` on its own config, in
+    the same process. Its obstacles become blocked cells of 0.25 m centred on the points (a map
+    with origin (-5.125, -5.125) m and 5 m of free margin round them); jaxplan's robot and
+    window stay cui2025's defaults (20 x 40 samples x 20 steps = 16,000 trajectory points;
+    PythonRobotics' config samples its window every 0.01 m/s and 0.1°/s over a 3 s horizon:
+    the table prints its points per call). PythonRobotics' source is MIT-licensed and is not
+    part of jaxplan: point ``PYTHONROBOTICS_DIR`` at a checkout of
+    https://github.com/AtsushiSakai/PythonRobotics (or at the file itself); without it its
+    row is skipped with a message.
 Each measurement runs in a child process, twice: with XLA's default threads and pinned
 to one core (on a 2-core machine XLA's intra-op threads help big batches but cost a
 single robot), and once more with the batch sharded over two XLA host devices
@@ -159,6 +171,113 @@ def scene(robots: int, seed: int = 0):
 
 
 
+# PythonRobotics' DWA scenario (PathPlanning/DynamicWindowApproach/dynamic_window_approach.py: `Config.ob`,
+# `main`'s start state and goal). The numbers only; `pythonrobotics` checks them against the loaded file.
+PR_OBSTACLES = np.array([[-1, -1], [0, 2], [4.0, 2.0], [5.0, 4.0], [5.0, 5.0], [5.0, 6.0], [5.0, 9.0], [8.0, 9.0],
+                         [7.0, 9.0], [8.0, 10.0], [9.0, 11.0], [12.0, 13.0], [12.0, 12.0], [15.0, 15.0], [13.0, 13.0]])
+PR_START = np.array([0.0, 0.0, np.pi / 8.0, 0.0, 0.0])
+PR_GOAL = np.array([10.0, 10.0])
+PR_FILE = "PathPlanning/DynamicWindowApproach/dynamic_window_approach.py"
+
+
+def pythonrobotics():
+    """PythonRobotics' DWA module loaded from ``PYTHONROBOTICS_DIR`` (a checkout or the file), or a message saying
+    why not. matplotlib is imported by the module; a stand-in is used if it is not installed (nothing is drawn)."""
+    import importlib.util
+    import types
+    from pathlib import Path
+
+    root = os.environ.get("PYTHONROBOTICS_DIR")
+    if not root:
+        return None, ("PythonRobotics: skipped (set PYTHONROBOTICS_DIR to a checkout of "
+                      "https://github.com/AtsushiSakai/PythonRobotics; its code is not part of jaxplan)")
+    path = Path(root)
+    path = path / PR_FILE if path.is_dir() else path
+    if not path.is_file():
+        return None, f"PythonRobotics: skipped ({path} not found)"
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+    except ImportError:
+        plt = types.ModuleType("matplotlib.pyplot")
+        sys.modules.setdefault("matplotlib", types.ModuleType("matplotlib"))
+        sys.modules.setdefault("matplotlib.pyplot", plt)
+    spec = importlib.util.spec_from_file_location("pythonrobotics_dwa", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    if not np.array_equal(np.asarray(module.config.ob, float), PR_OBSTACLES):
+        return module, "PythonRobotics: its obstacle list differs from the one this benchmark reproduces"
+    return module, None
+
+
+def pythonrobotics_scene(res: float = 0.25, margin: float = 5.0):
+    """PythonRobotics' scenario in jaxplan's terms: each point obstacle a blocked ``res`` cell centred on it (the
+    origin sits half a cell off the points' grid), ``margin`` metres of free map round them; start and goal."""
+    import jaxplan as jp
+
+    lo = PR_OBSTACLES.min(0) - margin - res / 2
+    hi = PR_OBSTACLES.max(0) + margin + res / 2
+    W, H = np.round((hi - lo) / res).astype(int)
+    free = np.ones((H, W), bool)
+    cells = np.floor((PR_OBSTACLES - lo) / res).astype(int)
+    free[cells[:, 1], cells[:, 0]] = False
+    return jp.grid_from_array(free, resolution=res, origin=tuple(lo)), PR_START, PR_GOAL
+
+
+def measure_pythonrobotics(repeat: int) -> dict:
+    """The single-robot rows on PythonRobotics' scenario (milliseconds per call, medians), PythonRobotics' own
+    `dwa_control` among them when it can be loaded."""
+    import jax
+
+    from jaxplan.dwa import DWAConfig, advance, default_params, dwa_control, dwa_step, make_stepper
+    from jaxplan.dwa._step import table_of
+
+    grid, x, goal = pythonrobotics_scene()
+    cfg = DWAConfig()
+    step = make_stepper(grid, cfg)
+    out: dict = {"points": cfg.samples * cfg.steps, "grid": list(grid.shape), "resolution": float(grid.resolution)}
+    n = max(50, repeat * 30)
+    calls = {"stepper_ms": lambda: step(x, goal),
+             "lean_ms": lambda: dwa_step(x, goal, grid, config=cfg, full_info=False),
+             "full_ms": lambda: dwa_step(x, goal, grid, config=cfg)}
+    for name, fn in calls.items():
+        fn()
+        out[name] = median_time(fn, n) * 1e3
+    steps = 50
+    lean = DWAConfig(keep_rollouts=False)
+
+    @jax.jit
+    def episode(table, cfg, params, state, goal):
+        def body(st, _):
+            u, info = dwa_control(table, cfg, params, st, goal)
+            return advance(st, u, cfg.period), info.recovery
+        return jax.lax.scan(body, state, None, length=steps)
+
+    local = grid.to_local(np.stack([x[:2], goal]))
+    start = np.concatenate([local[0], x[2:]]).astype(np.float32)
+    args = (table_of(grid), jax.device_put(lean), jax.device_put(default_params()), jax.device_put(start),
+            jax.device_put(local[1].astype(np.float32)))
+    jax.block_until_ready(episode(*args))
+    out["episode_ms"] = median_time(lambda: jax.block_until_ready(episode(*args)), max(15, 3 * repeat)) / steps * 1e3
+    module, note = pythonrobotics()
+    if note:
+        out["note"] = note
+    if module is not None and note is None:
+        pr_cfg = module.config
+        pr_cfg.robot_type = module.RobotType.circle
+        ob = np.asarray(pr_cfg.ob)
+        dw = module.calc_dynamic_window(PR_START.copy(), pr_cfg)
+        n_v = len(np.arange(dw[0], dw[1], pr_cfg.v_resolution))
+        n_w = len(np.arange(dw[2], dw[3], pr_cfg.yaw_rate_resolution))
+        T = len(module.predict_trajectory(PR_START.copy(), 0.0, 0.0, pr_cfg))
+        module.dwa_control(PR_START.copy(), pr_cfg, PR_GOAL, ob)
+        out["pr_ms"] = median_time(lambda: module.dwa_control(PR_START.copy(), pr_cfg, PR_GOAL, ob),
+                                   max(3, repeat // 2)) * 1e3
+        out["pr_points"] = n_v * n_w * T
+    return out
+
+
 def measure(robots: list[int], repeat: int, sharded: bool) -> dict:
     import jax
 
@@ -244,6 +363,9 @@ def measure(robots: list[int], repeat: int, sharded: bool) -> dict:
             jax.device_put(goals[0]))
     jax.block_until_ready(episode(*args))
     out["episode_step_ms"] = median_time(lambda: jax.block_until_ready(episode(*args)), repeat) / steps * 1e3
+    out["lean_front_ms"] = median_time(lambda: dwa_step(states[0], goals[0], grid, full_info=False), repeat * 5) * 1e3
+    if not sharded:  # the sharded child splits batches: its single-robot rows are not printed
+        out["pythonrobotics"] = measure_pythonrobotics(repeat)
     return out
 
 
@@ -285,8 +407,24 @@ def main() -> None:
     for label in ("default", "pinned"):
         r = results[label]
         print(f"1 robot, {names[label]}: {r['episode_step_ms']:.3f} ms per control step inside a 50-step episode "
-              f"(lax.scan, hybrid); host front dwa_step with every rollout kept: {r['front_ms']:.3f} ms")
-    print("targets: <= 0.2 ms per single-robot step, >= 200 M points/s for >= 64 robots, >= 3x numpy, compile <= 1 s")
+              f"(lax.scan, hybrid); host front dwa_step with every rollout kept: {r['front_ms']:.3f} ms, "
+              f"full_info=False: {r['lean_front_ms']:.3f} ms")
+    print("\nPythonRobotics' DWA scenario, one robot, ms per call (jaxplan: 16,000 trajectory points per step):")
+    print(f"{'threads':<26}{'stepper':>9}{'lean':>8}{'dwa_step':>10}{'episode':>9}{'/episode':>10} | "
+          f"{'PythonRobotics':>15}{'its points':>11}{'x PR':>7}")
+    for label in ("default", "pinned"):
+        r = results[label]["pythonrobotics"]
+        pr = (f"{r['pr_ms']:>15.1f}{r['pr_points']:>11,}{r['pr_ms'] / r['stepper_ms']:>7.0f}" if "pr_ms" in r
+              else f"{'—':>15}{'—':>11}{'—':>7}")
+        print(f"{names[label]:<26}{r['stepper_ms']:>9.3f}{r['lean_ms']:>8.3f}{r['full_ms']:>10.3f}"
+              f"{r['episode_ms']:>9.3f}{r['stepper_ms'] / r['episode_ms']:>9.2f}x | {pr}")
+        if "note" in r:
+            print(f"  {r['note']}")
+    print("  stepper: make_stepper(grid)(state, subgoal); lean: dwa_step(..., full_info=False); dwa_step: every "
+          "rollout kept; episode: the step inside a compiled 50-step episode; x PR: PythonRobotics' dwa_control "
+          "over the stepper")
+    print("targets: <= 0.2 ms per single-robot step, >= 200 M points/s for >= 64 robots, >= 3x numpy, compile <= 1 s; "
+          "Python-facing single-robot step <= 2x the in-episode step and >= 100x PythonRobotics")
     print(steal.summary())
 
 

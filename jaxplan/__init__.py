@@ -36,7 +36,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     "registry": ("PlannerSpec", "register_planner"),
     "result": ("PlanResult",),
     "dwa": ("Ackermann", "Disc", "DiscObstacles", "DWAConfig", "DWAInfo", "DWAParams", "Rectangle", "Unicycle",
-            "dwa_control", "dwa_control_batch", "dwa_step"),
+            "DWAStepper", "dwa_control", "dwa_control_batch", "dwa_step", "make_stepper"),
     "mppi": ("MPPIConfig", "MPPIParams", "mppi_control", "mppi_step"),
     "metrics": ("EnergyModel", "EpisodeTiming", "path_metrics"),
     "smooth": ("Smoothed", "smooth"),

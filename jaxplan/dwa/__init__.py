@@ -4,6 +4,9 @@ Host front::
 
     import jaxplan as jp
     u, info = jp.dwa_step(state, subgoal, grid)             # state [5] or [B, 5]
+    u, _ = jp.dwa_step(state, subgoal, grid, full_info=False)  # the control alone
+    step = jp.make_stepper(grid, config)                    # one robot on a fixed map, in a loop
+    u = step(state, subgoal)
 
 Pure core, for episodes (`lax.scan` over control steps, `vmap` over episodes)::
 
@@ -49,15 +52,17 @@ from jaxplan.dwa._step import (
     validate_config,
     validate_params,
 )
+from jaxplan.dwa._stepper import DWAStepper, make_stepper
 from jaxplan.dwa._window import Window, dynamic_window, sample_controls
 
 __all__ = [
     "Robot", "abs_angle", "as_obstacles", "braking_clearance", "curvature_limit", "rotor",
     "Ackermann", "CLEARANCE_MODES", "ClearanceTable", "Critics", "DWAConfig", "DWAInfo", "DWAParams", "Disc",
-    "DiscObstacles", "EVALUATORS", "HYBRID_EXACT_CELLS", "Rectangle", "Rollouts", "SELECTIONS", "Unicycle", "Window",
+    "DiscObstacles", "DWAStepper", "EVALUATORS", "HYBRID_EXACT_CELLS", "Rectangle", "Rollouts", "SELECTIONS",
+    "Unicycle", "Window",
     "advance", "clearance_table", "critics", "default_params", "disc_clearance", "dwa_control", "dwa_control_batch",
     "dwa_step", "dynamic_window", "evaluate", "footprint_offsets", "footprint_radius", "fuzzy_evaluate",
-    "input_memberships", "no_obstacles", "rollout", "rule_table", "sample_controls",
+    "input_memberships", "make_stepper", "no_obstacles", "rollout", "rule_table", "sample_controls",
     "obstacles_to_local", "speed_cap", "static_clearance", "table_of",
     "trajectory", "validate_config", "validate_params",
 ]

@@ -6,6 +6,12 @@ problem. The map's `ClearanceTable` is built once per map object and kept; the s
 itself is jitted once per configuration (the static fields of `DWAConfig`, the array
 shapes and the number of moving discs) — limits, distances and weights are traced, so
 changing them does not recompile.
+
+Per call the front does only what that call needs: a configuration is checked and copied to
+the device once (the last 64 are kept), one robot's state is checked with scalar arithmetic,
+and with ``full_info=False`` the program returns the control alone (no rollouts computed, no
+info record copied to numpy). A script that steps one robot on a fixed map can go further with
+`jaxplan.dwa.make_stepper`, which does the per-map and per-robot work once.
 """
 
 from __future__ import annotations
@@ -43,20 +49,56 @@ _single = jax.jit(dwa_control)
 _batch = jax.jit(dwa_control_batch, static_argnames=("chunk",))
 
 
+def _control_only(table, config, params, state, subgoal, obstacles=None, path=None):
+    return dwa_control(table, config, params, state, subgoal, obstacles, path)[0]
+
+
+def _control_only_batch(table, config, params, states, subgoals, obstacles=None, path=None, *, chunk):
+    return dwa_control_batch(table, config, params, states, subgoals, obstacles, path, chunk=chunk)[0]
+
+
+# The control alone: XLA drops the info record's outputs; the control's bits are those of `_single`/`_batch`
+# (tests/test_dwa_stepper.py compares them).
+_single_control = jax.jit(_control_only)
+_batch_control = jax.jit(_control_only_batch, static_argnames=("chunk",))
+
+
+@lru_cache(maxsize=64)
+def on_device(config: DWAConfig, lean: bool = False) -> DWAConfig:
+    """``config`` with its traced fields as device arrays (``lean``: with ``keep_rollouts=False``), one per
+    configuration: a call then hands over buffers instead of converting eleven Python floats."""
+    return jax.device_put(config.replace(keep_rollouts=False) if lean else config)
+
+
+@lru_cache(maxsize=64)
+def _params_on_device(key: tuple[bytes, ...]) -> DWAParams:
+    return jax.device_put(DWAParams(*(np.frombuffer(b, np.float32)[0] for b in key)))
+
+
+def params_on_device(params: DWAParams) -> DWAParams:
+    """Validated float32 ``params`` as device arrays, one per distinct value (keyed by the bits, so -0.0 and
+    0.0 stay apart)."""
+    return _params_on_device(tuple(np.float32(x).tobytes() for x in params))
+
+
 def table_of(grid: GridMap) -> ClearanceTable:
     """The `ClearanceTable` of ``grid``, built once per map object (a few maps are kept); with the grid's
-    speed limit layer if it has one."""
-    table = _table(grid)[1]
+    speed limit layer if it has one (copied to the device once, with the table).
+
+    A map's layers are taken as they are when its table is built: change a map with
+    `GridMap.replace` (a new map, new arrays), not by writing into its arrays."""
+    return _table(grid)[1]
+
+
+# Keyed by the identity of the free-cell and speed-limit arrays, as `dwa_step` calls this on every step (a content
+# digest of a 512x512 map costs 0.25 ms); the value holds those arrays, so their ids cannot be reused while the
+# entry lives.
+@memoize(maxsize=8, key=lambda grid: (id(grid.free), id(grid.speed_limit), float(grid.resolution)))
+def _table(grid: GridMap) -> tuple[Any, ClearanceTable]:
+    table = clearance_table(collision_map(grid))
     if grid.speed_limit is not None:
         table = table._replace(speed_limit=jnp.asarray(grid.speed_limit, jnp.float32))
-    return table
-
-
-# Keyed by the identity of the free-cell array, as `dwa_step` calls this on every step (a content digest of a
-# 512x512 map costs 0.25 ms); the value holds that array, so its id cannot be reused while the entry lives.
-@memoize(maxsize=8, key=lambda grid: (id(grid.free), float(grid.resolution)))
-def _table(grid: GridMap) -> tuple[Any, ClearanceTable]:
-    return grid.free, clearance_table(collision_map(grid))
+    return (grid.free, grid.speed_limit), table
 
 
 def _number(name: str, x: Any, *, positive: bool = False, nonneg: bool = False) -> float:
@@ -249,9 +291,45 @@ def _check_on_free_cells(grid: GridMap, states: np.ndarray, single: bool) -> Non
                          f"(x, y = {x:.4g}, {y:.4g} m)")
 
 
+def device_config(config: DWAConfig, lean: bool = False) -> DWAConfig:
+    """`on_device` for a hashable (validated) configuration; a configuration with array fields as it is."""
+    try:
+        return on_device(config, lean)
+    except TypeError:  # unhashable: array-valued fields
+        return config.replace(keep_rollouts=False) if lean else config
+
+
+def one_robot(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, config: DWAConfig
+              ) -> tuple[np.ndarray, np.ndarray] | None:
+    """One robot's ``f32[5]`` state and ``f32[2]`` sub-goal in the map's frame, checked with scalar arithmetic
+    (a few microseconds), or None when they are not one robot's or a check fails: `dwa_step`'s general path
+    then raises the error that names the problem. The same float64 operations as that path, so the same bits."""
+    st = np.asarray(state, dtype=np.float64)
+    sg = np.asarray(subgoal, dtype=np.float64)
+    if st.shape != (5,) or sg.shape != (2,):
+        return None
+    x, y, th, v, w = st.tolist()
+    gx, gy = sg.tolist()
+    if not all(map(math.isfinite, (x, y, th, v, w, gx, gy))):
+        return None
+    r, P = config.robot, float(config.period)
+    if max(v - float(r.decel) * P, float(r.v_min)) > min(v + float(r.accel) * P, float(r.v_max)) or \
+            max(w - float(r.alpha) * P, -float(r.omega_max)) > min(w + float(r.alpha) * P, float(r.omega_max)):
+        return None
+    if grid.has_origin:
+        ox, oy = (float(o) for o in grid.origin)
+        x, y, gx, gy = x - ox, y - oy, gx - ox, gy - oy
+    res = float(grid.resolution)
+    cx, cy = math.floor(x / res), math.floor(y / res)
+    H, W = grid.shape
+    if not (0 <= cx < W and 0 <= cy < H and grid.free[cy, cx]):
+        return None
+    return np.array([x, y, th, v, w], np.float32), np.array([gx, gy], np.float32)
+
+
 def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any = None,
              params: DWAParams | Mapping[str, float] | None = None, *, config: DWAConfig | None = None,
-             path: ArrayLike | None = None) -> tuple[np.ndarray, DWAInfo]:
+             path: ArrayLike | None = None, full_info: bool = True) -> tuple[np.ndarray, DWAInfo | None]:
     """One Dynamic Window Approach step for one robot or a batch (DESIGN §3, §5).
 
     Args:
@@ -268,11 +346,15 @@ def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any
       config: `DWAConfig` (robot, window, horizon, evaluator, clearance mode, selection);
         default `DWAConfig()` — cui2025's robot and weighted evaluator.
       path: the global path ``[L, 2]`` (m) for the path critic, or ``[B, L, 2]``.
+      full_info: False returns ``(control, None)``: the step computes no rollouts to keep
+        and copies no info record (the same control, bit for bit). For one robot stepped in a
+        loop on a fixed map, `make_stepper` is leaner still.
 
     Returns:
       ``(control, info)``: ``control`` ``[2]`` = (v, omega) for the next control period
       (``[B, 2]`` for a batch) and a `DWAInfo` of numpy arrays (leading ``B`` axis for a
       batch): scores ``[S]``, rollouts ``[S, T, 3]``, feasible ``[S]``, chosen index, …
+      (None with ``full_info=False``).
 
     Raises:
       ValueError: non-finite or mis-shaped state, sub-goal, obstacles or path; an
@@ -289,6 +371,13 @@ def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any
     """
     config = validate_config(DWAConfig() if config is None else config)
     prm = validate_params(params, config.evaluator)
+    if obstacles is None and path is None and isinstance(grid, GridMap):
+        robot = one_robot(state, subgoal, grid, config)
+        if robot is not None:  # one robot, all checks passed: the lean path
+            table, prm_dev = table_of(grid), params_on_device(prm)
+            if not full_info:
+                return np.asarray(_single_control(table, device_config(config, True), prm_dev, *robot)), None
+            return _numpy_info(_single(table, device_config(config), prm_dev, *robot, None, None), grid)
     st = np.asarray(state, dtype=np.float64)
     single = st.ndim == 1
     if st.shape[-1:] != (5,) or st.ndim not in (1, 2) or st.shape[0] == 0:
@@ -322,8 +411,11 @@ def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any
         obs, pa = obstacles_to_local(obs, grid), None if pa is None else grid.to_local(pa)
     _check_on_free_cells(grid, st2, single)
     table = table_of(grid)
+    if not full_info:
+        config = config.replace(keep_rollouts=False)
+    single_fn, batch_fn = (_single, _batch) if full_info else (_single_control, _batch_control)
     if single:
-        out = _single(table, config, prm, st.astype(np.float32), sg.astype(np.float32), obs, pa)
+        out = single_fn(table, config, prm, st.astype(np.float32), sg.astype(np.float32), obs, pa)
     else:
         # Pad the batch to whole chunks: one compilation per bucket, no remainder trace.
         Bp = B if B <= CHUNK else -(-B // CHUNK) * CHUNK
@@ -335,10 +427,17 @@ def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any
             obs = DiscObstacles(*(None if a is None else pad(a) for a in obs))
         if pa is not None and pa.ndim == 3:
             pa = pad(pa)
-        out = _batch(table, config, prm, pad(st2).astype(np.float32), pad(sg).astype(np.float32), obs, pa,
-                     chunk=CHUNK)
+        out = batch_fn(table, config, prm, pad(st2).astype(np.float32), pad(sg).astype(np.float32), obs, pa,
+                       chunk=CHUNK)
         if Bp > B:
             out = jax.tree_util.tree_map(lambda a: a[:B], out)
+    if not full_info:
+        return np.asarray(out), None
+    return _numpy_info(out, grid)
+
+
+def _numpy_info(out: tuple[Any, DWAInfo], grid: GridMap) -> tuple[np.ndarray, DWAInfo]:
+    """The control and info of a step as numpy arrays, rollouts in the world frame."""
     u, info = jax.device_get(out)
     info = DWAInfo(*(None if a is None else np.asarray(a) for a in info))
     if grid.has_origin and info.rollouts is not None:
