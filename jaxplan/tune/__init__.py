@@ -62,6 +62,7 @@ from jaxplan.tune._strategies import (
 from jaxplan.tune._study import (
     CountedObjective,
     StudyConfig,
+    StudyFile,
     apply_study_quick,
     build_study_objective,
     confirm_config,
@@ -91,6 +92,6 @@ __all__ = [
     "compare", "fragment_toml", "plot_tuning", "run_tuning", "tune_loop",
     "SparrowState", "adaptive_weight", "issa", "levy", "ssa",
     "aco_own_objective", "check_disjoint", "concat_objectives", "path_costs",
-    "CountedObjective", "StudyConfig", "apply_study_quick", "build_study_objective", "confirm_config",
+    "CountedObjective", "StudyConfig", "StudyFile", "apply_study_quick", "build_study_objective", "confirm_config",
     "load_study_config", "parse_study_config", "run_study",
 ]

@@ -61,26 +61,78 @@ from typing import Any, Mapping
 import numpy as np
 
 from jaxplan.core.io import atomic_write, confined, folder_lock
-from jaxplan.experiments.schema import ConfigError
+from jaxplan.experiments.config import MapTable, ScenarioSpec
+from jaxplan.experiments.schema import ConfigError, Reader, declaration, setting
 from jaxplan.tune._composite import aco_own_objective, check_disjoint, concat_objectives
-from jaxplan.tune._config import TuneConfig, apply_tune_quick, parse_tune_config
+from jaxplan.tune._config import TuneConfig, TuneTable, apply_tune_quick, parse_tune_config
 from jaxplan.tune._objective import Evaluation, Objective
 from jaxplan.tune._strategies import STRATEGIES, make_strategy, option_problems
 from jaxplan.tune._workflow import _inline, _json_safe, _splits, _toml_value, fragment_toml, tune_loop
 
 __all__ = ["StudyConfig", "load_study_config", "parse_study_config", "apply_study_quick", "CountedObjective",
-           "build_study_objective", "run_study", "confirm_config", "GAPS"]
+           "build_study_objective", "run_study", "confirm_config", "GAPS", "StudyFile", "StudyTable",
+           "StudyQuickTable"]
 
 GAPS = ("length", "own")
-_STUDY_KEYS = ("methods", "tuner_seeds", "budget", "population", "gap", "held_out_count", "options",
-               "confirm_seeds", "confirm_count", "confirm_scenario_seed", "quick")
-_QUICK_KEYS = ("methods", "tuner_seeds", "budget", "population", "held_out_count", "confirm_seeds", "confirm_count")
+
+
+def _strategies() -> tuple[str, ...]:
+    return STRATEGIES
+
+
+@declaration
+class StudyQuickTable:
+    """What ``quick=True`` (``jaxplan study --quick``) changes besides ``[tune.quick]``: a smoke run in NAME-quick
+    (every key optional)."""
+
+    methods: tuple[str, ...] = setting("strings", None, "the methods of the quick run", choices=_strategies)
+    tuner_seeds: Any = setting("seeds", None, "tuner seeds: a count or a list")
+    budget: int = setting("int", None, "training evaluations per method and tuner seed", ge=2)
+    population: int = setting("int", None, "weight vectors per generation", ge=2)
+    held_out_count: int = setting("int", None, "held-out scenario rows per map", ge=1)
+    confirm_seeds: Any = setting("seeds", None, "trial seeds of the confirmation run: a count (from 5000) or a list")
+    confirm_count: int = setting("int", None, "random start-goal pairs per map of the confirmation run", ge=1)
+
+
+@declaration
+class StudyTable:
+    """The study: which methods, how many tuner seeds, the equal training budget, the confirmation run."""
+
+    methods: tuple[str, ...] = setting("strings", ("random", "cma_es"), "the tuning methods compared "
+                                       "(`jaxplan.tune.STRATEGIES`)", choices=_strategies)
+    tuner_seeds: Any = setting("seeds", 5, "tuner seeds: a count n (0..n-1) or a list; each method runs once per seed")
+    budget: int = setting("int", 160, "training-split weight-vector evaluations per method and tuner seed (counted)",
+                          ge=2)
+    population: int = setting("int", 16, "weight vectors per generation (budget / population generations)", ge=2)
+    gap: str = setting("str", "length", "aco: the gap metric's yardstick: the shortest path, or the planner's own "
+                       "cost at its default weights against its exact own optimum", choices=GAPS)
+    held_out_count: int = setting("int", None, "held-out scenario rows per map", ge=1,
+                                  default_text="the map's rows after the training rows")
+    options: Mapping[str, Any] = setting("table", doc="per method, its options: method = { option = value }")
+    confirm_seeds: Any = setting("seeds", None, "trial seeds of the confirmation run (`jaxplan run`): a count or a list",
+                                 default_text="10 seeds from 5000")
+    confirm_count: int = setting("int", 8, "random start-goal pairs per map of the confirmation run", ge=1)
+    confirm_scenario_seed: int = setting("int", 1, "the seed the confirmation run draws its pairs with", ge=0)
+    quick: Any = setting("section", None, "what `--quick` changes", section=StudyQuickTable)
+
+
+@declaration
+class StudyFile:
+    """A tuning study config (`jaxplan study CONFIG`): a tuning config, with one or more maps, and ``[study]``."""
+
+    tune: Any = setting("section", None, "the tuned planner, its search box, scenarios and seeds (as in tuning "
+                        "configs; its strategy, population and generations are not used)", section=TuneTable,
+                        required=True)
+    maps: Any = setting("tables", None, "one or more maps, as in experiment configs (the study's objective is the "
+                        "mean over all their scenarios)", section=MapTable, required=True, nonempty=True)
+    scenarios: Any = setting("section", None, "as in experiment configs", section=ScenarioSpec)
+    study: Any = setting("section", None, "the study", section=StudyTable, required=True)
 
 
 @dataclass(frozen=True)
 class StudyConfig:
     """A validated study config: ``tunes`` one `TuneConfig` per map (the first one names the study), and the
-    ``[study]`` settings (module docstring)."""
+    ``[study]`` settings (`StudyTable`)."""
 
     name: str
     description: str
@@ -116,13 +168,10 @@ def _dump(v: Any) -> str:
     return _toml_value(v)
 
 
-def _seeds(v: Any, what: str, start: int = 0) -> tuple[int, ...]:
-    if isinstance(v, int) and not isinstance(v, bool) and v >= 1:
-        return tuple(range(start, start + v))
-    if isinstance(v, list) and v and all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in v) \
-            and len(set(v)) == len(v):
-        return tuple(v)
-    raise ValueError(f"{what}: expected a count >= 1 or a list of distinct integers >= 0, got {v!r}")
+def _confirm_seeds(raw: Any, read: tuple[int, ...]) -> tuple[int, ...]:
+    """The confirmation seeds: a count n in the file (``raw``) means 5000..5000+n-1 (apart from the train seeds 0..
+    and the held-out seeds 1000..); a list (``read``) is taken as it is."""
+    return tuple(range(5000, 5000 + raw)) if isinstance(raw, int) and not isinstance(raw, bool) else tuple(read)
 
 
 def parse_study_config(text: str, *, data_dir: str | os.PathLike | None = None, source: str = "config",
@@ -132,78 +181,53 @@ def parse_study_config(text: str, *, data_dir: str | os.PathLike | None = None, 
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise ConfigError([f"not valid TOML: {e}"], source) from None
-    st = raw.pop("study", None)
-    problems: list[str] = []
-    if not isinstance(st, dict):
-        raise ConfigError(["study: a [study] table is required"], source)
-    for k in st:
-        if k not in _STUDY_KEYS:
-            problems.append(f"study.{k}: unknown key; expected one of {', '.join(_STUDY_KEYS)}")
+    r = Reader()
+    r.section(raw, "", StudyFile)
+    st = r.section(raw.get("study"), "study", StudyTable)
+    quick = r.section(st.get("quick"), "study.quick", StudyQuickTable)
     maps = raw.get("maps")
     if not isinstance(maps, list) or not maps or not all(isinstance(m, dict) for m in maps):
-        raise ConfigError(["maps: at least one [[maps]] table is required"], source)
+        r.bad("maps", "at least one [[maps]] table is required")
+        raise ConfigError(r.problems, source)
+    tune_raw = {k: v for k, v in raw.items() if k != "study"}
     tunes = []
     for i, m in enumerate(maps):
-        one = {**raw, "maps": [m]}
+        one = {**tune_raw, "maps": [m]}
         try:
             tunes.append(parse_tune_config("\n".join(f"{json.dumps(k)} = {_dump(v)}" for k, v in one.items()),
                                            data_dir=data_dir, source=f"{source} (maps[{i}])", path=path))
         except ConfigError as e:
-            problems += [p for p in e.problems if p not in problems]
-    get = st.get
-    out: dict[str, Any] = {}
-    try:
-        methods = get("methods", ["random", "cma_es"])
-        if not isinstance(methods, list) or not methods or len(set(methods)) != len(methods):
-            raise ValueError(f"study.methods: expected a list of distinct strategy names, got {methods!r}")
-        for mth in methods:
-            if mth not in STRATEGIES:
-                raise ValueError(f"study.methods: unknown strategy {mth!r}; choose from {', '.join(STRATEGIES)}")
-        out["methods"] = tuple(methods)
-    except ValueError as e:
-        problems.append(str(e))
-    for key, default, lo in (("budget", 160, 2), ("population", 16, 2), ("confirm_count", 8, 1),
-                             ("confirm_scenario_seed", 1, 0)):
-        v = get(key, default)
-        if not isinstance(v, int) or isinstance(v, bool) or v < lo:
-            problems.append(f"study.{key}: expected an integer >= {lo}, got {v!r}")
-        out[key] = v
-    hc = get("held_out_count")
-    if hc is not None and (not isinstance(hc, int) or isinstance(hc, bool) or hc < 1):
-        problems.append(f"study.held_out_count: expected an integer >= 1, got {hc!r}")
-    for key, default, start in (("tuner_seeds", 5, 0), ("confirm_seeds", 10, 5000)):
-        try:
-            out[key] = _seeds(get(key, default), f"study.{key}", start)
-        except ValueError as e:
-            problems.append(str(e))
-    gap = get("gap", "length")
-    if gap not in GAPS:
-        problems.append(f"study.gap: expected one of {GAPS}, got {gap!r}")
-    if gap == "own" and tunes and tunes[0].kind != "aco":
-        problems.append("study.gap: 'own' applies to kind = 'aco' only")
-    opts = get("options", {})
-    if not isinstance(opts, dict):
-        problems.append(f"study.options: expected a table of method = {{ option = value }}, got {opts!r}")
-        opts = {}
-    quick = get("quick", {})
-    if not isinstance(quick, dict):
-        problems.append(f"study.quick: expected a table, got {quick!r}")
-        quick = {}
-    for k in quick:
-        if k not in _QUICK_KEYS:
-            problems.append(f"study.quick.{k}: unknown key; expected one of {', '.join(_QUICK_KEYS)}")
-    if tunes and "confirm_seeds" in out:
-        shared = sorted(set(out["confirm_seeds"]) & (set(tunes[0].train_seeds) | set(tunes[0].test_seeds)))
+            r.problems += [p for p in e.problems if p not in r.problems]
+    opts = st.get("options") or {}
+    for k, v in opts.items():
+        if not isinstance(v, dict):
+            r.bad(f"study.options.{k}", f"expected a table of options, got {v!r}")
+    if st["gap"] == "own" and tunes and tunes[0].kind != "aco":
+        r.bad("study.gap", "'own' applies to kind = 'aco' only")
+    for where, ms in (("study.methods", st["methods"]), ("study.quick.methods", quick.get("methods") or ())):
+        for m in ms:
+            if m not in STRATEGIES:
+                r.bad(where, f"unknown strategy {m!r}; choose from {', '.join(STRATEGIES)}")
+    if len(set(st["methods"])) != len(st["methods"]):
+        r.bad("study.methods", f"a method is listed twice: {list(st['methods'])}")
+    st_raw = raw.get("study") if isinstance(raw.get("study"), dict) else {}
+    confirm = _confirm_seeds(st_raw.get("confirm_seeds"), st["confirm_seeds"]) if st.get("confirm_seeds") else \
+        tuple(range(5000, 5010))
+    qr = st_raw.get("quick") if isinstance(st_raw.get("quick"), dict) else {}
+    if quick.get("confirm_seeds") is not None:
+        quick["confirm_seeds"] = _confirm_seeds(qr.get("confirm_seeds"), quick["confirm_seeds"])
+    if tunes:
+        shared = sorted(set(confirm) & (set(tunes[0].train_seeds) | set(tunes[0].test_seeds)))
         if shared:
-            problems.append(f"study.confirm_seeds: must not meet the train or held-out seeds: {shared}")
-    if problems:
-        raise ConfigError(problems, source)
+            r.bad("study.confirm_seeds", f"must not meet the train or held-out seeds: {shared}")
+    if r.problems:
+        raise ConfigError(r.problems, source)
     cfg = StudyConfig(name=tunes[0].name, description=tunes[0].description, tunes=tuple(tunes), maps_raw=tuple(maps),
-                      methods=out["methods"], tuner_seeds=out["tuner_seeds"], budget=out["budget"],
-                      population=out["population"], gap=gap, held_out_count=hc,
-                      options={k: dict(v) for k, v in opts.items()}, confirm_seeds=out["confirm_seeds"],
-                      confirm_count=out["confirm_count"], confirm_scenario_seed=out["confirm_scenario_seed"],
-                      quick=dict(quick), text=text, path=path)
+                      methods=tuple(st["methods"]), tuner_seeds=tuple(st["tuner_seeds"]), budget=st["budget"],
+                      population=st["population"], gap=st["gap"], held_out_count=st.get("held_out_count"),
+                      options={k: dict(v) for k, v in opts.items()}, confirm_seeds=confirm,
+                      confirm_count=st["confirm_count"], confirm_scenario_seed=st["confirm_scenario_seed"],
+                      quick={k: v for k, v in quick.items() if v is not None}, text=text, path=path)
     _check_sizes(cfg, source)
     return cfg
 
@@ -243,10 +267,11 @@ def apply_study_quick(cfg: StudyConfig) -> StudyConfig:
             ch[k] = q[k]
     if q.get("methods") is not None:
         ch["methods"] = tuple(q["methods"])
+        ch["options"] = {k: v for k, v in cfg.options.items() if k in ch["methods"]}
     if q.get("tuner_seeds") is not None:
-        ch["tuner_seeds"] = _seeds(q["tuner_seeds"], "study.quick.tuner_seeds")
+        ch["tuner_seeds"] = tuple(q["tuner_seeds"])
     if q.get("confirm_seeds") is not None:
-        ch["confirm_seeds"] = _seeds(q["confirm_seeds"], "study.quick.confirm_seeds", 5000)
+        ch["confirm_seeds"] = tuple(q["confirm_seeds"])
     if q.get("confirm_count") is not None:
         ch["confirm_count"] = q["confirm_count"]
     new = dataclasses.replace(cfg, **ch)
