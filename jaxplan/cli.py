@@ -362,8 +362,10 @@ def cmd_study(args: argparse.Namespace) -> int:
     from jaxplan.tune import run_study
 
     folder = run_study(args.config, out=args.out, quick=args.quick, data_dir=args.data_dir,
-                       progress=not args.no_progress, resume=not args.no_resume, results=args.results)
-    print(f"wrote {folder}/ (log.csv, summary.json, convergence.png, best.toml, confirm.toml, page.md)")
+                       progress=not args.no_progress, resume=not args.no_resume, results=args.results,
+                       confirm=args.confirm)
+    print(f"wrote {folder}/ (log.csv, summary.json, convergence.png, best.toml, confirm.toml, page.md"
+          + (", confirm.md)" if args.confirm else ")"))
     return 0
 
 
@@ -485,6 +487,8 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("--data-dir", default=None, help="folder that map paths are relative to")
     st.add_argument("--results", default=None, help="also write the page, figure, best.toml and confirm.toml here "
                                                     "(e.g. docs/results/tuning)")
+    st.add_argument("--confirm", action="store_true", help="then run confirm.toml (defaults vs tuned on fresh "
+                                                             "scenarios) with `jaxplan run` and write its page")
     st.add_argument("--no-resume", action="store_true", help="start afresh instead of resuming")
     st.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
     st.set_defaults(func=cmd_study)

@@ -129,11 +129,10 @@ def test_own_objective_path_costs_match_exact_search():
 @pytest.mark.slow  # ~1 min on 2 shared cores: three studies of a tiny colony (one compilation each) and one run
 def test_study_log_budget_best_toml_and_resume(tmp_path, monkeypatch):
     import jaxplan.tune._study as study
-    from jaxplan.experiments import run_experiment
     from jaxplan.experiments.config import load_config
 
     cfg = _write(tmp_path)
-    a = run_study(cfg, out=tmp_path / "a", progress=False, results=tmp_path / "res")
+    a = run_study(cfg, out=tmp_path / "a", progress=False, results=tmp_path / "res", confirm=True)
     s = json.loads((a / "summary.json").read_text())
     # every method and tuner seed received the same counted budget
     assert {m: r["evaluations"] for m, r in s["methods"].items()} == {"random": 8, "cma_es": 8}
@@ -141,7 +140,7 @@ def test_study_log_budget_best_toml_and_resume(tmp_path, monkeypatch):
     assert {int(r["evaluations"]) for r in rows if r["generation"] == "2"} == {8}
     assert all(np.isfinite(float(r["heldout_best"])) for r in rows)
     assert s["defaults"]["heldout"] >= -1e-5  # the own-objective gap of a colony is never below its optimum
-    for f in ("s.md", "s.png", "s_best.toml", "s_confirm.toml"):
+    for f in ("s.md", "s.png", "s_best.toml", "s_confirm.toml", "s_confirm.md"):
         assert (tmp_path / "res" / f).is_file(), f
 
     # same seeds: the same log (wall times aside)
@@ -169,9 +168,10 @@ def test_study_log_budget_best_toml_and_resume(tmp_path, monkeypatch):
     c = run_study(cfg, out=tmp_path / "c", progress=False)
     assert _log(c) == rows
 
-    # best.toml round-trips into `jaxplan run`: the confirmation runs defaults and the tuned weights
-    run = run_experiment(a / "confirm.toml", tmp_path / "run", progress=False)
+    # best.toml round-trips into `jaxplan run`: the confirmation ran the defaults and the tuned weights
+    run = tmp_path / "a" / "s_confirm"
     exp = load_config(run / "config.toml")
+    assert (tmp_path / "a" / "s" / "best.toml").read_text() in (tmp_path / "a" / "s" / "confirm.toml").read_text()
     tuned = {p.label: p for p in exp.planners}["IACO (tuned)"]
     for k, v in s["best"]["weights"].items():
         assert np.allclose(tuned.overrides[k], v), k

@@ -42,6 +42,8 @@ Study folder ``OUT/NAME`` (``NAME-quick``)::
     best.toml                  the best weights as a ``[[planners]]`` entry (`fragment_toml`)
     confirm.toml               an experiment config: defaults vs tuned on fresh scenarios and seeds (`jaxplan run`)
     page.md                    the results page (also written to ``results/NAME.md`` with ``results``)
+    sessions.json              each session's wall seconds, load averages and generations run (the page's time)
+    confirm.md                 with ``confirm``: the confirmation run's report (the run itself: OUT/NAME_confirm)
 """
 
 from __future__ import annotations
@@ -109,7 +111,8 @@ class StudyTable:
     held_out_count: int = setting("int", None, "held-out scenario rows per map", ge=1,
                                   default_text="the map's rows after the training rows")
     options: Mapping[str, Any] = setting("table", doc="per method, its options: method = { option = value }")
-    confirm_seeds: Any = setting("seeds", None, "trial seeds of the confirmation run (`jaxplan run`): a count or a list",
+    confirm_seeds: Any = setting("seeds", None, "trial seeds of the confirmation run (`jaxplan run`): a count or a "
+                                 "list",
                                  default_text="10 seeds from 5000")
     confirm_count: int = setting("int", 8, "random start-goal pairs per map of the confirmation run", ge=1)
     confirm_scenario_seed: int = setting("int", 1, "the seed the confirmation run draws its pairs with", ge=0)
@@ -404,7 +407,24 @@ def _run_one(cfg: StudyConfig, objective: Objective, method: str, seed: int, fol
         raise RuntimeError(f"{folder.name}: counted {evals[-1] if evals else 0} training evaluations in "
                            f"{len(evals)} generations; the budget is {cfg.budget} in {cfg.generations}")
     return {"rows": res["rows"], "evaluations": evals, "wall_s": walls, "best_x": np.asarray(res["best_x"]),
-            "best_f": res["best_f"]}
+            "best_f": res["best_f"], "new": cfg.generations - res["resumed_from"]}
+
+
+def _sessions(folder: Path, wall: float, load0, generations: int) -> list[dict]:
+    """The study's sessions so far (``sessions.json``), this one appended: wall seconds, load averages, generations
+    run. A folder from before sessions.json takes its first session from summary.json."""
+    path = folder / "sessions.json"
+    sessions: list[dict] = []
+    if path.is_file():
+        sessions = json.loads(path.read_text())
+    elif (folder / "summary.json").is_file():
+        old = json.loads((folder / "summary.json").read_text())
+        sessions = [{"wall_s": old.get("wall_s_this_session", 0.0), "loadavg_start": old.get("loadavg_start"),
+                     "loadavg_end": old.get("loadavg_end"), "generations": None}]
+    sessions.append({"wall_s": wall, "loadavg_start": list(load0), "loadavg_end": list(os.getloadavg()),
+                     "generations": generations})
+    atomic_write(path, json.dumps(sessions, indent=1).encode())
+    return sessions
 
 
 def _t95(n: int) -> float:
@@ -422,13 +442,14 @@ def _stats(v) -> dict:
 
 
 def run_study(config_path, out="runs", quick: bool = False, data_dir=None, progress: bool = True,
-              resume: bool = True, results: str | os.PathLike | None = None) -> Path:
+              resume: bool = True, results: str | os.PathLike | None = None, confirm: bool = False) -> Path:
     """Runs (or resumes) the study config at ``config_path``; returns its folder ``OUT/NAME`` (``NAME-quick``).
 
     Every method runs once per tuner seed with the same counted budget; then the log, summary, figure,
     best.toml, confirm.toml and page.md are written (module docstring). With ``results``, the page, figure,
     best.toml and confirm.toml are copied to ``results/NAME.md``, ``NAME.png``, ``NAME_best.toml`` and
-    ``NAME_confirm.toml``.
+    ``NAME_confirm.toml``. With ``confirm``, the confirmation experiment then runs (`jaxplan run` of confirm.toml,
+    into ``OUT/NAME_confirm``) and its report becomes ``confirm.md`` (and ``results/NAME_confirm.md``).
     """
     cfg = load_study_config(config_path, data_dir=data_dir)
     if quick:
@@ -439,7 +460,35 @@ def run_study(config_path, out="runs", quick: bool = False, data_dir=None, progr
     folder = confined(out, cfg.name + ("-quick" if cfg.is_quick else ""))
     folder.mkdir(parents=True, exist_ok=True)
     with folder_lock(folder):
-        return _run_study(cfg, objective, folder, progress, resume, results, data_dir)
+        _run_study(cfg, objective, folder, progress, resume, results, data_dir)
+    if confirm:
+        _confirm(cfg, folder, out, results, data_dir, progress)
+    return folder
+
+
+def _confirm(cfg: StudyConfig, folder: Path, out, results, data_dir, progress: bool) -> Path:
+    """Runs the study's confirm.toml with `run_experiment` and writes its page (the run's report, introduced)."""
+    from jaxplan.experiments import run_experiment
+
+    t0 = time.perf_counter()
+    load = os.getloadavg()
+    run = run_experiment(folder / "confirm.toml", out, data_dir=data_dir, progress=progress)
+    wall = time.perf_counter() - t0
+    report = (run / "report.md").read_text()
+    head = [f"# Confirmation of tuning study `{cfg.name}`", "",
+            f"The defaults against the tuned weights of [{cfg.name}]({cfg.name}.md) (`{cfg.name}_best.toml`) with "
+            f"`jaxplan run {cfg.name}_confirm.toml` on fresh random start-goal pairs and trial seeds "
+            f"{list(cfg.confirm_seeds)} (neither the tuner nor the held-out split saw them; checked). Regenerate: "
+            f"`jaxplan study {_rel(cfg.path)} --results docs/results/tuning --confirm` (the study resumes from its "
+            f"checkpoints); the confirmation run took {wall / 60:.1f} min wall (load average "
+            f"{', '.join(f'{v:.2f}' for v in load)} at its start).", "",
+            "The run's report follows.", ""]
+    body = report.split("\n", 1)[1] if report.startswith("# ") else report
+    text = "\n".join(head) + body.replace("\n# ", "\n## ")
+    atomic_write(folder / "confirm.md", text.encode())
+    if results is not None:
+        atomic_write(Path(results) / f"{cfg.name}_confirm.md", text.encode())
+    return run
 
 
 def _run_study(cfg: StudyConfig, objective: Objective, folder: Path, progress: bool, resume: bool,
@@ -466,7 +515,10 @@ def _run_study(cfg: StudyConfig, objective: Objective, folder: Path, progress: b
     d_test = held.scores([d])[0]
     d_train = objective.evaluate(np.stack([d] * cfg.population), "train")  # not charged: not part of a search
     wall = time.perf_counter() - t_start
+    sessions = _sessions(folder, wall, load0, sum(r["new"] for r in runs.values()))
     summary = _summary(cfg, objective, runs, d_train, d_test, held, wall, load0)
+    summary["sessions"] = sessions
+    summary["wall_s_total"] = sum(x["wall_s"] for x in sessions)
     atomic_write(folder / "log.csv", _log_csv(cfg, runs, names).encode())
     atomic_write(folder / "summary.json", json.dumps(_json_safe(summary), indent=1, allow_nan=False).encode())
     _figure(cfg, runs, d_test["fitness"], folder / "convergence.png")
@@ -601,7 +653,7 @@ def confirm_config(cfg: StudyConfig, fragment: str, data_dir: str | os.PathLike 
              "[experiment]", f'name = "{cfg.name}_confirm"',
              f'description = "defaults vs tuned {t0.planner} weights of study {cfg.name}, on fresh scenarios"',
              f"seeds = {_toml_value(list(cfg.confirm_seeds))}", ""]
-    for t, m in zip(cfg.tunes, cfg.maps_raw, strict=True):
+    for m in cfg.maps_raw:
         entry = {k: v for k, v in m.items() if k != "scenarios"}
         scen = {"source": "random", "count": cfg.confirm_count, "seed": cfg.confirm_scenario_seed,
                 "min_distance": float(m.get("scenarios", {}).get("min_distance", 8.0))}
@@ -615,7 +667,8 @@ def confirm_config(cfg: StudyConfig, fragment: str, data_dir: str | os.PathLike 
     ov = dict(t0.overrides)
     lines += ["[[planners]]", f'label = "{t0.planner.upper()} (defaults)"', 'kind = "plan"',
               f"name = {_toml_value(t0.planner)}"] + ([f"overrides = {_inline(ov)}"] if ov else []) + [""]
-    text = "\n".join(lines) + fragment
+    text = "\n".join(lines) + fragment + ('\n[stats]\nanova = false\npairwise = true\n'
+                                        'metrics = ["success", "length", "optimality_gap", "turns"]\n')
     exp = parse_config(text, data_dir=data_dir, source=f"{cfg.name}_confirm")
     for spec, t in zip(exp.maps, cfg.tunes, strict=True):  # fresh pairs: none may be a training row
         grid, s0, g0, _ = load_map_spec(spec)
@@ -635,7 +688,9 @@ def _page(cfg: StudyConfig, s: dict, frag: str, results) -> str:
     t0 = cfg.tunes[0]
     cmd = f"jaxplan study {_rel(cfg.path)}" + (" --quick" if cfg.is_quick else "") + \
         " --results docs/results/tuning"
-    load = ", ".join(f"{v:.2f}" for v in s["loadavg_start"])
+    main = max(s["sessions"], key=lambda x: x["wall_s"])
+    load = ", ".join(f"{v:.2f}" for v in (main["loadavg_start"] or s["loadavg_start"]))
+    n_sess = len(s["sessions"])
     gap = {"own": "the gap of the best path's own IACO cost (at the default λ) to its exact own optimum "
                   "(`jaxplan.search.exact_objectives`)",
            "length": "the gap of the best path's length to the shortest path"}[cfg.gap]
@@ -643,9 +698,11 @@ def _page(cfg: StudyConfig, s: dict, frag: str, results) -> str:
     space = ", ".join(f"{n} ∈ [{lo:g}, {hi:g}]" for n, (lo, hi) in s["space"].items())
     dft = s["defaults"]
     lines = [f"# Tuning study `{cfg.name}`" + (" (quick)" if cfg.is_quick else ""), "", s["description"], "",
-             f"Regenerate: `{cmd}` — measured {s['wall_s_this_session'] / 60:.1f} min wall "
-             f"(load average {load} at the start, `nice -n 10`, 2 shared cores; this session's time: a resumed "
-             "study counts only the remainder).", "",
+             f"Regenerate: `{cmd}` (add `--confirm` to run the confirmation too) — measured "
+             f"{s['wall_s_total'] / 60:.1f} min wall in total"
+             + (f" over {n_sess} sessions (the longest {main['wall_s'] / 60:.1f} min; later ones resumed from the "
+                "checkpoints)" if n_sess > 1 else "")
+             + f", at `nice -n 10` on 2 cores shared with other work (load average {load} at the start).", "",
              "## Setup", "",
              f"- Planner: `{t0.planner}` with overrides {_inline(dict(t0.overrides)) if t0.overrides else '{}'}; "
              f"tuned: {space}.",
