@@ -530,7 +530,9 @@ def _run_study(cfg: StudyConfig, objective: Objective, folder: Path, progress: b
     frag = fragment_toml(objective, bx, label=f"{t0.planner.upper()} (tuned)", overrides=dict(t0.overrides),
                          pipeline=t0.pipeline, comment=comment)
     atomic_write(folder / "best.toml", frag.encode())
-    confirm = confirm_config(cfg, frag, data_dir)
+    dflt = None if t0.kind == "aco" else fragment_toml(objective, objective.defaults, label=f"{t0.planner} (defaults)",
+                                                        overrides=dict(t0.overrides), pipeline=t0.pipeline)
+    confirm = confirm_config(cfg, frag, data_dir, dflt)
     atomic_write(folder / "confirm.toml", confirm.encode())
     page = _page(cfg, summary, frag, results)
     atomic_write(folder / "page.md", page.encode())
@@ -630,9 +632,15 @@ def _figure(cfg: StudyConfig, runs: dict, defaults: float, path: Path) -> None:
     plt.close(fig)
 
 
-def confirm_config(cfg: StudyConfig, fragment: str, data_dir: str | os.PathLike | None = None) -> str:
+def confirm_config(cfg: StudyConfig, fragment: str, data_dir: str | os.PathLike | None = None,
+                   defaults: str | None = None) -> str:
     """An experiment config (`jaxplan run`): the defaults against the tuned ``fragment`` on every map of the study,
     on ``confirm_count`` fresh random start-goal pairs per map (``confirm_scenario_seed``) and ``confirm_seeds``.
+
+    ``defaults`` is the defaults' ``[[planners]]`` entry (`fragment_toml` of the objective's defaults); None: the
+    planner by name with the study's overrides (an ACO planner). Navigation kinds are confirmed on the episode
+    metrics (success, time, collisions, path length); moving obstacles, if the study's episodes have them, must be
+    added to the entries by the caller.
 
     Raises:
       ValueError: a confirmation pair that is one of the study's training rows, or seeds that meet the training
@@ -665,10 +673,16 @@ def confirm_config(cfg: StudyConfig, fragment: str, data_dir: str | os.PathLike 
         lines += [f"{k} = {_dump(v)}" for k, v in entry.items()]
         lines.append("")
     ov = dict(t0.overrides)
-    lines += ["[[planners]]", f'label = "{t0.planner.upper()} (defaults)"', 'kind = "plan"',
-              f"name = {_toml_value(t0.planner)}"] + ([f"overrides = {_inline(ov)}"] if ov else []) + [""]
-    text = "\n".join(lines) + fragment + ('\n[stats]\nanova = false\npairwise = true\n'
-                                        'metrics = ["success", "length", "optimality_gap", "turns"]\n')
+    if defaults is None:
+        lines += ["[[planners]]", f'label = "{t0.planner.upper()} (defaults)"', 'kind = "plan"',
+                  f"name = {_toml_value(t0.planner)}"] + ([f"overrides = {_inline(ov)}"] if ov else []) + [""]
+    else:
+        lines += [defaults]
+    tested = '["success", "length", "optimality_gap", "turns"]' if t0.kind == "aco" else \
+        '["success", "time_s", "collisions", "path_length"]'
+    if t0.kind != "aco":
+        lines = [ln if not ln.startswith("metrics = ") else f"metrics = {tested}" for ln in lines]
+    text = "\n".join(lines) + fragment + f"\n[stats]\nanova = false\npairwise = true\nmetrics = {tested}\n"
     exp = parse_config(text, data_dir=data_dir, source=f"{cfg.name}_confirm")
     for spec, t in zip(exp.maps, cfg.tunes, strict=True):  # fresh pairs: none may be a training row
         grid, s0, g0, _ = load_map_spec(spec)
