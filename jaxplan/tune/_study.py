@@ -475,15 +475,20 @@ def _confirm(cfg: StudyConfig, folder: Path, out, results, data_dir, progress: b
     run = run_experiment(folder / "confirm.toml", out, data_dir=data_dir, progress=progress)
     wall = time.perf_counter() - t0
     report = (run / "report.md").read_text()
+    chunks = json.loads((run / "checkpoints" / "manifest.json").read_text())["chunks"].values()
+    calls = sum(float(c.get("compile_s", 0.0)) + float(c.get("time_s", 0.0)) for c in chunks)
     head = [f"# Confirmation of tuning study `{cfg.name}`", "",
             f"The defaults against the tuned weights of [{cfg.name}]({cfg.name}.md) (`{cfg.name}_best.toml`) with "
             f"`jaxplan run {cfg.name}_confirm.toml` on fresh random start-goal pairs and trial seeds "
             f"{list(cfg.confirm_seeds)} (neither the tuner nor the held-out split saw them; checked). Regenerate: "
             f"`jaxplan study {_rel(cfg.path)} --results docs/results/tuning --confirm` (the study resumes from its "
-            f"checkpoints); the confirmation run took {wall / 60:.1f} min wall (load average "
-            f"{', '.join(f'{v:.2f}' for v in load)} at its start).", "",
+            f"checkpoints); the confirmation run's batched calls took {calls:.0f} s (compilation included; "
+            f"this session {wall:.0f} s wall, load average {', '.join(f'{v:.2f}' for v in load)} at its start; a "
+            "finished run is only read again).", "",
             "The run's report follows.", ""]
     body = report.split("\n", 1)[1] if report.startswith("# ") else report
+    if cfg.gap == "own":
+        head += own_gap_table(cfg, run, data_dir) + [""]
     text = "\n".join(head) + body.replace("\n# ", "\n## ")
     atomic_write(folder / "confirm.md", text.encode())
     if results is not None:
@@ -694,6 +699,59 @@ def confirm_config(cfg: StudyConfig, fragment: str, data_dir: str | os.PathLike 
     return text
 
 
+def own_gap_table(cfg: StudyConfig, run: Path, data_dir=None) -> list[str]:
+    """Markdown lines: the confirmation run's own-objective gap at the DEFAULT weights, per map and planner.
+
+    The run's own ``objective_gap`` metric would cost each planner's paths with that planner's weights (the tuned
+    λ for the tuned entry); the study's yardstick is the default-weight cost, so it is computed here from the run's
+    stored paths (`jaxplan.search.path_objectives` over `jaxplan.search.exact_objectives`). Per seed the mean over
+    the successful trials, then mean ± sd over seeds; Welch's t-test between the two planners per map."""
+    from scipy.stats import ttest_ind
+
+    from jaxplan.experiments import load_chunk_arrays, load_map_spec
+    from jaxplan.experiments.config import load_config
+    from jaxplan.search import exact_objectives, path_objectives
+
+    t0 = cfg.tunes[0]
+    weights = dict(t0.overrides)
+    exp = load_config(run / "config.toml", data_dir=data_dir)
+    grids = {m.name: load_map_spec(m)[0] for m in exp.maps}
+    man = json.loads((run / "checkpoints" / "manifest.json").read_text())
+    per: dict[tuple[str, str], list[np.ndarray]] = {}
+    for uid, ch in sorted(man["chunks"].items()):
+        a = load_chunk_arrays(run, uid, ch.get("arrays_sha256"))
+        paths, n, ok = np.asarray(a["paths"]), np.asarray(a["n_cells"]), np.asarray(a["success"], bool)
+        S, R = ok.shape
+        g = grids[ch["map"]]
+        flat_p, flat_n = paths.reshape(S * R, *paths.shape[2:]).astype(np.int64), n.reshape(-1)
+        cost = np.full(S * R, np.nan)
+        good = ok.reshape(-1) & (flat_n >= 2)
+        cost[good] = path_objectives(flat_p[good], flat_n[good], g, t0.planner, **weights)
+        r = np.argmax(n, axis=1)  # a seed whose path reached the goal (scenario ends are the same for every seed)
+        starts, goals = paths[np.arange(S), r, 0], paths[np.arange(S), r, np.maximum(n[np.arange(S), r] - 1, 0)]
+        opt = exact_objectives(g, starts, goals, t0.planner, **weights)
+        gap = cost.reshape(S, R) / opt[:, None] - 1.0
+        per.setdefault((ch["map"], ch["planner"]), []).append(gap)
+    lines = ["## Own-objective gap at the default weights", "",
+             f"The study's yardstick on the confirmation trials: each path's {t0.planner.upper()} cost at the default "
+             "weights over that cost's exact optimum, minus 1 (successful trials; per seed the mean over scenarios, "
+             "then mean ± sd over seeds; Welch's t-test over the per-seed means).", "",
+             "| map | planner | own-objective gap | vs defaults: t | p |", "|---|---|---:|---:|---:|"]
+    for m in grids:
+        seeds = {}
+        for (mp, pl), parts in per.items():
+            if mp == m:
+                seeds[pl] = np.nanmean(np.concatenate(parts, axis=0), axis=0)
+        ref = next((v for k, v in seeds.items() if k.endswith("(defaults)")), None)
+        for pl, v in seeds.items():
+            test = ("–", "–")
+            if ref is not None and v is not ref:
+                t, pv = ttest_ind(ref, v, equal_var=False)
+                test = (f"{t:.3g}", f"{pv:.3g}")
+            lines.append(f"| {m} | {pl} | {np.mean(v):.4f} ± {np.std(v, ddof=1):.4f} | {test[0]} | {test[1]} |")
+    return lines
+
+
 def _fmt(v: float, d: int = 4) -> str:
     return f"{v:.{d}f}" if isinstance(v, float) and math.isfinite(v) else "–"
 
@@ -705,6 +763,7 @@ def _page(cfg: StudyConfig, s: dict, frag: str, results) -> str:
     main = max(s["sessions"], key=lambda x: x["wall_s"])
     load = ", ".join(f"{v:.2f}" for v in (main["loadavg_start"] or s["loadavg_start"]))
     n_sess = len(s["sessions"])
+    load_end = ", ".join(f"{v:.2f}" for v in (main["loadavg_end"] or s["loadavg_end"]))
     gap = {"own": "the gap of the best path's own IACO cost (at the default λ) to its exact own optimum "
                   "(`jaxplan.search.exact_objectives`)",
            "length": "the gap of the best path's length to the shortest path"}[cfg.gap]
@@ -716,7 +775,8 @@ def _page(cfg: StudyConfig, s: dict, frag: str, results) -> str:
              f"{s['wall_s_total'] / 60:.1f} min wall in total"
              + (f" over {n_sess} sessions (the longest {main['wall_s'] / 60:.1f} min; later ones resumed from the "
                 "checkpoints)" if n_sess > 1 else "")
-             + f", at `nice -n 10` on 2 cores shared with other work (load average {load} at the start).", "",
+             + f", at `nice -n 10` on 2 cores shared with other work (1-, 5-, 15-min load averages {load} at the "
+             f"start and {load_end} at the end of the longest session).", "",
              "## Setup", "",
              f"- Planner: `{t0.planner}` with overrides {_inline(dict(t0.overrides)) if t0.overrides else '{}'}; "
              f"tuned: {space}.",
@@ -730,8 +790,9 @@ def _page(cfg: StudyConfig, s: dict, frag: str, results) -> str:
              "otherwise).",
              f"- Budget: {cfg.budget} training evaluations (weight vectors) per method and tuner seed, counted by "
              f"the objective wrapper ({cfg.population} per generation × {cfg.generations} generations); "
-             f"{len(cfg.tuner_seeds)} tuner seeds {list(cfg.tuner_seeds)}. Every strategy starts from the "
-             "defaults. Held-out evaluations are not charged.", "",
+             f"{len(cfg.tuner_seeds)} tuner seeds {list(cfg.tuner_seeds)}. The strategies that take a starting "
+             "point begin from the defaults (`tune_loop`'s x0); grid and random search cover the box (the grid is "
+             "the same for every tuner seed). Held-out evaluations are not charged.", "",
              "## Results", "",
              "Train = the best training cost the tuner found (the minimum over its evaluations, so optimistic); "
              "held-out = the cost of those same weights on the held-out split. Mean ± sd over tuner seeds, "
