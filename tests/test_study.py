@@ -178,3 +178,13 @@ def test_study_log_budget_best_toml_and_resume(tmp_path, monkeypatch):
     with open(run / "trials.csv", newline="") as f:
         planners = {r["planner"] for r in csv.DictReader(f)}
     assert planners == {"IACO (defaults)", "IACO (tuned)"}
+
+
+def test_the_study_command_lists_every_config_problem_before_any_work(tmp_path, capsys):
+    from jaxplan.cli import main
+
+    bad = _write(tmp_path, STUDY.replace("budget = 8", "budget = 1").replace('gap = "own"', 'gap = "mine"'))
+    assert main(["study", str(bad), "--out", str(tmp_path / "runs")]) == 2
+    err = capsys.readouterr().err
+    assert "study.budget" in err and "study.gap" in err
+    assert not (tmp_path / "runs").exists()
