@@ -745,10 +745,11 @@ def own_gap_table(cfg: StudyConfig, run: Path, data_dir=None) -> list[str]:
         ref = next((v for k, v in seeds.items() if k.endswith("(defaults)")), None)
         for pl, v in seeds.items():
             test = ("–", "–")
-            if ref is not None and v is not ref:
+            if ref is not None and v is not ref and len(v) > 1:
                 t, pv = ttest_ind(ref, v, equal_var=False)
                 test = (f"{t:.3g}", f"{pv:.3g}")
-            lines.append(f"| {m} | {pl} | {np.mean(v):.4f} ± {np.std(v, ddof=1):.4f} | {test[0]} | {test[1]} |")
+            sd = f"{np.std(v, ddof=1):.4f}" if len(v) > 1 else "–"  # one seed has no spread
+            lines.append(f"| {m} | {pl} | {np.mean(v):.4f} ± {sd} | {test[0]} | {test[1]} |")
     return lines
 
 
