@@ -1,4 +1,4 @@
-"""Command line: ``jaxplan demo | plan | navigate | run | figures | export | reproduce | tune | bench``.
+"""Command line: ``jaxplan demo | plan | navigate | run | figures | export | reproduce | tune | study | bench``.
 
 ``jaxplan --help`` and every ``jaxplan CMD --help`` answer without importing JAX or numba: this
 module imports only the standard library at the top, and each command imports what it needs.
@@ -367,6 +367,18 @@ def cmd_tune(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_study(args: argparse.Namespace) -> int:
+    """``jaxplan study CONFIG``: run (or resume) a tuning study; writes OUT/NAME/ with its log, figure and page."""
+    from jaxplan.tune import run_study
+
+    folder = run_study(args.config, out=args.out, quick=args.quick, data_dir=args.data_dir,
+                       progress=not args.no_progress, resume=not args.no_resume, results=args.results,
+                       confirm=args.confirm)
+    print(f"wrote {folder}/ (log.csv, summary.json, convergence.png, best.toml, confirm.toml, page.md"
+          + (", confirm.md)" if args.confirm else ")"))
+    return 0
+
+
 def cmd_bench(args: argparse.Namespace) -> int:
     """``jaxplan bench``: the checkout's benchmarks/run_all.py (every benchmark, one table, JSON)."""
     import subprocess
@@ -477,6 +489,19 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--no-resume", action="store_true", help="start afresh instead of resuming from the last checkpoint")
     t.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
     t.set_defaults(func=cmd_tune)
+    st = sub.add_parser("study", help="a tuning study: every method at an equal counted budget, judged on held-out "
+                                      "scenarios (resumable); writes OUT/NAME/")
+    st.add_argument("config", help="study config (TOML: a tuning config plus [study]; jaxplan.tune._study)")
+    st.add_argument("--quick", action="store_true", help="apply [study.quick] and [tune.quick] (OUT/NAME-quick/)")
+    st.add_argument("--out", default="runs", help="parent folder of the study folder (default: runs)")
+    st.add_argument("--data-dir", default=None, help="folder that map paths are relative to")
+    st.add_argument("--results", default=None, help="also write the page, figure, best.toml and confirm.toml here "
+                                                    "(e.g. docs/results/tuning)")
+    st.add_argument("--confirm", action="store_true", help="then run confirm.toml (defaults vs tuned on fresh "
+                                                             "scenarios) with `jaxplan run` and write its page")
+    st.add_argument("--no-resume", action="store_true", help="start afresh instead of resuming")
+    st.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
+    st.set_defaults(func=cmd_study)
     b = sub.add_parser("bench", help="every benchmark of the library in one table (benchmarks/run_all.py; "
                                      "options after --, e.g. jaxplan bench -- --quick)")
     b.add_argument("rest", nargs=argparse.REMAINDER, help="options of benchmarks/run_all.py")

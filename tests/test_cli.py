@@ -11,7 +11,7 @@ import pytest
 
 from jaxplan.cli import build_parser, main
 
-COMMANDS = ("demo", "plan", "navigate", "run", "figures", "export", "reproduce", "tune", "bench")
+COMMANDS = ("demo", "plan", "navigate", "run", "figures", "export", "reproduce", "tune", "study", "bench")
 
 
 def test_every_command_is_listed():

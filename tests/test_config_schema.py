@@ -22,7 +22,7 @@ from jaxplan.experiments.config import (
     parse_config,
 )
 from jaxplan.experiments.schema import Reader, setting, settings
-from jaxplan.tune import TuneFile
+from jaxplan.tune import StudyFile, TuneFile
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = sorted((ROOT / "configs").glob("*.toml"))
@@ -59,7 +59,8 @@ def test_check_mode_names_a_stale_file_and_writes_nothing(tmp_path):
 @pytest.mark.parametrize("path", CONFIGS, ids=[p.stem for p in CONFIGS])
 def test_every_config_validates_against_its_json_schema(path):
     jsonschema = pytest.importorskip("jsonschema")
-    name = "tune.schema.json" if path.name.startswith("tune_") else "experiment.schema.json"
+    name = {"tune": "tune.schema.json", "study": "study.schema.json"}.get(path.name.split("_")[0],
+                                                                          "experiment.schema.json")
     s = json.loads((ROOT / "configs" / "schema" / name).read_text())
     jsonschema.Draft7Validator.check_schema(s)
     errors = [f"{'/'.join(map(str, e.absolute_path))}: {e.message}"
@@ -82,7 +83,7 @@ def test_the_json_schema_flags_what_an_editor_should():
 # Declared once
 
 
-@pytest.mark.parametrize("root", [ExperimentFile, TuneFile])
+@pytest.mark.parametrize("root", [ExperimentFile, TuneFile, StudyFile])
 def test_every_key_has_a_type_and_a_one_line_doc(root):
     for cls in _sections(root):
         for s in settings(cls) + ((schema.extra_setting(cls),) if schema.extra_setting(cls) else ()):

@@ -13,6 +13,8 @@ optimisers.
   `relaxed_dwa` differentiates softmax-DWA episodes through `lax.scan` with optax.
 * `_strategies`: the registry of strategies by name (`STRATEGY_SPECS`, `make_strategy`), used by
   configs, the workflow and the benchmarks.
+* `_composite`, `_study`: objectives of objectives (a colony's own-objective gap, several maps at once) and
+  tuning studies (`run_study`: every method at an equal counted budget, judged on held-out scenarios).
 * `_config`, `_workflow`: TOML tuning configs (schema: `TuneFile`) and `run_tuning` (progress, CSV log, orbax
   checkpoints with exact resume, best weights as a ``[[planners]]`` fragment, convergence figure).
 
@@ -24,6 +26,7 @@ Example::
 
 from jaxplan.tune._base import Strategy, sanitize
 from jaxplan.tune._bounds import Bounds, clip, from_unit, make_bounds, reflect, to_unit
+from jaxplan.tune._composite import aco_own_objective, check_disjoint, concat_objectives, path_costs
 from jaxplan.tune._config import TuneConfig, TuneFile, apply_tune_quick, load_tune_config, parse_tune_config
 from jaxplan.tune._evosax import cma_es, snes
 from jaxplan.tune._gradients import (
@@ -67,6 +70,17 @@ from jaxplan.tune._strategies import (
     option_problems,
     strategy_options,
 )
+from jaxplan.tune._study import (
+    CountedObjective,
+    StudyConfig,
+    StudyFile,
+    apply_study_quick,
+    build_study_objective,
+    confirm_config,
+    load_study_config,
+    parse_study_config,
+    run_study,
+)
 from jaxplan.tune._workflow import (
     TuneResult,
     build_objective,
@@ -89,4 +103,7 @@ __all__ = [
     "build_objective",
     "compare", "fragment_toml", "plot_tuning", "run_tuning", "tune_loop",
     "SparrowState", "adaptive_weight", "issa", "levy", "ssa",
+    "aco_own_objective", "check_disjoint", "concat_objectives", "path_costs",
+    "CountedObjective", "StudyConfig", "StudyFile", "apply_study_quick", "build_study_objective", "confirm_config",
+    "load_study_config", "parse_study_config", "run_study",
 ]
