@@ -31,6 +31,7 @@ from jaxplan.grid._generators import (
 )
 from jaxplan.grid._graph import SearchGraph, distance_from, search_graph, shortest_lengths, shortest_path
 from jaxplan.grid._gridmap import GridMap, check_cell, check_cells, grid_from_array, passable
+from jaxplan.grid._heap import heap_pop, heap_push
 from jaxplan.grid._movingai import (
     Scenarios,
     load_movingai_map,
@@ -60,5 +61,5 @@ __all__ = [
     "MountainGenerator", "RandomMapGenerator", "Scene", "UrbanGenerator", "WarehouseGenerator", "as_rng",
     "demo_warehouse", "poisson_risk", "warehouse_chen2023", "warehouse_yu2020",
     "is_ros_map", "load_movingai_map", "save_movingai_map", "load_ros_map", "save_ros_map", "read_ros_yaml",
-    "read_pgm", "occupancy_values", "resample", "resampled_shape", "state_cost_to_go",
+    "read_pgm", "occupancy_values", "resample", "resampled_shape", "state_cost_to_go", "heap_pop", "heap_push",
 ]

@@ -28,46 +28,10 @@ from numba import njit
 from numpy.typing import ArrayLike
 
 from jaxplan.grid._gridmap import GridMap, check_cells, passable
+from jaxplan.grid._heap import heap_pop, heap_push
 from jaxplan.grid._neighbours import neighbour_table
 
 __all__ = ["state_cost_to_go"]
-
-
-@njit(cache=True, nogil=True)
-def _push(hf, hv, size, f, v):
-    i = size
-    while i > 0:
-        p = (i - 1) >> 1
-        if hf[p] <= f:
-            break
-        hf[i] = hf[p]
-        hv[i] = hv[p]
-        i = p
-    hf[i] = f
-    hv[i] = v
-    return size + 1
-
-
-@njit(cache=True, nogil=True)
-def _pop(hf, hv, size):
-    size -= 1
-    f = hf[size]
-    v = hv[size]
-    i = 0
-    while True:
-        c = 2 * i + 1
-        if c >= size:
-            break
-        if c + 1 < size and hf[c + 1] < hf[c]:
-            c += 1
-        if hf[c] >= f:
-            break
-        hf[i] = hf[c]
-        hv[i] = hv[c]
-        i = c
-    hf[i] = f
-    hv[i] = v
-    return size
 
 
 @njit(cache=True, nogil=True)
@@ -90,10 +54,10 @@ def _backward(index, valid, offsets, step, angle, right, cell, turn_rule, w_len,
     size = 0
     for k in range(K):
         out[target, k] = 0.0
-        size = _push(hf, hv, size, 0.0, target * K + k)
+        size = heap_push(hf, hv, size, 0.0, target * K + k)
     while size > 0:
         t = hv[0]
-        size = _pop(hf, hv, size)
+        size = heap_pop(hf, hv, size)
         if closed[t]:
             continue
         closed[t] = True
@@ -129,7 +93,7 @@ def _backward(index, valid, offsets, step, angle, right, cell, turn_rule, w_len,
                     hv2[:size] = hv
                     hf = hf2
                     hv = hv2
-                size = _push(hf, hv, size, cost, s)
+                size = heap_push(hf, hv, size, cost, s)
 
 
 @njit(cache=True, nogil=True)

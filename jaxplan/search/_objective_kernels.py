@@ -31,6 +31,8 @@ import numba
 import numpy as np
 from numba import njit
 
+from jaxplan.grid import heap_pop, heap_push
+
 H_NONE, H_MANHATTAN, H_OCTILE, H_EUCLID = 0, 1, 2, 3
 _SQRT2M1 = math.sqrt(2.0) - 1.0
 
@@ -47,45 +49,6 @@ def _h(kind, x, y, tx, ty):
     if kind == H_EUCLID:
         return math.sqrt(float(dx * dx + dy * dy))
     return 0.0
-
-
-@njit(cache=True, nogil=True)
-def _push(hf, hv, size, f, v):
-    """Binary-heap insert keyed by ``f``. Returns the new size."""
-    i = size
-    while i > 0:
-        p = (i - 1) >> 1
-        if hf[p] <= f:
-            break
-        hf[i] = hf[p]
-        hv[i] = hv[p]
-        i = p
-    hf[i] = f
-    hv[i] = v
-    return size + 1
-
-
-@njit(cache=True, nogil=True)
-def _pop(hf, hv, size):
-    """Removes the root (read it first). Returns the new size."""
-    size -= 1
-    f = hf[size]
-    v = hv[size]
-    i = 0
-    while True:
-        c = 2 * i + 1
-        if c >= size:
-            break
-        if c + 1 < size and hf[c + 1] < hf[c]:
-            c += 1
-        if hf[c] >= f:
-            break
-        hf[i] = hf[c]
-        hv[i] = hv[c]
-        i = c
-    hf[i] = f
-    hv[i] = v
-    return size
 
 
 @njit(cache=True, nogil=True)
@@ -116,11 +79,11 @@ def state_search(index, valid, step, angle, right, cell, turn_rule, w_len, w_ang
     hv = np.empty(1024, np.int64)
     g[s0] = cell[source]
     parent[s0] = -1
-    size = _push(hf, hv, 0, g[s0] + h_scale * _h(hkind, source % width, source // width, tx, ty), s0)
+    size = heap_push(hf, hv, 0, g[s0] + h_scale * _h(hkind, source % width, source // width, tx, ty), s0)
     expanded = 0
     while size > 0:
         s = hv[0]
-        size = _pop(hf, hv, size)
+        size = heap_pop(hf, hv, size)
         if closed[s]:
             continue
         closed[s] = True
@@ -158,7 +121,7 @@ def state_search(index, valid, step, angle, right, cell, turn_rule, w_len, w_ang
                     hv2[:size] = hv
                     hf = hf2
                     hv = hv2
-                size = _push(hf, hv, size, cost + h_scale * _h(hkind, v % width, v // width, tx, ty), t)
+                size = heap_push(hf, hv, size, cost + h_scale * _h(hkind, v % width, v // width, tx, ty), t)
     return np.inf, -1, expanded
 
 
