@@ -31,7 +31,6 @@ from jaxplan.grid._generators import (
 )
 from jaxplan.grid._graph import SearchGraph, distance_from, search_graph, shortest_lengths, shortest_path
 from jaxplan.grid._gridmap import GridMap, check_cell, check_cells, grid_from_array, passable
-from jaxplan.grid._heap import heap_pop, heap_push
 from jaxplan.grid._movingai import (
     Scenarios,
     load_movingai_map,
@@ -50,6 +49,7 @@ from jaxplan.grid._neighbours import (
 )
 from jaxplan.grid._resample import resample, resampled_shape
 from jaxplan.grid._ros import load_ros_map, occupancy_values, read_pgm, read_ros_yaml, save_ros_map
+from jaxplan.grid._search_parts import H_EUCLID, H_MANHATTAN, H_NONE, H_OCTILE, cell_heuristic, heap_pop, heap_push
 
 __all__ = [
     "CONNECTIVITIES", "GridMap", "Neighbours", "Scenarios", "check_cell", "check_cells", "check_connectivity",
@@ -61,5 +61,7 @@ __all__ = [
     "MountainGenerator", "RandomMapGenerator", "Scene", "UrbanGenerator", "WarehouseGenerator", "as_rng",
     "demo_warehouse", "poisson_risk", "warehouse_chen2023", "warehouse_yu2020",
     "is_ros_map", "load_movingai_map", "save_movingai_map", "load_ros_map", "save_ros_map", "read_ros_yaml",
-    "read_pgm", "occupancy_values", "resample", "resampled_shape", "state_cost_to_go", "heap_pop", "heap_push",
+    "read_pgm", "occupancy_values", "resample", "resampled_shape", "state_cost_to_go",
+    "heap_pop", "heap_push", "cell_heuristic", "H_NONE", "H_MANHATTAN", "H_OCTILE",
+    "H_EUCLID",
 ]

@@ -28,8 +28,8 @@ from numba import njit
 from numpy.typing import ArrayLike
 
 from jaxplan.grid._gridmap import GridMap, check_cells, passable
-from jaxplan.grid._heap import heap_pop, heap_push
 from jaxplan.grid._neighbours import neighbour_table
+from jaxplan.grid._search_parts import heap_pop, heap_push
 
 __all__ = ["state_cost_to_go"]
 

@@ -20,10 +20,11 @@ from jaxplan.core.cache import digest, memoize
 from jaxplan.grid import _kernels as K
 from jaxplan.grid._gridmap import GridMap, check_cell, check_cells, passable
 from jaxplan.grid._neighbours import Neighbours, neighbour_table
+from jaxplan.grid._search_parts import H_EUCLID, H_MANHATTAN, H_NONE, H_OCTILE
 
 __all__ = ["SearchGraph", "search_graph", "shortest_path", "shortest_lengths", "distance_from"]
 
-_HEURISTIC = {4: K.H_MANHATTAN, 8: K.H_OCTILE, 16: K.H_EUCLID}
+_HEURISTIC = {4: H_MANHATTAN, 8: H_OCTILE, 16: H_EUCLID}
 
 
 class SearchGraph(NamedTuple):
@@ -89,7 +90,7 @@ def shortest_path(
     s = check_cell(grid, start, "start", graph.passable)
     g = check_cell(grid, goal, "goal", graph.passable)
     W = grid.width
-    hkind = _HEURISTIC[graph.moves.connectivity] if heuristic else K.H_NONE
+    hkind = _HEURISTIC[graph.moves.connectivity] if heuristic else H_NONE
     dist, parent, expanded = K.path_search(
         graph.moves.index, graph.moves.valid, graph.step_cells, W,
         s[1] * W + s[0], g[1] * W + g[0], hkind, graph.capacity,

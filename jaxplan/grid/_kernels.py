@@ -16,30 +16,16 @@ distance, so one search from a source serves several targets.
 
 from __future__ import annotations
 
-import math
 from concurrent.futures import ThreadPoolExecutor
 
 import numba
 import numpy as np
 from numba import njit
 
-H_NONE, H_MANHATTAN, H_OCTILE, H_EUCLID = 0, 1, 2, 3
-_SQRT2M1 = math.sqrt(2.0) - 1.0
+from jaxplan.grid._search_parts import H_NONE, cell_heuristic
+
 # Up to this many targets the heuristic is the minimum over targets; beyond, plain Dijkstra.
 _MAX_HEURISTIC_TARGETS = 8
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _h(kind, x, y, tx, ty):
-    dx = abs(x - tx)
-    dy = abs(y - ty)
-    if kind == H_MANHATTAN:
-        return float(dx + dy)
-    if kind == H_OCTILE:
-        return float(max(dx, dy)) + _SQRT2M1 * float(min(dx, dy))
-    if kind == H_EUCLID:
-        return math.sqrt(float(dx * dx + dy * dy))
-    return 0.0
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -123,7 +109,7 @@ def _search(index, valid, step, width, source, targets, hkind, stamp, g, seen, c
     if use_h:
         h0 = np.inf
         for t in range(n_t):
-            h0 = min(h0, _h(hkind, sx, sy, tx[t], ty[t]))
+            h0 = min(h0, cell_heuristic(hkind, sx, sy, tx[t], ty[t]))
     g[source] = 0.0
     seen[source] = stamp
     parent[source] = source
@@ -159,7 +145,7 @@ def _search(index, valid, step, width, source, targets, hkind, stamp, g, seen, c
                     vx = v - vy * width
                     hv_ = np.inf
                     for t in range(n_t):
-                        hv_ = min(hv_, _h(hkind, vx, vy, tx[t], ty[t]))
+                        hv_ = min(hv_, cell_heuristic(hkind, vx, vy, tx[t], ty[t]))
                 size = _push(hf, hg, hv, size, gv + hv_, gv, v)
     for t in range(n_t):
         c = targets[t]

@@ -51,6 +51,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from jaxplan.grid import (
+    H_EUCLID,
+    H_MANHATTAN,
+    H_OCTILE,
     GridMap,
     check_cell,
     check_cells,
@@ -75,7 +78,7 @@ _REFUSED = {
     "rrt_star": "it plans in continuous space (a polyline of samples), not over grid moves and turns",
     "mrbs_rrt": "it plans in continuous space (a polyline of samples), not over grid moves and turns",
 }
-_HEURISTIC = {4: OK.H_MANHATTAN, 8: OK.H_OCTILE, 16: OK.H_EUCLID}
+_HEURISTIC = {4: H_MANHATTAN, 8: H_OCTILE, 16: H_EUCLID}
 
 
 class NonAdditiveCost(ValueError):

@@ -24,31 +24,13 @@ cached on disk, GIL released, so batches of queries run on threads.
 
 from __future__ import annotations
 
-import math
 from concurrent.futures import ThreadPoolExecutor
 
 import numba
 import numpy as np
 from numba import njit
 
-from jaxplan.grid import heap_pop, heap_push
-
-H_NONE, H_MANHATTAN, H_OCTILE, H_EUCLID = 0, 1, 2, 3
-_SQRT2M1 = math.sqrt(2.0) - 1.0
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _h(kind, x, y, tx, ty):
-    """Lower bound of the remaining length in cells (consistent for the connectivity's moves)."""
-    dx = abs(x - tx)
-    dy = abs(y - ty)
-    if kind == H_MANHATTAN:
-        return float(dx + dy)
-    if kind == H_OCTILE:
-        return float(max(dx, dy)) + _SQRT2M1 * float(min(dx, dy))
-    if kind == H_EUCLID:
-        return math.sqrt(float(dx * dx + dy * dy))
-    return 0.0
+from jaxplan.grid import cell_heuristic, heap_pop, heap_push
 
 
 @njit(cache=True, nogil=True)
@@ -79,7 +61,7 @@ def state_search(index, valid, step, angle, right, cell, turn_rule, w_len, w_ang
     hv = np.empty(1024, np.int64)
     g[s0] = cell[source]
     parent[s0] = -1
-    size = heap_push(hf, hv, 0, g[s0] + h_scale * _h(hkind, source % width, source // width, tx, ty), s0)
+    size = heap_push(hf, hv, 0, g[s0] + h_scale * cell_heuristic(hkind, source % width, source // width, tx, ty), s0)
     expanded = 0
     while size > 0:
         s = hv[0]
@@ -121,7 +103,7 @@ def state_search(index, valid, step, angle, right, cell, turn_rule, w_len, w_ang
                     hv2[:size] = hv
                     hf = hf2
                     hv = hv2
-                size = heap_push(hf, hv, size, cost + h_scale * _h(hkind, v % width, v // width, tx, ty), t)
+                size = heap_push(hf, hv, size, cost + h_scale * cell_heuristic(hkind, v % width, v // width, tx, ty), t)
     return np.inf, -1, expanded
 
 
