@@ -18,10 +18,12 @@ from jaxplan.mppi import (
     MPPIConfig,
     clamp_controls,
     default_params,
+    fixed_rows,
     initial_sequence,
     mppi_control,
     shift,
 )
+from jaxplan.mppi import _core as mppi_core
 from jaxplan.mppi import _critics as C
 
 CFG = MPPIConfig(samples=128)
@@ -262,3 +264,31 @@ def test_noise_is_standard_normal_and_keyed():
     b = np.asarray(gaussian(jax.random.key(4), (4096,)))
     np.testing.assert_array_equal(a, np.asarray(gaussian(jax.random.key(3), (4096,))))
     assert abs(np.corrcoef(a, b)[0, 1]) < 0.05 and len(set(a.tolist()) & set(b.tolist())) < 10
+
+
+def _drive_from_the_wall(corridor, steps: int = 40) -> tuple[float, float]:
+    """A robot at rest 0.31 m from the corridor's wall, facing it, its sub-goal along the corridor: ``(distance
+    made along the corridor, least clearance)`` after ``steps`` MPPI steps."""
+    _, table = corridor
+    state = jnp.array([3.0, 1.31, -1.2, 0.0, 0.0], jnp.float32)
+    goal = jnp.array([15.5, 1.5])
+    f = jax.jit(lambda s, m, k: mppi_control(table, CFG, PARAMS, s, m, k, goal))
+    mean = initial_sequence(CFG, state)
+    least = np.inf
+    for i in range(steps):
+        u, info = f(state, mean, jax.random.key(i))
+        state = jp.dwa.advance(state, u, CFG.period)
+        mean = shift(info.sequence)
+        least = min(least, float(jp.dwa.static_clearance(table, state[0:1], state[1:2])[0]))
+    return float(state[0]) - 3.0, least
+
+
+def test_a_robot_at_rest_facing_a_wall_turns_in_place_and_drives_on(corridor, monkeypatch):
+    """Every sequence that drives first would bring the robot inside d_safe; the turn-in-place candidate (row
+    `TURN_ROW`) turns it towards the sub-goal, and then it drives. Without the candidate it stands."""
+    made, least = _drive_from_the_wall(corridor)
+    assert made >= 2.0 and least >= CFG.d_safe - 1e-3, (made, least)
+    assert fixed_rows(CFG) == 3 and fixed_rows(CFG.replace(robot=Ackermann())) == 2
+    monkeypatch.setattr(mppi_core, "fixed_rows", lambda config: 2)
+    made, _ = _drive_from_the_wall(corridor)
+    assert made < 0.5, made

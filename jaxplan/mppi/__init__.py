@@ -24,13 +24,22 @@ Pure core, for episodes::
 """
 
 from jaxplan.mppi._config import CRITICS, MPPIConfig, MPPIParams, default_params
-from jaxplan.mppi._core import BRAKE_ROW, MEAN_ROW, MPPIInfo, initial_sequence, mppi_control, shift
+from jaxplan.mppi._core import (
+    BRAKE_ROW,
+    MEAN_ROW,
+    TURN_ROW,
+    MPPIInfo,
+    fixed_rows,
+    initial_sequence,
+    mppi_control,
+    shift,
+)
 from jaxplan.mppi._critics import Context, Terms
 from jaxplan.mppi._rollout import Sequences, clamp_controls, rollout
 from jaxplan.mppi._step import mppi_step, validate_config, validate_params
 
 __all__ = [
-    "BRAKE_ROW", "CRITICS", "Context", "MEAN_ROW", "MPPIConfig", "MPPIInfo", "MPPIParams", "Sequences", "Terms",
-    "clamp_controls", "default_params", "initial_sequence", "mppi_control", "mppi_step", "rollout",
-    "shift", "validate_config", "validate_params",
+    "BRAKE_ROW", "CRITICS", "Context", "MEAN_ROW", "MPPIConfig", "MPPIInfo", "MPPIParams", "Sequences", "TURN_ROW",
+    "Terms", "clamp_controls", "default_params", "fixed_rows", "initial_sequence", "mppi_control", "mppi_step",
+    "rollout", "shift", "validate_config", "validate_params",
 ]

@@ -26,7 +26,7 @@ from jaxplan.dwa import CLEARANCE_MODES, DWAConfig, as_obstacles, obstacles_to_l
 from jaxplan.dwa import validate_config as validate_dwa_config
 from jaxplan.grid import GridMap
 from jaxplan.mppi._config import MPPIConfig, MPPIParams, default_params
-from jaxplan.mppi._core import MPPIInfo, mppi_control, shift
+from jaxplan.mppi._core import MPPIInfo, fixed_rows, mppi_control, shift
 
 __all__ = ["validate_config", "validate_params", "mppi_step"]
 
@@ -51,9 +51,9 @@ def _check_config(config: MPPIConfig) -> None:
         v = getattr(config, name)
         if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < 1:
             raise ValueError(f"MPPIConfig.{name} must be a positive integer, got {v!r}")
-    if config.samples < 3:
-        raise ValueError(f"MPPIConfig.samples must be >= 3 (two fixed candidates and at least one noisy "
-                         f"sequence), got {config.samples}")
+    if config.samples < fixed_rows(config) + 1:
+        raise ValueError(f"MPPIConfig.samples must be >= {fixed_rows(config) + 1} ({fixed_rows(config)} fixed "
+                         f"candidates and at least one noisy sequence), got {config.samples}")
     for name in ("d_clip", "disc_clip", "path_clip", "goal_radius"):
         v = getattr(config, name)
         if not (isinstance(v, (int, float, np.floating)) and math.isfinite(v) and v > 0):
