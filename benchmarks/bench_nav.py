@@ -153,7 +153,8 @@ def section_maps(d: Path, args) -> None:
                 print(row(f"{name[:15]} {label[:14]}", b, wall), flush=True)
                 if args.verbose:
                     bad = ~b.success & b.feasible
-                    print("   failures:", {r: int(np.sum(b.reason[bad] == r)) for r in np.unique(b.reason[bad])})
+                    print("   failures:", {r: int(np.sum(b.reason[bad] == r)) for r in np.unique(b.reason[bad])},
+                          f"give-ways per episode {float(np.mean(b.give_ways[b.feasible])):.3f}")
 
 
 ALLROWS_BATCH = 100

@@ -124,3 +124,50 @@ def test_an_mppi_config_with_dwa_weights_is_refused():
         parse_config(text)
     ok = parse_config(text.replace("heading = 0.4", "dynamic = 2.0"))
     assert ok.planners[0].obstacles.behavior == "social"
+
+
+def test_a_robot_gives_way_to_a_walker_that_sees_in_a_bottleneck():
+    """A robot and a walker that sees meet head-on in a 1 m wide bottleneck between two halls: each waits for the
+    other until the time limit (the social force model stops the walker 0.4 m before the robot, and the robot finds
+    every way forward through it), unless the robot gives way: then it backs out into the hall, the walker comes
+    through, and the robot goes on and arrives."""
+    free = np.zeros((7, 24), bool)
+    free[1:6, 0:9] = free[1:6, 15:24] = True
+    free[3, 9:15] = True
+    grid = jp.grid_from_array(free, resolution=1.0)
+    walker = moving_obstacles([[[22.5, 3.5], [0.5, 3.5]]], speeds=1.0, radii=0.25, reactive=True, offsets=[2.0])
+    base = NavConfig(mppi=MPPIConfig(samples=128), max_time=60.0)
+    runs = {}
+    for give_way in (False, True):
+        runs[give_way] = jp.navigate(grid, (2, 3), (22, 3), pipeline="astar_kng_mppi",
+                                     config=base.replace(give_way=give_way), obstacles=walker, time_limit=60.0)
+    assert runs[False].reason == "time limit" and runs[False].collisions == 0
+    ep = runs[True]
+    assert ep.success and ep.collisions == 0, (ep.reason, ep.collisions)
+    op = ep.obstacle_positions[:, 0]
+    assert np.any(op[:, 0] < ep.trajectory[:, 0] - 1.0)  # the walker came through to the robot's side
+    assert np.hypot(*(op - ep.trajectory[:, :2]).T).min() >= 0.5 - 0.03  # and never touched it
+
+
+def test_the_yield_point_steps_aside_or_backs_away():
+    """In a 3 m hall a robot facing a walker steps to the side of the walker's line; in a 1 m corridor, where there
+    is no side, it backs away from the walker along it. Either point has room to stand."""
+    from jaxplan.dwa import clearance_table, static_clearance
+    from jaxplan.grid import collision_map
+    from jaxplan.nav._give_way import STAND_ROOM, yield_point
+
+    d_safe = 0.3
+    for rows, lateral in ((3, True), (1, False)):
+        grid = jp.grid_from_array(np.pad(np.ones((rows, 16), bool), ((1, 1), (0, 0))), resolution=1.0)
+        table = clearance_table(collision_map(grid))
+        y = 1.0 + rows / 2
+        pos, walker = np.array([8.0, y], np.float32), np.array([9.2, y], np.float32)
+        point, found = yield_point(pos, walker, walker[None], np.array([0.25], np.float32),
+                                   lambda x, yy: static_clearance(table, x, yy, "hybrid"), d_safe)
+        point = np.asarray(point)
+        assert bool(found)
+        assert float(static_clearance(table, point[:1], point[1:])[0]) >= d_safe + STAND_ROOM - 1e-6
+        if lateral:
+            assert abs(point[1] - y) >= 0.5 and point[0] <= pos[0] + 0.2, point
+        else:
+            assert abs(point[1] - y) < 1e-3 and point[0] <= pos[0] - 1.5, point

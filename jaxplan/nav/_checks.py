@@ -75,13 +75,16 @@ def resolve_config(config: NavConfig | None, pipeline: Pipeline, local_planner: 
         v = getattr(cfg, f)
         if not (isinstance(v, (int, float)) and not math.isnan(v) and v > 0):
             raise ValueError(f"NavConfig.{f} must be a number > 0 (inf disables {what}), got {v!r}")
-    for f in ("stall_progress", "stall_speed"):
+    for f in ("stall_progress", "stall_speed", "give_way_time", "give_way_distance", "give_way_move",
+              "give_way_hold"):
         v = getattr(cfg, f)
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise ValueError(f"NavConfig.{f} must be a finite number > 0, got {v!r}")
     for f in ("chunk", "replan_sweeps", "replan_cells", "replan_slots", "contact_checks"):
         if not isinstance(getattr(cfg, f), int) or getattr(cfg, f) < 1:
             raise ValueError(f"NavConfig.{f} must be a positive integer, got {getattr(cfg, f)!r}")
+    if cfg.give_way not in (None, True, False):
+        raise ValueError(f"NavConfig.give_way must be True, False or None (on with MPPI), got {cfg.give_way!r}")
     if not isinstance(cfg.replan_group, int) or cfg.replan_group < 0:
         raise ValueError(f"NavConfig.replan_group must be an integer >= 0 (0: the whole batch), "
                          f"got {cfg.replan_group!r}")

@@ -176,6 +176,17 @@ class NavConfig:
         ``"constant_velocity"`` (default) or ``"oracle"``, their true routes — an ablation that
         separates prediction error from what the local planner can do at all. Re-planning and
         the threat rule keep the constant-velocity view.
+      give_way: a robot in a standoff steps out of the way of the disc it faces and waits
+        (`jaxplan.nav._give_way`; static): True, False, or None (default) — on with the MPPI local
+        planner, off with DWA and path following (their results stay those measured before the
+        option existed; turn it on to compare). Walkers that see stop in front of a robot standing in
+        their way, and without it the two stand until the time limit.
+      give_way_time: seconds a robot must have stayed within ``give_way_move`` of one spot, with a
+        disc within ``give_way_distance`` of its edge, before it gives way.
+      give_way_distance: see ``give_way_time`` (m, edge to edge).
+      give_way_move: see ``give_way_time`` (m).
+      give_way_hold: the longest a robot gives way (s) before it tracks its path again (it gives way
+        again after another ``give_way_time`` if still stuck).
     """
 
     dwa: DWAConfig = DWAConfig(keep_rollouts=False, recovery="flee", d_clip=0.5)
@@ -216,12 +227,22 @@ class NavConfig:
     recheck_gain: float = 5.0
     recede_speed: float = 0.5
     prediction: str = dataclasses.field(default="constant_velocity", metadata=dict(static=True))
+    give_way: bool | None = dataclasses.field(default=None, metadata=dict(static=True))
+    give_way_time: float = 3.0
+    give_way_distance: float = 1.0
+    give_way_move: float = 0.3
+    give_way_hold: float = 10.0
 
     @property
     def steps(self) -> int:
         """Control steps of the longest episode, a multiple of ``chunk``."""
         n = math.ceil(self.max_time / self.dwa.period - 1e-9)
         return math.ceil(n / self.chunk) * self.chunk
+
+    @property
+    def gives_way(self) -> bool:
+        """Whether the robots give way (``give_way``, or by default with the MPPI local planner)."""
+        return self.local == "mppi" if self.give_way is None else bool(self.give_way)
 
     def local_mppi(self) -> MPPIConfig:
         """The MPPI step's config: ``mppi`` with the episode's robot, period and d_safe (``dwa``'s)."""

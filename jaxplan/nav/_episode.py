@@ -57,6 +57,7 @@ from jaxplan.dwa import (
 from jaxplan.metrics import point_polyline_distance
 from jaxplan.mppi import MPPIParams, initial_sequence, mppi_control, shift
 from jaxplan.nav._config import NavConfig
+from jaxplan.nav._give_way import GiveWay, initial_give_way, release, standoff_watch, yield_point
 from jaxplan.nav._moving import MovingObstacles, obstacle_state, route_target
 from jaxplan.nav._replan import path_blocked, replan_slots
 from jaxplan.nav._social import SocialForce, WalkerState, advance_walkers, initial_walkers
@@ -302,6 +303,40 @@ def _subgoal(config: NavConfig, c: Carry, pos: jnp.ndarray) -> tuple[jnp.ndarray
     return sub, c._replace(index=seg)
 
 
+def _give_way(config: NavConfig, table: ClearanceTable, c: Carry, pos: jnp.ndarray, discs: _Discs,
+              sub: jnp.ndarray) -> tuple[jnp.ndarray, Carry]:
+    """Stage 5b (`NavConfig.gives_way`): the standoff watch, the end of a robot's giving way, and its start (in a
+    `lax.cond` taken only on steps where some robot's standoff is due); a robot giving way steers for its yield
+    point instead of ``sub [B, N, 2]``."""
+    gw: GiveWay = c.give_way
+    period = config.dwa.period
+    gap = jnp.sqrt(jnp.sum((discs.pos - pos[:, :, None, :]) ** 2, axis=-1)) - discs.rad - discs.radius  # [B, N, D]
+    near = jnp.any(gap < config.give_way_distance, axis=-1)
+    gw = standoff_watch(gw, pos, near, c.t, config.give_way_move)
+    ended = release(gw, discs.pos, gap, c.t, period, config.give_way_hold, config.give_way_distance)
+    gw = gw._replace(active=gw.active & ~ended, anchor=jnp.where(ended[..., None], pos, gw.anchor),
+                     anchor_t=jnp.where(ended, c.t, gw.anchor_t))
+    due = ~gw.active & ~c.done & near & ((c.t - gw.anchor_t).astype(jnp.float32) * period
+                                         >= config.give_way_time - 1e-6)
+
+    def start(g: GiveWay) -> GiveWay:
+        j = jnp.argmin(gap, axis=-1).astype(jnp.int32)  # [B, N] the disc in the way: the nearest
+        at = jnp.take_along_axis(discs.pos, j[..., None, None], axis=2)[:, :, 0]
+        point, found = jax.vmap(jax.vmap(yield_point, in_axes=(0, 0, 0, 0, None, None)),
+                                in_axes=(0, 0, 0, 0, None, None))(
+            pos, at, discs.pos, discs.rad, lambda x, y: static_clearance(table, x, y, "hybrid"), config.dwa.d_safe)
+        begin = due & found
+        b2 = begin[..., None]
+        # No point to go to: the clock restarts, and the robot looks again after another give_way_time.
+        return g._replace(active=g.active | begin, point=jnp.where(b2, point, g.point),
+                          since=jnp.where(begin, c.t, g.since), disc=jnp.where(begin, j, g.disc),
+                          disc_at=jnp.where(b2, at, g.disc_at), count=g.count + begin.astype(jnp.int32),
+                          anchor_t=jnp.where(due, c.t, g.anchor_t))
+
+    gw = lax.cond(jnp.any(due), start, lambda g: g, gw)
+    return jnp.where(gw.active[..., None], gw.point, sub), c._replace(give_way=gw)
+
+
 LOCAL_PATH_POINTS = 4
 """Waypoints ahead (after the one before the current) that the MPPI path-align critic sees."""
 
@@ -357,9 +392,22 @@ def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams |
     if table.speed_limit is not None:  # the map's speed limit at each robot's cell, of the robot's top speed
         v_top = jnp.minimum(v_top, speed_cap(table, flat(pos), robot.v_max))
         table = table._replace(speed_limit=None)  # applied: the local planners must not scale v_top again
+    goal = inputs.goal
+    if c.give_way is not None:
+        # Giving way: towards the yield point, arriving slowly (the DWA has no goal to stop at), and for MPPI the
+        # point is the goal and the path a line to it (its goal critic stops the robot there).
+        gw = c.give_way
+        to_point = jnp.sqrt(jnp.sum((gw.point - pos) ** 2, axis=-1)).reshape(-1)
+        v_top = jnp.where(gw.active.reshape(-1), jnp.minimum(v_top, jnp.maximum(to_point, 0.1)), v_top)
+        goal = jnp.where(gw.active[..., None], gw.point, goal)
     if config.local == "mppi":
         mcfg = config.local_mppi()
         path, n_path = jax.vmap(_local_path)(flat(c.waypoints), flat(c.n_wp), flat(c.index), flat(c.origin))
+        if c.give_way is not None:
+            line = jnp.broadcast_to(flat(c.give_way.point)[:, None], path.shape).at[:, 0].set(flat(pos))
+            giving = flat(c.give_way.active)
+            path = jnp.where(giving[:, None, None], line, path)
+            n_path = jnp.where(giving, 2, n_path)
         robot_index = jnp.tile(jnp.arange(N, dtype=jnp.uint32), B)
         keys = jax.vmap(lambda kd, r: jax.random.fold_in(jax.random.wrap_key_data(kd), c.t.astype(jnp.uint32) * N + r))(
             jnp.repeat(inputs.key, N, axis=0), robot_index)
@@ -368,7 +416,7 @@ def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams |
             cfg = mcfg.replace(robot=dataclasses.replace(mcfg.robot, v_max=vmax))
             return mppi_control(table, cfg, p, state, mean, key, subgoal, goal, d, path_, n_path_, finish_)
 
-        args = (flat(c.state), flat(c.plan), keys, flat(sub), flat(inputs.goal), obstacles, path, n_path, v_top, finish)
+        args = (flat(c.state), flat(c.plan), keys, flat(sub), flat(goal), obstacles, path, n_path, v_top, finish)
         u, info = jax.vmap(mppi)(*args, _per_robot(params, N)) if per_episode else jax.vmap(mppi)(*args)
         recovery = info.recovery.reshape(B, N)
         plan = jnp.where(c.done[..., None, None], c.plan, shift(info.sequence).reshape(c.plan.shape))
@@ -505,6 +553,8 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
     if config.replan:
         c = _replanning(config, free, table.resolution, inputs, c, pos, discs, crowded)
     sub, c = _subgoal(config, c, pos)
+    if c.give_way is not None:
+        sub, c = _give_way(config, table, c, pos, discs, sub)
     u, recovery, plan = _local_control(config, table, params, inputs, c, pos, sub, discs, t, per_episode)
     c = c._replace(plan=plan)
     walked = None
@@ -564,6 +614,7 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
         goal_best=jnp.sqrt(jnp.sum(lax.stop_gradient(inputs.goal - inputs.start[..., :2]) ** 2, axis=-1)),
         stall_replan=jnp.zeros((B, N), bool), detour=jnp.zeros((B, N), bool),
         plan=_initial_plans(config, inputs.start), walkers=_initial_walkers(inputs.obstacles),
+        give_way=initial_give_way(inputs.start[..., :2]) if config.gives_way else None,
         t=jnp.asarray(0, jnp.int32),
     )
     states = jnp.broadcast_to(inputs.start[None], (steps + 1, B, N, 5))
@@ -603,4 +654,5 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
         walkers=None if walked is None else jnp.where(  # rows after the loop stopped: where they were then
             (jnp.arange(steps + 1) <= k * chunk)[:, None, None, None], walked,
             walked[jnp.minimum(k * chunk, steps)][None]).swapaxes(0, 1),
+        give_ways=None if c.give_way is None else c.give_way.count,
     )

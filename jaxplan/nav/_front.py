@@ -341,6 +341,7 @@ def _episode_batch(out: Any, E: int, R: int, N: int, active: np.ndarray, reason:
         compile_s=compile_s, period=period, pipeline=pipeline, resolution=res,
         obstacle_positions=None if out.walkers is None else np.asarray(out.walkers).reshape(
             (E, R) + out.walkers.shape[1:]),
+        give_ways=np.zeros_like(n_steps) if out.give_ways is None else back(out.give_ways),
     )
 
 

@@ -99,6 +99,7 @@ class EpisodeBatch(NamedTuple):
       obstacles: `MovingObstacles` with leaves ``[E, R, M, …]``.
       obstacle_positions: ``f32[E, R, S + 1, M, 2]`` where the obstacles were after each step when some walkers
         see (simulated, not on their routes), or None (positions follow from the routes).
+      give_ways: ``i32[E, R, N]`` times each robot gave way (`jaxplan.NavConfig.give_way`; zero when off).
       plan_time_s: global planning wall time per episode (s, compilation excluded).
       step_time_s: wall time per control step of one robot (s): the episode call's time
         over the robot-steps it ran (compilation excluded).
@@ -139,6 +140,7 @@ class EpisodeBatch(NamedTuple):
     pipeline: str
     resolution: float
     obstacle_positions: np.ndarray | None = None
+    give_ways: np.ndarray | None = None
 
     METRICS = ("success", "collisions", "active_contacts", "passive_contacts", "time_s", "rmse", "max_curvature",
                "energy", "path_length", "recoveries", "replans")

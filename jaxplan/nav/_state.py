@@ -74,6 +74,8 @@ class EpisodeOutput(NamedTuple):
       walkers: ``f32[B, S + 1, M, 2]`` where the moving obstacles were after each step when some walkers see
         (their own simulation; the blind ones on their routes as well), or None when every disc is blind
         (their positions follow from the routes).
+      give_ways: ``i32[B, N]`` times the robot gave way (`jaxplan.nav._give_way`), or None when the episode's
+        robots do not give way (`NavConfig.gives_way`).
     """
 
     states: jnp.ndarray
@@ -90,6 +92,7 @@ class EpisodeOutput(NamedTuple):
     n_waypoints: jnp.ndarray
     executed: jnp.ndarray
     walkers: jnp.ndarray | None = None
+    give_ways: jnp.ndarray | None = None
 
 
 class Carry(NamedTuple):
@@ -122,4 +125,5 @@ class Carry(NamedTuple):
     detour: jnp.ndarray  # [B, N] tracking a path planned around discs: re-checked every NavConfig.recheck_period
     plan: jnp.ndarray  # [B, N, T, 2] the MPPI step's warm start (T = 0 for the other local planners)
     walkers: Any  # WalkerState [B, M] of the walkers that see, or None when every disc is blind
+    give_way: Any  # GiveWay [B, N] (jaxplan.nav._give_way), or None when the robots do not give way
     t: jnp.ndarray  # scalar step counter
