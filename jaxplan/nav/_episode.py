@@ -553,7 +553,7 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
     if config.replan:
         c = _replanning(config, free, table.resolution, inputs, c, pos, discs, crowded)
     sub, c = _subgoal(config, c, pos)
-    if c.give_way is not None:
+    if c.give_way is not None and discs.pos.shape[2] > 0:  # with no disc at all there is nothing to give way to
         sub, c = _give_way(config, table, c, pos, discs, sub)
     u, recovery, plan = _local_control(config, table, params, inputs, c, pos, sub, discs, t, per_episode)
     c = c._replace(plan=plan)
