@@ -6,8 +6,10 @@ model takes a loop over a few hundred samples with a few dozen operations each f
 single robot's control step (800 sampled controls) is split, and on every call from Python the split
 loops hand half their work to a thread that has gone to sleep since the last call: waking it costs more
 than the half it takes over. A program compiled with these options skips that pass only: the same
-kernels, run on the calling thread, give the same bits. The options belong to the one compiled program
-(``jax.jit(f, compiler_options=one_thread_options())``); other programs, and XLA_FLAGS, stay as they are.
+kernels, each loop run whole by one thread, give the same bits. The options belong to the one compiled
+program (``jax.jit(f, compiler_options=one_thread_options())``); other programs, and XLA_FLAGS, stay as
+they are. (XLA:CPU may still run independent kernels of the program on two threads at once: that choice,
+made by its thunk executor from the program's dependency graph, has no compiler option.)
 """
 
 from __future__ import annotations
