@@ -28,14 +28,16 @@ For 1, 64 and 1,024 robots it prints:
     15 point obstacles, start (0, 0, π/8, 0, 0), goal (10, 10)): the Python-facing step from
     `make_stepper`, `dwa_step(full_info=False)` and `dwa_step`, beside the same step inside a
     compiled 50-step episode and beside PythonRobotics' own `dwa_control` on its own config, in
-    the same process. Its obstacles become blocked cells of 0.25 m centred on the points (a map
-    with origin (-5.125, -5.125) m and 5 m of free margin round them); jaxplan's robot and
-    window stay cui2025's defaults (20 x 40 samples x 20 steps = 16,000 trajectory points;
-    PythonRobotics' config samples its window every 0.01 m/s and 0.1°/s over a 3 s horizon:
-    the table prints its points per call). PythonRobotics' source is MIT-licensed and is not
-    part of jaxplan: point ``PYTHONROBOTICS_DIR`` at a checkout of
-    https://github.com/AtsushiSakai/PythonRobotics (or at the file itself); without it its
-    row is skipped with a message.
+    the same process; and the stepper's path with its program compiled as XLA does by default
+    (``split``: large loops split across XLA's intra-op threads, which the stepper's program
+    skips), in rounds interleaved with the stepper's. Its obstacles become blocked cells of 0.25
+    m centred on the points (a map with origin (-5.125, -5.125) m and 5 m of free margin round
+    them); jaxplan's robot and window stay cui2025's defaults (20 x 40 samples x 20 steps =
+    16,000 trajectory points; PythonRobotics' config samples its window every 0.01 m/s and
+    0.1°/s over a 3 s horizon: the table prints its points per call). PythonRobotics' source is
+    MIT-licensed and is not part of jaxplan: point ``PYTHONROBOTICS_DIR`` at a checkout of
+    https://github.com/AtsushiSakai/PythonRobotics (or at the file itself); without it its row
+    is skipped with a message.
 Each measurement runs in a child process, twice: with XLA's default threads and pinned
 to one core (on a 2-core machine XLA's intra-op threads help big batches but cost a
 single robot), and once more with the batch sharded over two XLA host devices
@@ -231,19 +233,33 @@ def measure_pythonrobotics(repeat: int) -> dict:
     import jax
 
     from jaxplan.dwa import DWAConfig, advance, default_params, dwa_control, dwa_step, make_stepper
-    from jaxplan.dwa._step import table_of
+    from jaxplan.dwa._step import _control_only, table_of
 
     grid, x, goal = pythonrobotics_scene()
     cfg = DWAConfig()
     step = make_stepper(grid, cfg)
     out: dict = {"points": cfg.samples * cfg.steps, "grid": list(grid.shape), "resolution": float(grid.resolution)}
     n = max(50, repeat * 30)
-    calls = {"stepper_ms": lambda: step(x, goal),
+    # The stepper's own path (its checks, its device arrays) with the program compiled as XLA does by default:
+    # large loops split across the intra-op threads (the stepper's program skips that split, `jaxplan.core.xla`).
+    split = jax.jit(_control_only)
+
+    def split_step():
+        st, sg = step._robot(x, goal)
+        return np.asarray(split(step.table, step._lean, step._params, st, sg))
+
+    calls = {"stepper_ms": lambda: step(x, goal), "split_ms": split_step,
              "lean_ms": lambda: dwa_step(x, goal, grid, config=cfg, full_info=False),
              "full_ms": lambda: dwa_step(x, goal, grid, config=cfg)}
-    for name, fn in calls.items():
+    for fn in calls.values():
         fn()
-        out[name] = median_time(fn, n) * 1e3
+    # Interleaved rounds: stepper and split see the same moments of the machine's load.
+    rounds: dict = {name: [] for name in calls}
+    for _ in range(5):
+        for name, fn in calls.items():
+            rounds[name].append(median_time(fn, max(10, n // 5)))
+    for name, ts in rounds.items():
+        out[name] = float(np.median(ts)) * 1e3
     steps = 50
     lean = DWAConfig(keep_rollouts=False)
 
@@ -410,17 +426,18 @@ def main() -> None:
               f"(lax.scan, hybrid); host front dwa_step with every rollout kept: {r['front_ms']:.3f} ms, "
               f"full_info=False: {r['lean_front_ms']:.3f} ms")
     print("\nPythonRobotics' DWA scenario, one robot, ms per call (jaxplan: 16,000 trajectory points per step):")
-    print(f"{'threads':<26}{'stepper':>9}{'lean':>8}{'dwa_step':>10}{'episode':>9}{'/episode':>10} | "
+    print(f"{'threads':<26}{'stepper':>9}{'split':>8}{'lean':>8}{'dwa_step':>10}{'episode':>9}{'/episode':>10} | "
           f"{'PythonRobotics':>15}{'its points':>11}{'x PR':>7}")
     for label in ("default", "pinned"):
         r = results[label]["pythonrobotics"]
         pr = (f"{r['pr_ms']:>15.1f}{r['pr_points']:>11,}{r['pr_ms'] / r['stepper_ms']:>7.0f}" if "pr_ms" in r
               else f"{'—':>15}{'—':>11}{'—':>7}")
-        print(f"{names[label]:<26}{r['stepper_ms']:>9.3f}{r['lean_ms']:>8.3f}{r['full_ms']:>10.3f}"
+        print(f"{names[label]:<26}{r['stepper_ms']:>9.3f}{r['split_ms']:>8.3f}{r['lean_ms']:>8.3f}{r['full_ms']:>10.3f}"
               f"{r['episode_ms']:>9.3f}{r['stepper_ms'] / r['episode_ms']:>9.2f}x | {pr}")
         if "note" in r:
             print(f"  {r['note']}")
-    print("  stepper: make_stepper(grid)(state, subgoal); lean: dwa_step(..., full_info=False); dwa_step: every "
+    print("  stepper: make_stepper(grid)(state, subgoal); split: the same with the program as XLA compiles it by "
+          "default (large loops split across its threads); lean: dwa_step(..., full_info=False); dwa_step: every "
           "rollout kept; episode: the step inside a compiled 50-step episode; x PR: PythonRobotics' dwa_control "
           "over the stepper")
     print("targets: <= 0.2 ms per single-robot step, >= 200 M points/s for >= 64 robots, >= 3x numpy, compile <= 1 s; "

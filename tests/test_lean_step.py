@@ -1,6 +1,7 @@
 """The lean single-robot steps: `make_stepper` and `dwa_step(full_info=False)` give `dwa_step`'s control bit for bit,
 reject the same bad input with the same errors and never use another map's tables; `mppi_step`'s lean front
-gives the same control and sequence as before."""
+gives the same control and sequence as before; the one-robot programs, compiled without XLA:CPU's loop split,
+give the bits of XLA's default compilation."""
 
 from __future__ import annotations
 
@@ -10,7 +11,8 @@ import pytest
 
 import jaxplan as jp
 from jaxplan.dwa import DWAConfig, DWAInfo, dwa_step, make_stepper, table_of
-from jaxplan.dwa._step import _single, validate_params
+from jaxplan.dwa._core import dwa_control
+from jaxplan.dwa._step import _control_only, _single, _single_control, device_config, validate_params
 
 
 def _map(origin=(0.0, 0.0)):
@@ -68,6 +70,28 @@ def test_dwa_steps_lean_front_returns_what_the_plain_program_returns(origin):
             assert _bits(a) == _bits(b), name
         u2, info2 = make_stepper(grid, config).info(st, sg)
         assert _bits(u2) == _bits(u) and all(_bits(a) == _bits(b) for a, b in zip(info, info2, strict=True))
+
+
+@pytest.mark.parametrize("config", [DWAConfig(), DWAConfig(evaluator="fuzzy"), DWAConfig(evaluator="classic"),
+                                    DWAConfig(clearance="bilinear", n_v=7, n_omega=11)],
+                         ids=["weighted", "fuzzy", "classic", "bilinear"])
+def test_one_robot_programs_skip_xlas_loop_split_with_the_bits_of_the_default_compilation(config):
+    """`_single`/`_single_control` (behind `dwa_step` and `make_stepper`) are compiled without XLA:CPU's
+    parallel task assignment (`jaxplan.core.xla`): no loop is split across threads, and control and info are
+    those of a plain ``jax.jit`` (which splits the large loops when the process has several cores or devices)."""
+    grid = _map((-3.125, 7.5))
+    prm = validate_params(None, config.evaluator)
+    table, lean, full = table_of(grid), device_config(config, True), device_config(config)
+    plain_control, plain_full = jax.jit(_control_only), jax.jit(dwa_control)
+    for st, sg in zip(*_states(grid, 8, seed=3), strict=True):
+        local = grid.to_local(st[None])[0].astype(np.float32), grid.to_local(sg).astype(np.float32)
+        assert _bits(_single_control(table, lean, prm, *local)) == _bits(plain_control(table, lean, prm, *local))
+        ours = jax.device_get(_single(table, full, prm, *local, None, None))
+        theirs = jax.device_get(plain_full(table, full, prm, *local, None, None))
+        assert all(_bits(a) == _bits(b) for a, b in zip(jax.tree_util.tree_leaves(ours),
+                                                           jax.tree_util.tree_leaves(theirs), strict=True))
+    hlo = _single_control.lower(table, lean, prm, *local).compile().as_text()
+    assert "outer_dimension_partitions" not in hlo
 
 
 @pytest.mark.parametrize("state, subgoal", [
@@ -175,3 +199,23 @@ def test_mppi_lean_front_gives_the_same_control_and_sequence(origin):
         a, ia = jp.mppi_step(st, sg, grid, sequence=info0.sequence, key=key)
         b, ib = jp.mppi_step(st, sg, grid, sequence=info0.sequence, key=jax.random.key(key))
         assert _bits(a) == _bits(b) and _bits(ia.costs) == _bits(ib.costs)
+
+
+def test_mppi_one_robot_program_gives_the_bits_of_the_default_compilation():
+    """`mppi_step`'s program, compiled without XLA:CPU's loop split, returns what a plain ``jax.jit`` returns."""
+    from jaxplan.mppi import MPPIConfig
+    from jaxplan.mppi._step import _on_device, _program
+    from jaxplan.mppi._step import validate_params as mppi_params
+
+    grid = _map()
+    config = MPPIConfig()
+    for full_info in (False, True):
+        ours = _program(config, False, False, True, full_info)
+        plain = jax.jit(ours.__wrapped__)
+        for i, (st, sg) in enumerate(zip(*_states(grid, 4, seed=4), strict=True)):
+            st, sg = np.asarray(st, np.float32), np.asarray(sg, np.float32)
+            mean = np.broadcast_to(st[3:5], (config.steps, 2)).astype(np.float32)
+            args = (table_of(grid), _on_device(mppi_params(None)), st, mean, np.int32(i), sg, sg, None, None)
+            a, b = jax.device_get(ours(*args)), jax.device_get(plain(*args))
+            assert all(_bits(x) == _bits(y) for x, y in zip(jax.tree_util.tree_leaves(a),
+                                                             jax.tree_util.tree_leaves(b), strict=True))

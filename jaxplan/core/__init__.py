@@ -14,6 +14,7 @@ helper does not pull in JAX or numba with another:
 * `jaxplan.core.progress`: the progress bar of long commands and batched calls (rich or a plain line, drawn only
   on a terminal).
 * `jaxplan.core.export`: results as plain Python (``to_dict``) and pandas DataFrames (``to_dataframe``).
+* `jaxplan.core.xla`: compiler options for small programs stepped from Python (no XLA:CPU loop split).
 
 Layers. Imports flow strictly downward through these layers: a module may import from its own
 package and from any lower layer, never from a higher one, and there is no import cycle::

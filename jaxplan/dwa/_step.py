@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from jaxplan.core.cache import lru_cache, memoize
+from jaxplan.core.xla import one_thread_options
 from jaxplan.dwa._clearance import ClearanceTable, DiscObstacles, clearance_table
 from jaxplan.dwa._config import (
     CLEARANCE_MODES,
@@ -45,7 +46,9 @@ __all__ = ["dwa_step", "table_of", "validate_config", "validate_params", "as_obs
 CHUNK = 128
 """Robots per vectorised chunk of a batched step (see `dwa_control_batch`)."""
 
-_single = jax.jit(dwa_control)
+# One robot's step is compiled without XLA:CPU's loop splitting (`jaxplan.core.xla`): called from Python, the
+# split loops wake a sleeping thread per call, which costs more than they save; the kernels and bits are the same.
+_single = jax.jit(dwa_control, compiler_options=one_thread_options())
 _batch = jax.jit(dwa_control_batch, static_argnames=("chunk",))
 
 
@@ -59,7 +62,7 @@ def _control_only_batch(table, config, params, states, subgoals, obstacles=None,
 
 # The control alone: XLA drops the info record's outputs; the control's bits are those of `_single`/`_batch`
 # (tests/test_dwa_stepper.py compares them).
-_single_control = jax.jit(_control_only)
+_single_control = jax.jit(_control_only, compiler_options=one_thread_options())
 _batch_control = jax.jit(_control_only_batch, static_argnames=("chunk",))
 
 

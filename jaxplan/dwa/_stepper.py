@@ -6,7 +6,9 @@ same map does that work once: `make_stepper` validates the configuration and wei
 map's `ClearanceTable` and puts it, the configuration and the weights on the device, and returns a
 `DWAStepper`. Each call then checks the state and sub-goal with scalar arithmetic (finite, window
 not empty, robot on a free cell of the map: the errors of `dwa_step`) and runs one compiled step
-that returns the control alone — the same control as `dwa_step`, bit for bit.
+that returns the control alone — the same control as `dwa_step`, bit for bit. Like `dwa_step`'s
+one-robot programs, the step is compiled without XLA:CPU's loop split across threads
+(`jaxplan.core.xla`): called from Python, one robot's loops are too small to pay for waking a thread.
 
 The stepper keeps the map as it was when it was built (its free cells and tables); for another map,
 make another stepper.

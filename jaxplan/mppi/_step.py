@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from jaxplan.core.cache import lru_cache
+from jaxplan.core.xla import one_thread_options
 from jaxplan.dwa import CLEARANCE_MODES, DWAConfig, as_obstacles, obstacles_to_local, table_of
 from jaxplan.dwa import validate_config as validate_dwa_config
 from jaxplan.grid import GridMap
@@ -98,7 +99,8 @@ def _program(config: MPPIConfig, with_obstacles: bool, with_path: bool, seeded: 
                                obstacles if with_obstacles else None, path if with_path else None)
         return (u, info) if full_info else (u, info.sequence)
 
-    return jax.jit(step)
+    # One robot's step, called from Python: compiled without XLA:CPU's loop splitting (`jaxplan.core.xla`).
+    return jax.jit(step, compiler_options=one_thread_options())
 
 
 @lru_cache(maxsize=64)
