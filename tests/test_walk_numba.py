@@ -19,6 +19,7 @@ from jaxplan.aco._colony import RunConfig, run_batch
 from jaxplan.aco._context import goal_tables, map_tables
 from jaxplan.aco._planners import seed_keys, split_params
 from jaxplan.aco._walk import GOAL, move_lut, walk
+from jaxplan.aco._walk_numba_kernels import MODES, NO_HOOK, walk_all
 from jaxplan.registry import resolve
 
 PLANNERS = sorted(COLONIES)
@@ -132,6 +133,35 @@ def test_walk_equals_jax_walk_field_by_field(dead_end, penalise, ants):
         assert np.asarray(ref.marks).any()
     if penalise:
         assert np.asarray(ref.penalty).sum() > 0
+
+
+@pytest.mark.parametrize("ants", [1, 5, 23])  # 2 runs x 2 colonies: fewer ants than lanes, and a partial last round
+@pytest.mark.parametrize("n_chunks", [1, 2, 3])
+def test_lane_walk_equals_jax_walk_for_any_ant_and_chunk_count(ants, n_chunks):
+    """The 8-connected walk steps `LANES` ants at once per chunk: idle lanes, lanes that take the chunk's
+    next ant and chunk counts that do not divide the ants change no path, count or penalty."""
+    scene = jp.RandomMapGenerator(20, 18, 0.25)(3)
+    B, S = 2, 2
+    d = _walk_inputs(scene.grid, B, S, ants, seed=ants)
+    L, C, K, A = 120, d["C"], d["K"], d["A"]
+    lut = move_lut(d["tables"].offsets)
+    kw = dict(max_steps=L, width=scene.grid.width, lut=lut, dead_end="retreat", penalty_size=B * S * C * K)
+    ref = jax.jit(functools.partial(walk, **kw))(d["nbr"], d["table"], d["start"], d["goal"], d["row0"], d["cell0"],
+                                                 d["seed"], d["local"], None)
+    i32 = lambda x: np.ascontiguousarray(np.asarray(x), np.int32)  # noqa: E731
+    cells, moves = np.zeros((A, L + 1), np.int32), np.zeros((A, L), np.int8)
+    per_ant, stats = np.zeros((3, A), np.int32), np.zeros((WN.N_STATS, A), np.float32)
+    penalty, marks = np.zeros(B * S * C * K, np.float32), np.zeros(1, np.bool_)
+    walk_all(i32(d["nbr"]), np.asarray(d["table"]), np.zeros((2, 1, K), np.float32), np.zeros((K + 1) * K, np.int32),
+             np.zeros(K, np.int32), np.zeros(1, np.bool_), i32(d["start"]), i32(d["goal"]), i32(d["row0"]),
+             i32(d["cell0"]), np.asarray(d["seed"]), i32(d["local"]), np.zeros(1, np.bool_),
+             np.asarray(WN.move_bits(d["nbr"])), L, scene.grid.width, i32(lut), MODES["retreat"], NO_HOOK, True,
+             n_chunks, np.ones(K + K * K, np.float32), np.ones((3, C), np.float32), cells, moves, per_ant[0],
+             per_ant[1], per_ant[2], penalty, marks, stats)
+    out = ref._replace(cells=cells, moves=moves, n=per_ant[0], status=per_ant[1], ant_steps=per_ant[2],
+                       penalty=penalty)
+    _assert_same_walk(ref, out, ["cells", "moves", "status", "ant_steps", "penalty"])
+    assert np.asarray(ref.penalty).sum() > 0
 
 
 @pytest.mark.parametrize("dead_end", ["die", "retreat", "alert"])

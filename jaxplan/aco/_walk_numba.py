@@ -4,11 +4,12 @@
 move; on a CPU each step is about fifteen small XLA kernels (gathers, scatters), so the
 loop costs far more than the arithmetic it does. Here the whole walk of one
 iteration (every run, colony and ant, from the start until goal, dead end or step
-limit) is one compiled call: each ant walks to the end on its own, the ants are shared
-out over the cores with `prange`. The JAX program calls it as an XLA FFI custom call (a
-numba `cfunc` registered with `jax.ffi`; CPU only), so the iterations' `lax.scan`, the
-move tables and the rules stay in JAX, and the JAX walk stays the one for GPUs. Two more
-native kernels serve the colony's update on the CPU (for either walk): `path_stats` and
+limit) is one compiled call: each ant walks to the end on its own (on 8-connected grids
+without a hook, 16 ants step at once in SIMD lanes), the ants are shared out over the cores
+with `prange`. The JAX program calls it as an XLA FFI custom call (a numba `cfunc`
+registered with `jax.ffi`; CPU only), so the iterations' `lax.scan`, the move tables and
+the rules stay in JAX, and the JAX walk stays the one for GPUs. Two more native kernels
+serve the colony's update on the CPU (for either walk): `path_stats` and
 `deposit` visit only the valid steps of the paths instead of whole ``[A, L]`` buffers.
 
 The result equals `walk`'s bit for bit: the same counter-based uniforms (`hash_uniform`,

@@ -1,6 +1,6 @@
-"""Scalar pieces of the native ant walk (numba), each the exact float32 counterpart of a `jaxplan.aco._walk`
-array operation: the counter-based uniform, XLA's exp, a fused multiply-add, and two LLVM vector intrinsics
-for the 8-connected walk's tabu test and draw (`jaxplan.aco._walk_numba_kernels`).
+"""Scalar and vector pieces of the native ant walk (numba), each the exact float32 counterpart of a `jaxplan.aco._walk`
+array operation: the counter-based uniform, XLA's exp, a fused multiply-add, and an LLVM vector intrinsic
+for the 8-connected walk's tabu test and draw of 16 ants at once (`jaxplan.aco._walk_numba_kernels`).
 
 The functions here are inlined into the kernels that use them and are not cached on their own: numba's
 cache of a function does not notice changes in another file's functions it calls (numba issue #1833), so
@@ -14,7 +14,7 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
 
-__all__ = ["TINY", "fma32", "uniform", "move_between", "exp_xla", "u2f", "visited3x3", "draw8"]
+__all__ = ["TINY", "LANES", "fma32", "uniform", "move_between", "exp_xla", "u2f", "tabu_draw_lanes"]
 
 _F = np.float32
 TINY = np.finfo(np.float32).tiny  # as `walk`: keeps allowed moves drawable when their weights underflowed
@@ -107,57 +107,82 @@ def _splat(builder, value, vtype):
                                                                              [0] * vtype.count))
 
 
-@intrinsic
-def visited3x3(typingctx, seen, i, row, stamp):
-    """``uint32``: bit ``3 * r + c`` set where ``seen[i + r * row + c] == stamp`` (r, c in 0..2): the 3x3
-    block of a padded tabu grid whose top-left is ``i``, each of its rows read as one 4-lane vector
-    compare (the 4th lane is ignored; the grid needs one slot of slack at its end)."""
-    sig = types.uint32(seen, types.int64, types.int64, types.int32)
+_I64 = ir.IntType(64)
+LANES = 16
+"""Ants the 8-connected walk steps at once, one per SIMD lane (`tabu_draw_lanes`): 16 float32 lanes fill
+an AVX-512 register; with narrower vectors LLVM splits them (same results)."""
 
-    def codegen(context, builder, signature, args):
-        data = context.make_array(signature.args[0])(context, builder, args[0]).data
-        vt = ir.VectorType(_I32, 4)
-        target = _splat(builder, args[3], vt)
-        out = ir.Constant(_I32, 0)
-        for r in range(3):
-            ptr = builder.gep(data, [builder.add(args[1], builder.mul(args[2], ir.Constant(ir.IntType(64), r)))])
-            hit = builder.icmp_signed("==", builder.load(builder.bitcast(ptr, vt.as_pointer()), align=4), target)
-            bits = builder.and_(builder.zext(builder.bitcast(hit, ir.IntType(4)), _I32), ir.Constant(_I32, 7))
-            out = builder.or_(out, builder.shl(bits, ir.Constant(_I32, 3 * r)))
-        return out
 
-    return sig, codegen
+def _gather(builder, base, index, scale, etype):
+    """``<LANES x etype>`` loaded from the addresses ``base + index * scale`` (an int64 address and an int64
+    index vector): one vector gather instead of a load per lane."""
+    iv = ir.VectorType(_I64, LANES)
+    addresses = builder.add(builder.mul(index, ir.Constant(iv, [scale] * LANES)), _splat(builder, base, iv))
+    pv = ir.VectorType(etype.as_pointer(), LANES)
+    vt = ir.VectorType(etype, LANES)
+    name = f"llvm.masked.gather.v{LANES}{'f32' if isinstance(etype, ir.FloatType) else 'i32'}.v{LANES}p0"
+    fn = builder.module.globals.get(name) or ir.Function(
+        builder.module, ir.FunctionType(vt, [pv, _I32, ir.VectorType(ir.IntType(1), LANES), vt]), name=name)
+    return builder.call(fn, [builder.inttoptr(addresses, pv), ir.Constant(_I32, 4),
+                             ir.Constant(ir.VectorType(ir.IntType(1), LANES), [1] * LANES), ir.Constant(vt, None)])
 
 
 @intrinsic
-def draw8(typingctx, table, row, allowed, u):
-    """``(k, total)``, `draw` for one ant on an 8-connected grid: the weights ``table[row, j] + TINY`` of
-    the moves j whose bit is set in ``allowed`` (0 for the others) summed left to right in float32
-    (``total`` is the last running sum) and ``k`` the number of the first seven running sums at or
-    below ``u * total``, found as the first one above it (the sums never decrease) with one vector
-    compare. Same bits as the scalar loops of `walk_ant`."""
-    sig = types.Tuple((types.int64, types.float32))(table, types.int64, types.uint32, types.float32)
+def tabu_draw_lanes(typingctx, table, seen, vbits, offp, pp, stamp, row, pos, u, k_out, total_out):
+    """`draw` for `LANES` ants at once on an 8-connected grid, each in its own SIMD lane.
+
+    Lane l's ant stands on cell ``pos[l]`` (``pp[l]`` on the padded tabu grid ``seen``, ``row[l]`` in
+    ``table``); move j is allowed when bit j of ``vbits[pos]`` is set and ``seen[pp + offp[j]] != stamp[l]``.
+    Writes ``total_out[l]``, the float32 sum of the weights ``table[row, j] + TINY`` of the allowed moves
+    (0 for the others) left to right, and ``k_out[l]``, the number of the first seven running sums at or
+    below ``u[l] * total`` (counted as the sums not above it, which for non-decreasing sums is the index
+    of the first one above it: `draw`'s). Each lane does the float32 operations of the one-ant step in
+    the same order, so the draws are the same bits; the loads are vector gathers (one per move for the
+    tabu and one per move for the weights, for all lanes), so the step's dependent loads and its chain of
+    seven float additions are paid once per `LANES` ants.
+
+    Args (all arrays C-contiguous): table ``f32[R, 8]``; seen ``i32[S]``; vbits ``i32[C]`` (allowed
+    moves as bits); offp ``i64[8]``; pp, row, pos ``i64[LANES]``; stamp ``i32[LANES]``; u ``f32[LANES]``;
+    k_out ``i64[LANES]``; total_out ``f32[LANES]``. Every lane's indices must be valid (an idle lane
+    points at any valid cell).
+    """
+    sig = types.void(table, seen, vbits, offp, pp, stamp, row, pos, u, k_out, total_out)
 
     def codegen(context, builder, signature, args):
-        data = context.make_array(signature.args[0])(context, builder, args[0]).data
+        data = [context.make_array(t)(context, builder, a).data for t, a in zip(signature.args, args, strict=True)]
+        base = [builder.ptrtoint(d, _I64) for d in data]
         f32 = ir.FloatType()
-        vt, it = ir.VectorType(f32, 8), ir.VectorType(_I32, 8)
-        ptr = builder.gep(data, [builder.mul(args[1], ir.Constant(ir.IntType(64), 8))])
-        w = builder.fadd(builder.load(builder.bitcast(ptr, vt.as_pointer()), align=4),
-                         ir.Constant(vt, [float(TINY)] * 8))
-        on = builder.icmp_unsigned("!=", builder.and_(_splat(builder, args[2], it),
-                                                      ir.Constant(it, [1 << j for j in range(8)])),
-                                   ir.Constant(it, [0] * 8))
-        w = builder.select(on, w, ir.Constant(vt, [0.0] * 8))
-        acc = builder.extract_element(w, ir.Constant(_I32, 0))
-        sums = builder.insert_element(ir.Constant(vt, None), acc, ir.Constant(_I32, 0))
-        for j in range(1, 8):
-            acc = builder.fadd(acc, builder.extract_element(w, ir.Constant(_I32, j)))
-            sums = builder.insert_element(sums, acc, ir.Constant(_I32, j))
-        above = builder.fcmp_ordered(">", sums, _splat(builder, builder.fmul(args[3], acc), vt))
-        first = builder.or_(builder.zext(builder.bitcast(above, ir.IntType(8)), _I32), ir.Constant(_I32, 0x80))
-        cttz = builder.module.declare_intrinsic("llvm.cttz", [_I32], fnty=ir.FunctionType(_I32, [_I32, ir.IntType(1)]))
-        k = builder.zext(builder.call(cttz, [first, ir.Constant(ir.IntType(1), 1)]), ir.IntType(64))
-        return context.make_tuple(builder, signature.return_type, [k, acc])
+        iv, i32v, fv = ir.VectorType(_I64, LANES), ir.VectorType(_I32, LANES), ir.VectorType(f32, LANES)
+
+        def load(i, vt):
+            return builder.load(builder.bitcast(data[i], vt.as_pointer()), align=4)
+
+        ppv, stv, rowv, posv, uv = load(4, iv), load(5, i32v), load(6, iv), load(7, iv), load(8, fv)
+        visited = ir.Constant(i32v, [0] * LANES)
+        for j in range(8):
+            offj = builder.load(builder.gep(data[3], [ir.Constant(_I64, j)]))
+            stamps = _gather(builder, base[1], builder.add(ppv, _splat(builder, offj, iv)), 4, _I32)
+            hit = builder.zext(builder.icmp_signed("==", stamps, stv), i32v)
+            visited = builder.or_(visited, builder.shl(hit, ir.Constant(i32v, [j] * LANES)))
+        allowed = builder.and_(_gather(builder, base[2], posv, 4, _I32),
+                               builder.xor(visited, ir.Constant(i32v, [-1] * LANES)))
+        first = builder.mul(rowv, ir.Constant(iv, [8] * LANES))
+        sums = []
+        acc = None
+        for j in range(8):
+            w = _gather(builder, base[0], builder.add(first, ir.Constant(iv, [j] * LANES)), 4, f32)
+            w = builder.fadd(w, ir.Constant(fv, [float(TINY)] * LANES))
+            on = builder.icmp_unsigned("!=", builder.and_(allowed, ir.Constant(i32v, [1 << j] * LANES)),
+                                       ir.Constant(i32v, [0] * LANES))
+            w = builder.select(on, w, ir.Constant(fv, [0.0] * LANES))
+            acc = w if acc is None else builder.fadd(acc, w)  # 0 + w0 is w0 exactly: start from w0
+            sums.append(acc)
+        threshold = builder.fmul(uv, acc)
+        k = ir.Constant(iv, [0] * LANES)
+        for j in range(7):
+            k = builder.add(k, builder.zext(builder.not_(builder.fcmp_ordered(">", sums[j], threshold)), iv))
+        builder.store(k, builder.bitcast(data[9], iv.as_pointer()), align=8)
+        builder.store(acc, builder.bitcast(data[10], fv.as_pointer()), align=4)
+        return context.get_dummy_value()
 
     return sig, codegen

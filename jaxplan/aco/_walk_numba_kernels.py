@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit, prange
 
 from jaxplan.aco._walk import COMPACT_FACTOR, COMPACT_MIN_ANTS, DEAD_END, GOAL, STEP_LIMIT, WALKING
-from jaxplan.aco._walk_numba_intrinsics import TINY, draw8, exp_xla, move_between, uniform, visited3x3
+from jaxplan.aco._walk_numba_intrinsics import LANES, TINY, exp_xla, move_between, tabu_draw_lanes, uniform
 from jaxplan.aco._walk_numba_update import N_STATS, ant_stats
 
 __all__ = ["MODES", "DIE", "RETREAT", "ALERT", "NO_HOOK", "HOOK_RULES", "HOOK_TABLE", "walk_all", "loop_counters"]
@@ -181,150 +181,146 @@ _walk_ant, _walk_ant_8 = _walk_ant_for(0), _walk_ant_for(8)
 
 
 @njit(nogil=True)
-def _pair_tables(lut, width):
+def _lane_offsets(lut, width):
     """Flat offsets of the 8 moves on the map (``off``) and on the tabu grid padded by one cell on every
-    side (``offp``), and ``lut9 [512]``: the moves (bit k) into the cells of a 3x3 block pattern
-    (bit ``3 * (dy + 1) + dx + 1``, as `visited3x3` reads it)."""
+    side (``offp``), for `_walk_lanes8`."""
     off = np.zeros(8, np.int64)
     offp = np.zeros(8, np.int64)
-    bit = np.zeros(8, np.int64)
     for idx in range(25):
         k = lut[idx]
         if k >= 0:
             dx, dy = idx % 5 - 2, idx // 5 - 2
             off[k] = dx + dy * width
             offp[k] = dx + dy * (width + 2)
-            bit[k] = 3 * (dy + 1) + dx + 1
-    lut9 = np.zeros(512, np.uint8)
-    for b in range(512):
-        m = 0
-        for k in range(8):
-            m |= ((b >> bit[k]) & 1) << k
-        lut9[b] = m
-    return off, offp, lut9
+    return off, offp
 
 
 @njit(nogil=True)
-def _start_ant(a, start, goal, row0, seed, local, width, cells, seen):
-    """Puts ant ``a`` on its start for `_walk_pair8` (path slot 0, tabu stamp ``a + 1`` on the padded
-    grid ``seen``) and returns its lane's registers ``(pos, pp, goal, row0, seed, local, stamp)``:
-    ``pp`` is the start's index on the padded grid. Called once per ant, not per step."""
-    pos = np.int64(start[a])
-    pp = pos + (pos // width) * 2 + width + 3
-    stamp = np.int32(a + 1)
-    cells[a, 0] = pos
-    seen[pp] = stamp
-    return pos, pp, np.int64(goal[a]), np.int64(row0[a]), seed[a], np.int64(local[a]), stamp
+def _walk_lanes8(c, n_chunks, table, vbits, start, goal, row0, seed, local, max_steps, width, lut, mode, penalise,
+                 movef, cellf, cells, moves, n_out, status_out, steps_out, penalty, stats):
+    """`walk_ant` for the common case (8 moves, no hook, ``die`` or ``retreat``), `LANES` ants at a time.
 
-
-@njit(nogil=True)
-def _walk_pair8(c, n_chunks, table, vbits, start, goal, row0, seed, local, max_steps, width, lut, mode, penalise,
-                movef, cellf, cells, moves, n_out, status_out, steps_out, penalty, stats):
-    """`walk_ant` for the common case (8 moves, no hook, ``die`` or ``retreat``), two ants at a time.
-
-    Ants c, c + n_chunks, ... walk in two interleaved lanes: the step of one ant is a chain of
-    dependent loads and float adds (its latency, not its instruction count, sets its time), so a
-    second, independent ant in the same loop body fills the waiting core. The step is also shorter than
-    `walk_ant`'s: each lane's tabu is a grid padded by one cell, whose 3x3 block around the ant is read as
-    three vector compares (`visited3x3`); ``vbits`` holds each cell's allowed moves as bits; the weights,
-    their running sums and the inverse-CDF draw are one vector sequence (`draw8`). Same draws, same bits as `walk_ant`.
+    Ants c, c + n_chunks, ... walk in `LANES` lanes; a lane whose ant stops takes the chunk's next ant. One
+    round steps every lane: `tabu_draw_lanes` does the tabu test and the draw of all lanes as vector
+    gathers and float32 vector sums, then a scalar pass moves each lane's ant (or steps it back, or
+    stops it). The one-ant step is a chain of dependent loads and float additions whose latency, not its
+    instruction count, sets its time; in lanes the chain is paid once per round. Each lane's tabu is its
+    own region of one grid padded by one cell (so a move's neighbour is a fixed offset), stamped with
+    ``a + 1`` (never cleared). Same draws, same bits as `walk_ant`: the lanes' ants are independent.
 
     Moves come from ``lut`` and ``width`` (``nbr`` is not read): the neighbour table must be the
     grid's own, where a valid move k from cell c leads to ``c + off[k]`` (`neighbour_table`'s).
-
-    The two lanes' steps are written out twice on purpose: a shared step function inlined by numba
-    keeps reference counting of its array arguments inside the loop (calls on every step, slower
-    than the single-ant walk), and a non-inlined one costs a call per step.
     """
     A = start.shape[0]
     wp = width + 2
-    size = (vbits.shape[0] // width + 2) * wp + 2
-    seen0 = np.zeros(size, np.int32)
-    seen1 = np.zeros(size, np.int32)
-    off, offp, lut9 = _pair_tables(lut, width)
+    size = (vbits.shape[0] // width + 2) * wp
+    seen = np.zeros(LANES * size, np.int32)
+    vbits32 = vbits.astype(np.int32)
+    off, offp = _lane_offsets(lut, width)
     L = max_steps
+    ant = np.zeros(LANES, np.int64)
+    pos = np.zeros(LANES, np.int64)
+    pp = np.zeros(LANES, np.int64)  # pos on the padded grid, in the lane's region of ``seen``
+    row = np.zeros(LANES, np.int64)  # row0 + pos: the row of ``table``
+    n_ = np.zeros(LANES, np.int64)
+    t_ = np.zeros(LANES, np.int64)
+    goal_ = np.zeros(LANES, np.int64)
+    row0_ = np.zeros(LANES, np.int64)
+    local_ = np.zeros(LANES, np.int64)
+    seed_ = np.zeros(LANES, np.uint32)
+    stamp = np.zeros(LANES, np.int32)
+    u = np.zeros(LANES, np.float32)  # the uniform of the lane's next step
+    k_ = np.zeros(LANES, np.int64)
+    total_ = np.zeros(LANES, np.float32)
+    live = np.zeros(LANES, np.bool_)
     nxt = np.int64(c)
-    a0 = nxt
-    nxt += n_chunks
-    a1 = nxt
-    nxt += n_chunks
-    live0, live1 = a0 < A, a1 < A
-    pos0 = pp0 = n0 = t0 = g0 = r0_0 = loc0 = np.int64(0)
-    pos1 = pp1 = n1 = t1 = g1 = r0_1 = loc1 = np.int64(0)
-    sd0 = sd1 = np.uint32(0)
-    st0 = st1 = np.int32(0)
-    if live0:
-        pos0, pp0, g0, r0_0, sd0, loc0, st0 = _start_ant(a0, start, goal, row0, seed, local, width, cells, seen0)
-    if live1:
-        pos1, pp1, g1, r0_1, sd1, loc1, st1 = _start_ant(a1, start, goal, row0, seed, local, width, cells, seen1)
-    while live0 or live1:
-        s0 = s1 = WALKING
-        if live0:
-            allowed = np.uint32(vbits[pos0]) & ~np.uint32(lut9[visited3x3(seen0, pp0 - wp - 1, wp, st0)])
-            k, total = draw8(table, r0_0 + pos0, allowed, uniform(sd0, t0, loc0))
-            t0 += 1
-            if total > 0:  # as walk_ant: a NaN weight (0·log 0 under β = 0) makes the ant stuck, not move blind
-                pos0 += off[k]
-                pp0 += offp[k]
-                moves[a0, n0] = k
-                n0 += 1
-                cells[a0, n0] = pos0
-                seen0[pp0] = st0
-                if pos0 == g0:
-                    s0 = GOAL
-            elif mode == DIE or n0 == 0:
-                s0 = DEAD_END
+    n_live = 0
+    for lane in range(LANES):
+        pp[lane] = lane * size + wp + 1  # an idle lane reads a valid cell of its own region
+        live[lane] = nxt < A
+        if live[lane]:
+            n_live += 1
+            a = nxt
+            ant[lane] = a
+            p = np.int64(start[a])
+            pos[lane] = p
+            pp[lane] = lane * size + p + (p // width) * 2 + wp + 1
+            goal_[lane] = goal[a]
+            row0_[lane] = row0[a]
+            row[lane] = row0_[lane] + p
+            local_[lane] = local[a]
+            seed_[lane] = seed[a]
+            stamp[lane] = a + 1
+            u[lane] = uniform(seed_[lane], 0, local_[lane])
+            cells[a, 0] = p
+            seen[pp[lane]] = a + 1
+        nxt += n_chunks
+    while n_live > 0:
+        tabu_draw_lanes(table, seen, vbits32, offp, pp, stamp, row, pos, u, k_, total_)
+        for lane in range(LANES):
+            if not live[lane]:
+                continue
+            a = ant[lane]
+            p = pos[lane]
+            q = pp[lane]
+            n = n_[lane]
+            t = t_[lane] + 1  # the ant was walking during this step
+            r0 = row0_[lane]
+            k = k_[lane]
+            status = WALKING
+            if total_[lane] > 0:  # as walk_ant: a NaN weight (0·log 0 under β = 0) makes the ant stuck
+                p += off[k]
+                q += offp[k]
+                moves[a, n] = k
+                n += 1
+                cells[a, n] = p
+                seen[q] = stamp[lane]
+                if p == goal_[lane]:
+                    status = GOAL
+            elif mode == DIE or n == 0:
+                status = DEAD_END
             else:  # retreat over the last move
-                mv = np.int64(moves[a0, n0 - 1])
+                mv = np.int64(moves[a, n - 1])
                 if penalise:
-                    penalty[(r0_0 + cells[a0, n0 - 1]) * 8 + mv] += 1.0
-                pos0 -= off[mv]
-                pp0 -= offp[mv]
-                n0 -= 1
-            if s0 == WALKING and t0 >= L:
-                s0 = STEP_LIMIT
-        if live1:
-            allowed = np.uint32(vbits[pos1]) & ~np.uint32(lut9[visited3x3(seen1, pp1 - wp - 1, wp, st1)])
-            k, total = draw8(table, r0_1 + pos1, allowed, uniform(sd1, t1, loc1))
-            t1 += 1
-            if total > 0:
-                pos1 += off[k]
-                pp1 += offp[k]
-                moves[a1, n1] = k
-                n1 += 1
-                cells[a1, n1] = pos1
-                seen1[pp1] = st1
-                if pos1 == g1:
-                    s1 = GOAL
-            elif mode == DIE or n1 == 0:
-                s1 = DEAD_END
+                    penalty[(r0 + cells[a, n - 1]) * 8 + mv] += 1.0
+                p -= off[mv]
+                q -= offp[mv]
+                n -= 1
+            if status == WALKING and t >= L:
+                status = STEP_LIMIT
+            if status == WALKING:
+                pos[lane] = p
+                pp[lane] = q
+                row[lane] = r0 + p
+                n_[lane] = n
+                t_[lane] = t
+                u[lane] = uniform(seed_[lane], t, local_[lane])
+                continue
+            _finish_ant(a, n, t, status, cells, moves, n_out, status_out, steps_out, movef, cellf, 8, stats)
+            live[lane] = nxt < A
+            if live[lane]:  # the lane takes the chunk's next ant
+                a = nxt
+                ant[lane] = a
+                p = np.int64(start[a])
+                pos[lane] = p
+                pp[lane] = lane * size + p + (p // width) * 2 + wp + 1
+                n_[lane] = 0
+                t_[lane] = 0
+                goal_[lane] = goal[a]
+                row0_[lane] = row0[a]
+                row[lane] = row0_[lane] + p
+                local_[lane] = local[a]
+                seed_[lane] = seed[a]
+                stamp[lane] = a + 1
+                u[lane] = uniform(seed_[lane], 0, local_[lane])
+                cells[a, 0] = p
+                seen[pp[lane]] = a + 1
+                nxt += n_chunks
             else:
-                mv = np.int64(moves[a1, n1 - 1])
-                if penalise:
-                    penalty[(r0_1 + cells[a1, n1 - 1]) * 8 + mv] += 1.0
-                pos1 -= off[mv]
-                pp1 -= offp[mv]
-                n1 -= 1
-            if s1 == WALKING and t1 >= L:
-                s1 = STEP_LIMIT
-        if live0 and s0 != WALKING:
-            _finish_ant(a0, n0, t0, s0, cells, moves, n_out, status_out, steps_out, movef, cellf, 8, stats)
-            a0 = nxt
-            nxt += n_chunks
-            live0 = a0 < A
-            if live0:
-                n0 = t0 = np.int64(0)
-                pos0, pp0, g0, r0_0, sd0, loc0, st0 = _start_ant(a0, start, goal, row0, seed, local, width,
-                                                                   cells, seen0)
-        if live1 and s1 != WALKING:
-            _finish_ant(a1, n1, t1, s1, cells, moves, n_out, status_out, steps_out, movef, cellf, 8, stats)
-            a1 = nxt
-            nxt += n_chunks
-            live1 = a1 < A
-            if live1:
-                n1 = t1 = np.int64(0)
-                pos1, pp1, g1, r0_1, sd1, loc1, st1 = _start_ant(a1, start, goal, row0, seed, local, width,
-                                                                   cells, seen1)
+                n_live -= 1
+                pos[lane] = 0
+                row[lane] = 0
+                pp[lane] = lane * size + wp + 1
 
 
 @njit(nogil=True)
@@ -336,8 +332,8 @@ def _walk_chunk(c, n_chunks, nbr, table, hook_l, hook_v, right_turn, turn_rule, 
     A = start.shape[0]
     C, K = nbr.shape
     if K == 8 and not has_hook and mode != ALERT and max_steps > 0:
-        _walk_pair8(c, n_chunks, table, vbits, start, goal, row0, seed, local, max_steps, width, lut, mode, penalise,
-                    movef, cellf, cells, moves, n_out, status_out, steps_out, part, stats)
+        _walk_lanes8(c, n_chunks, table, vbits, start, goal, row0, seed, local, max_steps, width, lut, mode, penalise,
+                     movef, cellf, cells, moves, n_out, status_out, steps_out, part, stats)
         return
     seen = np.zeros(C, np.int32)
     p = np.empty(K, np.float32)
