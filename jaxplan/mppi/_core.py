@@ -47,11 +47,10 @@ MEAN_ROW, BRAKE_ROW, TURN_ROW = 0, 1, 2
 Why the turn: a unicycle that has come to rest facing a wall a few centimetres outside d_safe has no feasible
 sequence that moves (every one that drives first brings it inside d_safe), and the noisy sequences that stand
 turn by chance in either direction, so their softmax average barely turns: measured among walkers on
-maze-32-32-2, robots stood like that for 80-120 s until the time limit. The candidate stands and turns towards
-the farthest point of the local path in sight (`_aim`; the sub-goal without a path), which keeps the clearance of a
-disc footprint and wins on the heading critic; facing it, sequences that drive become feasible. Turned towards the
-sub-goal itself, a robot whose next waypoint lies round a shelf turned to face the shelf (a warehouse row). A
-robot that cannot turn in place (`jaxplan.dwa.curvature_limit`, an Ackermann) has no such row.
+maze-32-32-2, robots stood like that for 80-120 s until the time limit. The candidate stands and turns by the
+angle to the sub-goal (at most ``omega_max``), which keeps the clearance of a disc footprint and wins on the
+heading critic; facing the sub-goal, sequences that drive become feasible. A robot that cannot turn in place
+(`jaxplan.dwa.curvature_limit`, an Ackermann) has no such row.
 """
 
 
@@ -99,29 +98,10 @@ def shift(sequence: jnp.ndarray) -> jnp.ndarray:
     return jnp.concatenate([sequence[..., 1:, :], sequence[..., -1:, :]], axis=-2)
 
 
-_SIGHT_POINTS = 8
-"""A straight way to a point is in sight if it keeps d_safe (or the clearance now) at this many points."""
-
-
-def _aim(table: ClearanceTable, config: MPPIConfig, state: jnp.ndarray, ctx: C.Context) -> jnp.ndarray:
-    """``f32[2]``: the farthest of the local path's points, then the sub-goal, whose straight way from the robot
-    keeps ``min(d_safe, clearance now)`` to the map (the sub-goal if none does)."""
-    pts = jnp.concatenate([ctx.path, ctx.subgoal[None]]).astype(state.dtype)  # [L + 1, 2]
-    L = ctx.path.shape[0]
-    valid = jnp.concatenate([jnp.arange(L) < ctx.n_path, jnp.ones((1,), bool)])
-    frac = jnp.arange(1, _SIGHT_POINTS + 1, dtype=state.dtype) / _SIGHT_POINTS
-    way = state[:2] + frac[None, :, None] * (pts[:, None, :] - state[:2])  # [L + 1, P, 2]
-    clear = static_clearance(table, way[..., 0], way[..., 1], config.clearance)
-    now = static_clearance(table, state[0:1], state[1:2], config.clearance)[0]
-    sight = valid & jnp.all(clear >= jnp.minimum(config.d_safe, now) - ESCAPE_SLACK, axis=-1)
-    last = jnp.max(jnp.where(sight, jnp.arange(L + 1), -1))
-    return jnp.where(last >= 0, pts[jnp.maximum(last, 0)], ctx.subgoal.astype(state.dtype))
-
-
-def _turn(config: MPPIConfig, state: jnp.ndarray, aim: jnp.ndarray) -> jnp.ndarray:
-    """``f32[T, 2]``: stand, and turn by the angle to ``aim`` over the first half of the horizon (then hold)."""
+def _turn(config: MPPIConfig, state: jnp.ndarray, subgoal: jnp.ndarray) -> jnp.ndarray:
+    """``f32[T, 2]``: stand, and turn by the angle to ``subgoal`` over the first half of the horizon (then hold)."""
     T = config.steps
-    d = aim - state[:2]
+    d = subgoal - state[:2]
     err = jnp.arctan2(d[1], d[0]) - state[2]
     err = jnp.arctan2(jnp.sin(err), jnp.cos(err))
     half = max(T // 2, 1)
@@ -131,7 +111,7 @@ def _turn(config: MPPIConfig, state: jnp.ndarray, aim: jnp.ndarray) -> jnp.ndarr
 
 
 def _raw(config: MPPIConfig, params: MPPIParams, mean: jnp.ndarray, key, state: jnp.ndarray,
-         aim) -> tuple[jnp.ndarray, jnp.ndarray]:
+         subgoal: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:
     """``(raw [K, T, 2], noise [K, T, 2])``: the mean plus scaled noise, the first `fixed_rows` the fixed
     candidates (their noise as the control cost sees it: the candidate minus the mean)."""
     K, T = config.samples, config.steps
@@ -141,7 +121,7 @@ def _raw(config: MPPIConfig, params: MPPIParams, mean: jnp.ndarray, key, state: 
     raw = mean[None] + noise
     raw = raw.at[BRAKE_ROW].set(0.0)  # v -> 0 and ω -> 0 as fast as the window allows
     if fixed_rows(config) > TURN_ROW:
-        raw = raw.at[TURN_ROW].set(_turn(config, state, aim()))
+        raw = raw.at[TURN_ROW].set(_turn(config, state, subgoal))
         noise = noise.at[TURN_ROW].set(raw[TURN_ROW] - mean)
     return raw, noise
 
@@ -153,7 +133,7 @@ def _current_clearance(clearance, state: jnp.ndarray, margin) -> jnp.ndarray:
 
 
 def _iteration(table, config: MPPIConfig, params: MPPIParams, state, mean, key, ctx, obstacles, finish):
-    raw, noise = _raw(config, params, mean, key, state, lambda: _aim(table, config, state, ctx))
+    raw, noise = _raw(config, params, mean, key, state, ctx.subgoal)
     moving = obstacles is not None and obstacles.radii.shape[-1] > 0
     dt = config.period / config.substeps
 

@@ -211,9 +211,7 @@ def _next_waypoints(config: NavConfig, table: ClearanceTable, c: Carry, pos: jnp
     B, N = pos.shape[:2]
     # Only a creeping robot holds a waypoint whose way on is not clear: applied to every robot, the
     # rule sharpened turns at corners and cost evasions among walkers.
-    # MPPI always holds it (its heading critic turned a robot 1 m short of a corner waypoint to face the shelf
-    # on the straight way to the next one, where it stalled).
-    near = jnp.where(c.creep | (config.local == "mppi"), config.switch_min, config.switch_radius).reshape(-1)
+    near = jnp.where(c.creep, config.switch_min, config.switch_radius).reshape(-1)
     index = jax.vmap(subgoal_index, in_axes=(0, 0, 0, 0, None, 0, None, None))(
         pos.reshape(B * N, 2), c.waypoints.reshape((B * N,) + c.waypoints.shape[2:]), c.n_wp.reshape(-1),
         c.index.reshape(-1), config.switch_radius, near, config.dwa.d_safe,
