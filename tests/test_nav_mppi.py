@@ -163,7 +163,7 @@ def test_the_yield_point_steps_aside_or_backs_away():
         y = 1.0 + rows / 2
         pos, walker = np.array([8.0, y], np.float32), np.array([9.2, y], np.float32)
         point, found = yield_point(pos, walker, walker[None], np.array([0.25], np.float32),
-                                   lambda x, yy: static_clearance(table, x, yy, "hybrid"), d_safe)
+                                   lambda x, yy, t=table: static_clearance(t, x, yy, "hybrid"), d_safe)
         point = np.asarray(point)
         assert bool(found)
         assert float(static_clearance(table, point[:1], point[1:])[0]) >= d_safe + STAND_ROOM - 1e-6
