@@ -166,3 +166,23 @@ def test_bad_nav_config_values_raise_clearly(edit, match):
         text = text.replace('pipeline = "x"\n', "").replace(*edit)
     with pytest.raises(ConfigError, match=match):
         parse_tune_config(text, data_dir=DATA)
+
+
+def test_a_navigation_study_is_one_objective_over_every_map():
+    """`jaxplan study` on a ``kind = "nav"`` config: one navigation objective over all maps (not a join that would
+    run the first map's episodes only), with the pipeline's default params kept through the study's renaming."""
+    from jaxplan.tune import apply_study_quick, build_study_objective, parse_study_config
+
+    root = Path(__file__).resolve().parents[1]
+    text = (root / "configs" / "study_local_mppi.toml").read_text()
+    cfg = apply_study_quick(parse_study_config(text, data_dir=DATA.parent))
+    obj = build_study_objective(cfg)
+    assert obj.name == "study_local_mppi" and obj.kind == "nav"
+    assert [m.name for m in obj.maps] == ["maze-32-32-2", "random-32-32-20", "room-64-64-8"]
+    assert type(obj.base_params).__name__ == "MPPIParams"
+    assert [len(e.index) for e in obj.episodes["train"]] == [1, 1, 1]  # [tune.quick] train_count = 1 per map
+    for m in obj.maps:
+        assert not set(m.train_rows) & set(m.test_rows)
+    # blocks smaller than a re-planning group are groups of their own: no padded episodes
+    assert [e.B for e in obj.episodes["train"]] == [2, 2, 2]  # 1 row x 1 seed x 2 walker kinds
+    assert all(e.config.replan_group == 1 for e in obj.episodes["train"])

@@ -22,7 +22,8 @@ Layout (the design, written down):
   select that computes the re-planning fields at every step. Maps run one after the other (their
   shapes differ); costs are concatenated along the scenario axis.
 * **Same episodes as navigate_batch.** Each walker kind's block of ``rows × seeds`` episodes is
-  padded (episodes that do not run) to a whole number of `NavConfig.replan_group`, so that the
+  padded (episodes that do not run) to a whole number of `NavConfig.replan_group` (or, when smaller than
+  a group, is a group of its own: ``replan_group`` shrinks to the block), so that the
   re-planning groups — whose episodes share re-planning slots — are those of a `navigate_batch`
   call on that block, and members never share a group: a member's episodes are the episodes
   `navigate_batch` runs with its weights — step for step with DWA; with MPPI, weights given per
@@ -238,13 +239,18 @@ def _prepare_map(m: NavMap, rows: Sequence[int], seeds: Sequence[int], pipeline:
                              config=config, time_limit=time_limit, mesh=None)
         cfg = p.config
         G_ = cfg.replan_group if cfg.replan else 0
+        if 0 < E * R < G_:
+            # A block smaller than a group is one group of its own in navigate_batch (a partial group), so the
+            # group shrinks to the block: the same groups, and no padded episodes to step through.
+            cfg = dataclasses.replace(cfg, replan_group=E * R)
+            G_ = E * R
         size = E * R if G_ <= 0 else -(-(E * R) // G_) * G_
         blocks.append(_pad_block(p.inputs, size))
         index[:, k, :] = offset + np.arange(E * R).reshape(E, R)
         offset += size
         params = p.params
     inputs = _concat_blocks(blocks)
-    return _MapEpisodes(p.config, p.steps, p.table, jnp.asarray(p.free), inputs, index, offset), params
+    return _MapEpisodes(cfg, p.steps, p.table, jnp.asarray(p.free), inputs, index, offset), params
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -253,7 +259,8 @@ class NavObjective(Objective):
 
     Attributes (beyond `Objective`'s):
       maps: the `NavMap`s; walkers: the walker kinds; pipeline: the navigate pipeline; local: ``"dwa"`` or
-      ``"mppi"``; episodes: ``{split: [per-map episodes]}`` (internal).
+      ``"mppi"``; episodes: ``{split: [per-map episodes]}`` (internal); base_params: the pipeline's default
+      `DWAParams` or `MPPIParams`, into which a weight vector is scattered.
     """
 
     maps: tuple = ()
@@ -261,6 +268,7 @@ class NavObjective(Objective):
     pipeline: str = ""
     local: str = ""
     episodes: Mapping[str, Any] = dataclasses.field(default_factory=dict, repr=False)
+    base_params: Any = dataclasses.field(default=None, repr=False)  # DWAParams | MPPIParams: the pipeline's defaults
 
     def map_program(self, split: str, i: int):
         """Map ``i``'s pure program ``pop [P, D] -> (cost [P, E·K, R], metrics {k: [P, ·, R]})`` on ``split``."""
@@ -337,10 +345,6 @@ class NavObjective(Objective):
         per_seed = np.where(ok[:, None], cost.mean(axis=1), np.inf)
         means = {k: np.concatenate(v, axis=1).mean(axis=(1, 2)) for k, v in metrics.items()}
         return Evaluation(per_seed.mean(axis=1), per_seed, means, run_s, compile_s)
-
-    @property
-    def base_params(self):
-        return self.__dict__["_params0"]
 
 
 def nav_objective(maps: Sequence[NavMap], train_seeds: Sequence[int], test_seeds: Sequence[int], local: str = "dwa",
@@ -453,6 +457,5 @@ def nav_objective(maps: Sequence[NavMap], train_seeds: Sequence[int], test_seeds
 
     obj = NavObjective(name or f"nav_{local}_weights", "nav", local if local == "mppi" else pipe.evaluator, bounds,
                        defaults, weights, splits, program, base, mesh=None, memory=memory, maps=maps,
-                       walkers=walkers, pipeline=pipeline, local=local, episodes=episodes)
-    object.__setattr__(obj, "_params0", params0)
+                       walkers=walkers, pipeline=pipeline, local=local, episodes=episodes, base_params=params0)
     return obj
