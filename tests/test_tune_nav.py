@@ -186,3 +186,21 @@ def test_a_navigation_study_is_one_objective_over_every_map():
     # blocks smaller than a re-planning group are groups of their own: no padded episodes
     assert [e.B for e in obj.episodes["train"]] == [2, 2, 2]  # 1 row x 1 seed x 2 walker kinds
     assert all(e.config.replan_group == 1 for e in obj.episodes["train"])
+
+
+def test_a_navigation_study_is_confirmed_among_its_walkers():
+    """The confirmation of a navigation study runs defaults and tuned weights among each walker kind of the study,
+    with its walkers and episode length, and the config it writes is one `jaxplan run` accepts."""
+    from jaxplan.tune import confirm_config, parse_study_config
+
+    root = Path(__file__).resolve().parents[1]
+    cfg = parse_study_config((root / "configs" / "study_local_mppi.toml").read_text(), data_dir=DATA.parent)
+    entry = ('[[planners]]\nlabel = "{}"\nkind = "navigate"\nname = "astar_kng_mppi"\n'
+             'params = {{ obstacle = {} }}\n')
+    text = confirm_config(cfg, entry.format("MPPI (tuned)", 2.5), DATA.parent, entry.format("mppi (defaults)", 1.0))
+    exp = parse_config(text, data_dir=DATA.parent)
+    got = {(p.label, p.obstacles.behavior, p.obstacles.n, p.obstacles.speed) for p in exp.planners}
+    assert got == {(f"{who}, {kind} walkers", beh, 5, 1.0) for who in ("mppi (defaults)", "MPPI (tuned)")
+                   for kind, beh in (("blind", "blind"), ("seeing", "social"))}
+    assert {p.nav["max_time"] for p in exp.planners} == {120.0}
+    assert [m.name for m in exp.maps] == ["maze-32-32-2", "random-32-32-20", "room-64-64-8"]

@@ -590,6 +590,7 @@ def _summary(cfg, objective, runs, d_train, d_test, held, wall, load0) -> dict:
     hi = bm["ci95"][1] if math.isfinite(bm["ci95"][1]) else bm["mean"]
     lo_d = d_test["fitness"] - (d_hw if math.isfinite(d_hw) else 0.0)
     verdict = "beats" if hi < lo_d else ("worse" if bm["mean"] > d_test["fitness"] else "within")
+    kinds = len(getattr(objective, "walkers", ())) or 1  # a navigation objective runs every row among each kind
     return {
         "name": cfg.name, "description": cfg.description, "quick": cfg.is_quick, "kind": cfg.tunes[0].kind,
         "planner": cfg.tunes[0].planner, "gap": cfg.gap, "methods_order": list(cfg.methods),
@@ -600,8 +601,8 @@ def _summary(cfg, objective, runs, d_train, d_test, held, wall, load0) -> dict:
         "metric_weights": dict(objective.weights),
         "maps": [{"name": t.map.name, "train_rows": int(min(t.train_count, 10**9)),
                   "train_seeds": list(t.train_seeds), "heldout_seeds": list(t.test_seeds)} for t in cfg.tunes],
-        "train_runs": int(len(objective.splits["train"].starts) * len(objective.splits["train"].seeds)),
-        "heldout_runs": int(len(objective.splits["test"].starts) * len(objective.splits["test"].seeds)),
+        "train_runs": int(len(objective.splits["train"].starts) * len(objective.splits["train"].seeds) * kinds),
+        "heldout_runs": int(len(objective.splits["test"].starts) * len(objective.splits["test"].seeds) * kinds),
         "train_rows": int(len(objective.splits["train"].starts)),
         "heldout_rows": int(len(objective.splits["test"].starts)),
         "defaults": {"weights": objective.params(objective.defaults), "train": float(d_train.fitness[0]),
@@ -651,8 +652,8 @@ def confirm_config(cfg: StudyConfig, fragment: str, data_dir: str | os.PathLike 
 
     ``defaults`` is the defaults' ``[[planners]]`` entry (`fragment_toml` of the objective's defaults); None: the
     planner by name with the study's overrides (an ACO planner). Navigation kinds are confirmed on the episode
-    metrics (success, time, collisions, path length); moving obstacles, if the study's episodes have them, must be
-    added to the entries by the caller.
+    metrics (success, time, collisions, path length); a navigation study's entries are repeated once per walker
+    kind, with its walkers (`_nav_entries`).
 
     Raises:
       ValueError: a confirmation pair that is one of the study's training rows, or seeds that meet the training
@@ -666,6 +667,8 @@ def confirm_config(cfg: StudyConfig, fragment: str, data_dir: str | os.PathLike 
     shared = sorted(set(cfg.confirm_seeds) & (set(t0.train_seeds) | set(t0.test_seeds)))
     if shared:
         raise ValueError(f"confirm_seeds meet the study's train or held-out seeds: {shared}")
+    if t0.kind == "nav":
+        defaults, fragment = _nav_entries(defaults or "", t0), "\n" + _nav_entries(fragment, t0)
     lines = [f"# Confirmation of study {cfg.name}: the defaults against the tuned weights (best.toml) on fresh random",
              f"# start-goal pairs (scenario seed {cfg.confirm_scenario_seed}, checked against the training rows) and "
              "trial seeds", "# that neither the tuner nor the held-out split used. Written by `jaxplan study`.", "",
@@ -704,6 +707,26 @@ def confirm_config(cfg: StudyConfig, fragment: str, data_dir: str | os.PathLike 
         train, _ = _splits(t, gridt, ts, tg, topt)
         check_disjoint(train, Split(starts, goals, optimal, tuple(cfg.confirm_seeds)), f"confirmation, {spec.name}")
     return text
+
+
+def _nav_entries(block: str, t: TuneConfig) -> str:
+    """A navigation ``[[planners]]`` entry once per walker kind of ``t``: labelled with the kind, with the study's
+    walkers (`nav_objective`'s: their count, speed, 0.25 m radius, `AVOID_RADIUS` from start and goal) and its
+    episode length (``nav.max_time``)."""
+    from jaxplan.tune._nav_objective import AVOID_RADIUS, WALKER_KINDS
+
+    out = []
+    for kind in t.walkers:
+        obs = {"n": t.walker_count, "speed": t.walker_speed, "radius": 0.25, "avoid_radius": AVOID_RADIUS,
+               "behavior": WALKER_KINDS[kind]}
+        lines = []
+        for ln in block.strip("\n").splitlines():
+            if ln.startswith("label = "):
+                ln = f"label = {_toml_value(tomllib.loads(ln)['label'] + f', {kind} walkers')}"
+            lines.append(ln)
+        lines += [f"obstacles = {_inline(obs)}", f"nav = {_inline({'max_time': t.max_time})}"]
+        out.append("\n".join(lines) + "\n")
+    return "\n".join(out)
 
 
 def own_gap_table(cfg: StudyConfig, run: Path, data_dir=None) -> list[str]:
@@ -775,6 +798,7 @@ def _page(cfg: StudyConfig, s: dict, frag: str, results) -> str:
     gap = {"own": "the gap of the best path's own IACO cost (at the default λ) to its exact own optimum "
                   "(`jaxplan.search.exact_objectives`)",
            "length": "the gap of the best path's length to the shortest path"}[cfg.gap]
+    kinds = f" × {len(t0.walkers)} walker kinds" if t0.kind == "nav" else ""
     mw = " + ".join(f"{w:g}·{k}" for k, w in s["metric_weights"].items())
     space = ", ".join(f"{n} ∈ [{lo:g}, {hi:g}]" for n, (lo, hi) in s["space"].items())
     dft = s["defaults"]
@@ -788,13 +812,17 @@ def _page(cfg: StudyConfig, s: dict, frag: str, results) -> str:
              "## Setup", "",
              f"- Planner: `{t0.planner}` with overrides {_inline(dict(t0.overrides)) if t0.overrides else '{}'}; "
              f"tuned: {space}.",
-             f"- Cost (lower is better): {mw}, where gap is {gap} (a failed run counts gap 1), averaged over "
-             "scenarios and seeds.",
+             (f"- Cost (lower is better): {mw}, where gap is {gap} (a failed run counts gap 1), averaged over "
+              "scenarios and seeds." if t0.kind != "nav" else
+              f"- Cost (lower is better): {mw} per episode, where failure = not at the goal without contact within "
+              "the time limit and time = time to the goal over that limit (1 when not reached): success first, time "
+              f"second; averaged over episodes. Pipeline `{t0.pipeline}`, {t0.walker_count} walkers at "
+              f"{t0.walker_speed:g} m/s, each vector scored among each kind: {', '.join(t0.walkers)}."),
              "- Maps: " + "; ".join(f"{m['name']} (train seeds {m['train_seeds']}, held-out seeds "
                                     f"{m['heldout_seeds']})" for m in s["maps"]) + ".",
-             f"- Training split: {s['train_rows']} scenario rows × {len(t0.train_seeds)} seeds = {s['train_runs']} "
-             f"runs per evaluation; held-out split: {s['heldout_rows']} other rows × {len(t0.test_seeds)} other "
-             f"seeds = {s['heldout_runs']} runs. Rows and seeds are disjoint (checked: the study refuses to run "
+             f"- Training split: {s['train_rows']} scenario rows × {len(t0.train_seeds)} seeds{kinds} = "
+             f"{s['train_runs']} runs per evaluation; held-out split: {s['heldout_rows']} other rows × "
+             f"{len(t0.test_seeds)} other seeds{kinds} = {s['heldout_runs']} runs. Rows and seeds are disjoint (checked: the study refuses to run "
              "otherwise).",
              f"- Budget: {cfg.budget} training evaluations (weight vectors) per method and tuner seed, counted by "
              f"the objective wrapper ({cfg.population} per generation × {cfg.generations} generations); "
