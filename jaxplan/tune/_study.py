@@ -822,8 +822,8 @@ def _page(cfg: StudyConfig, s: dict, frag: str, results) -> str:
                                     f"{m['heldout_seeds']})" for m in s["maps"]) + ".",
              f"- Training split: {s['train_rows']} scenario rows × {len(t0.train_seeds)} seeds{kinds} = "
              f"{s['train_runs']} runs per evaluation; held-out split: {s['heldout_rows']} other rows × "
-             f"{len(t0.test_seeds)} other seeds{kinds} = {s['heldout_runs']} runs. Rows and seeds are disjoint (checked: the study refuses to run "
-             "otherwise).",
+             f"{len(t0.test_seeds)} other seeds{kinds} = {s['heldout_runs']} runs. Rows and seeds are disjoint "
+             "(checked: the study refuses to run otherwise).",
              f"- Budget: {cfg.budget} training evaluations (weight vectors) per method and tuner seed, counted by "
              f"the objective wrapper ({cfg.population} per generation × {cfg.generations} generations); "
              f"{len(cfg.tuner_seeds)} tuner seeds {list(cfg.tuner_seeds)}. The strategies that take a starting "
