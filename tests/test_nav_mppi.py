@@ -171,3 +171,28 @@ def test_the_yield_point_steps_aside_or_backs_away():
             assert abs(point[1] - y) >= 0.5 and point[0] <= pos[0] + 0.2, point
         else:
             assert abs(point[1] - y) < 1e-3 and point[0] <= pos[0] - 1.5, point
+
+
+def test_creep_distance_defaults_and_checks():
+    assert NavConfig(local="mppi").creep_reach == 2.0
+    assert NavConfig(local="dwa").creep_reach == np.inf and NavConfig().creep_reach == np.inf
+    assert NavConfig(local="dwa", creep_distance=3.0).creep_reach == 3.0
+    with pytest.raises(ValueError, match="creep_distance"):
+        jp.navigate(OPEN, (1, 4), (20, 4), pipeline="astar_kng_mppi", config=NavConfig(creep_distance=-1.0))
+
+
+@pytest.mark.slow
+def test_a_creeping_mppi_robot_is_released_once_it_comes_closer(movingai):
+    """Warehouse row 1 (seed 0): the robot stops 1 m short of a corner waypoint, turns towards the next one behind
+    a shelf and stalls; held to the creep speed along its re-planned path's long first leg it arrives after about
+    three minutes, released once 2 m closer to its goal in little more than the optimal time."""
+    grid = jp.load_map(movingai / "warehouse-10-20-10-2-1.map", resolution=1.0)
+    scen = jp.load_scenarios(movingai / "warehouse-10-20-10-2-1-random-1.scen", grid)
+    row = int(np.nonzero(scen.optimal <= 80)[0][0])
+    times = {}
+    for reach in (None, np.inf):
+        b = jp.navigate_batch(grid, scen.starts[row:row + 1], scen.goals[row:row + 1], pipeline="iaco_mppi",
+                              seeds=[0], config=NavConfig(creep_distance=reach))
+        assert b.success[0, 0, 0], b.reason[0, 0, 0]
+        times[reach] = float(b.time_s[0, 0, 0])
+    assert times[None] < 1.2 * scen.optimal[row] < 1.2 * 80 < times[np.inf], times

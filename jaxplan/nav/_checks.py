@@ -75,6 +75,10 @@ def resolve_config(config: NavConfig | None, pipeline: Pipeline, local_planner: 
         v = getattr(cfg, f)
         if not (isinstance(v, (int, float)) and not math.isnan(v) and v > 0):
             raise ValueError(f"NavConfig.{f} must be a number > 0 (inf disables {what}), got {v!r}")
+    v = cfg.creep_distance
+    if v is not None and not (isinstance(v, (int, float)) and not math.isnan(v) and v > 0):
+        raise ValueError(f"NavConfig.creep_distance must be None or a number > 0 (inf: creep until the waypoint), "
+                         f"got {v!r}")
     for f in ("stall_progress", "stall_speed", "give_way_time", "give_way_distance", "give_way_move",
               "give_way_hold"):
         v = getattr(cfg, f)

@@ -141,6 +141,12 @@ class NavConfig:
         the straight way to its waypoint crosses a blocked cell). ``inf`` disables it.
       stall_progress: metres of approach that count as progress (see ``stall_time``).
       stall_speed: top speed (m/s) while creeping.
+      creep_distance: a creeping robot stops creeping once it is this much (m) closer to its
+        goal than where it began (static; a robot circling in place does not come closer):
+        None (default) = 2 m with the MPPI local planner, unlimited with DWA and path following
+        (their results stay those measured before the option existed). MPPI brakes for its own
+        corners, so it needs the creep only to get loose; held to ``stall_speed`` along a
+        re-planned path's long first leg it lost minutes (docs/decisions.md, "MPPI in episodes").
       threat_distance: a moving obstacle whose edge is within this distance of the robot's
         centre, and whose own speed component towards that centre exceeds ``threat_speed``
         (m/s), lifts the corner speed cap of a DWA robot: it may then drive at full speed, to
@@ -226,6 +232,7 @@ class NavConfig:
     recheck_period: float = 3.0
     recheck_gain: float = 5.0
     recede_speed: float = 0.5
+    creep_distance: float | None = dataclasses.field(default=None, metadata=dict(static=True))
     prediction: str = dataclasses.field(default="constant_velocity", metadata=dict(static=True))
     give_way: bool | None = dataclasses.field(default=None, metadata=dict(static=True))
     give_way_time: float = 3.0
@@ -238,6 +245,13 @@ class NavConfig:
         """Control steps of the longest episode, a multiple of ``chunk``."""
         n = math.ceil(self.max_time / self.dwa.period - 1e-9)
         return math.ceil(n / self.chunk) * self.chunk
+
+    @property
+    def creep_reach(self) -> float:
+        """How far (m) from where it stalled a robot creeps (``creep_distance``; by default 2 m with MPPI)."""
+        if self.creep_distance is not None:
+            return float(self.creep_distance)
+        return 2.0 if self.local == "mppi" else math.inf
 
     @property
     def gives_way(self) -> bool:

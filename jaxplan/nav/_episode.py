@@ -36,6 +36,7 @@ robot of every episode is done; trajectories go to fixed-size buffers.
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import NamedTuple
 
 import jax
@@ -129,9 +130,12 @@ def _watch_progress(config: NavConfig, c: Carry, pos: jnp.ndarray, crowded: jnp.
     spin = jnp.where(fresh, 0.0, spin)
     goal_best = jnp.where(nearer, d_goal, c.goal_best)
     creep = (~restart & (c.creep | stalled)) | (orbit & ~crowded)
+    creep_goal = jnp.where(creep & ~c.creep, d_goal, c.creep_goal)
+    if math.isfinite(config.creep_reach):  # loose once that much closer to its goal (a circling robot does not come)
+        creep = creep & ~(c.creep & (d_goal < creep_goal - config.creep_reach))
     stall_replan = creep & (c.stall_replan | ~c.creep | again)
     return c._replace(watch=target, closest=closest, progress_t=progress_t, creep=creep, stall_replan=stall_replan,
-                      spin=spin, goal_best=goal_best)
+                      spin=spin, goal_best=goal_best, creep_goal=creep_goal)
 
 
 def _centres_at(obs: MovingObstacles, times: jnp.ndarray) -> jnp.ndarray:
@@ -610,6 +614,7 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
         last_replan=zeros - 10**6, origin=inputs.start[..., :2], sq_error=jnp.zeros((B, N), inputs.start.dtype),
         error=jnp.zeros((B, N), inputs.start.dtype), watch=jnp.full((B, N, 2), jnp.nan, inputs.start.dtype),
         closest=jnp.zeros((B, N), inputs.start.dtype), progress_t=zeros, creep=jnp.zeros((B, N), bool),
+        creep_goal=jnp.zeros((B, N), inputs.start.dtype),
         spin=jnp.zeros((B, N), inputs.start.dtype),
         goal_best=jnp.sqrt(jnp.sum(lax.stop_gradient(inputs.goal - inputs.start[..., :2]) ** 2, axis=-1)),
         stall_replan=jnp.zeros((B, N), bool), detour=jnp.zeros((B, N), bool),
