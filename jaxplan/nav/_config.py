@@ -248,7 +248,8 @@ class NavConfig:
 
     @property
     def creep_reach(self) -> float:
-        """How far (m) from where it stalled a robot creeps (``creep_distance``; by default 2 m with MPPI)."""
+        """How much closer (m) to its goal a creeping robot comes before it is released (``creep_distance``;
+        by default 2 m with MPPI, ``inf`` otherwise)."""
         if self.creep_distance is not None:
             return float(self.creep_distance)
         return 2.0 if self.local == "mppi" else math.inf

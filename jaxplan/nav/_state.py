@@ -118,7 +118,7 @@ class Carry(NamedTuple):
     watch: jnp.ndarray  # [B, N, 2] the waypoint whose approach is being watched (m)
     closest: jnp.ndarray  # [B, N] closest approach to that waypoint so far (m)
     progress_t: jnp.ndarray  # [B, N] step of the last approach by NavConfig.stall_progress
-    creep: jnp.ndarray  # [B, N] stalled: top speed stall_speed until the waypoint is passed
+    creep: jnp.ndarray  # [B, N] stalled: top speed stall_speed until the waypoint is passed (or creep_distance)
     creep_goal: jnp.ndarray  # [B, N] distance to the goal where the robot last began to creep (m)
     spin: jnp.ndarray  # [B, N] net heading change (rad) since the last approach to the goal, a crowd or an orbit
     goal_best: jnp.ndarray  # [B, N] that approach: closest distance to the goal so far (m)
