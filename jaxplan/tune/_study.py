@@ -319,7 +319,7 @@ def build_study_objective(cfg: StudyConfig) -> Objective:
     if t0.kind == "nav":
         # One navigation objective over every map: its `evaluate` runs the maps one compiled call each (a join of
         # per-map objectives would evaluate the first map's episodes only); it checks rows and seeds disjoint.
-        t = dataclasses.replace(t0, maps=tuple(m for t in cfg.tunes for m in t.maps),
+        t = dataclasses.replace(t0, maps=tuple(m for one in cfg.tunes for m in one.maps),
                                 test_count=cfg.held_out_count if cfg.held_out_count is not None else t0.test_count)
         return dataclasses.replace(build_objective(t), name=cfg.name, _compiled={})
     objs = []
