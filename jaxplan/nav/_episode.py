@@ -74,7 +74,7 @@ from jaxplan.nav._state import (
 )
 from jaxplan.nav._tracking import corner_cap, follow, lookahead_point, rewatch, subgoal_index, threatened
 
-__all__ = ["run_episodes"]
+__all__ = ["run_episodes", "initial_carry", "run_chunk"]
 
 SOCIAL_FORCE = SocialForce()
 """The walkers' social force parameters (Helbing & Molnár 1995; see `jaxplan.nav._social`)."""
@@ -589,6 +589,35 @@ def _initial_plans(config: NavConfig, start: jnp.ndarray) -> jnp.ndarray:
     return jax.vmap(jax.vmap(lambda s: initial_sequence(mc, s)))(start).astype(start.dtype)
 
 
+def initial_carry(config: NavConfig, inputs: EpisodeInputs) -> Carry:
+    """The episode loop's carry before step 0 (pure): every robot at its start, nothing counted yet."""
+    B, N = inputs.start.shape[:2]
+    zeros = jnp.zeros((B, N), jnp.int32)
+    return Carry(
+        state=inputs.start, waypoints=inputs.waypoints, n_wp=inputs.n_waypoints, index=zeros, done=~inputs.active,
+        reason=zeros, steps=zeros, hit=jnp.zeros((B, N), bool), pair_hit=jnp.zeros((B, N, N), bool),
+        collisions=zeros, active_contacts=zeros, pair_collisions=jnp.zeros((B, N, N), jnp.int32), replans=zeros,
+        last_replan=zeros - 10**6, origin=inputs.start[..., :2], sq_error=jnp.zeros((B, N), inputs.start.dtype),
+        error=jnp.zeros((B, N), inputs.start.dtype), watch=jnp.full((B, N, 2), jnp.nan, inputs.start.dtype),
+        closest=jnp.zeros((B, N), inputs.start.dtype), progress_t=zeros, creep=jnp.zeros((B, N), bool),
+        creep_goal=jnp.zeros((B, N), inputs.start.dtype),
+        spin=jnp.zeros((B, N), inputs.start.dtype),
+        goal_best=jnp.sqrt(jnp.sum(lax.stop_gradient(inputs.goal - inputs.start[..., :2]) ** 2, axis=-1)),
+        stall_replan=jnp.zeros((B, N), bool), detour=jnp.zeros((B, N), bool),
+        plan=_initial_plans(config, inputs.start), walkers=_initial_walkers(inputs.obstacles),
+        give_way=initial_give_way(inputs.start[..., :2]) if config.gives_way else None,
+        t=jnp.asarray(0, jnp.int32),
+    )
+
+
+def run_chunk(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: DWAParams | MPPIParams,
+              inputs: EpisodeInputs, carry: Carry, per_episode: bool = False) -> Carry:
+    """`NavConfig.chunk` steps of every episode from ``carry`` (pure; ``config`` and ``per_episode`` static),
+    the trajectories dropped: what `jaxplan.nav.run_outcomes` steps between its compactions."""
+    return lax.scan(lambda cc, _: (_step(config, table, free, params, inputs, cc, per_episode)[0], None), carry,
+                    None, length=config.chunk)[0]
+
+
 def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp.ndarray,
                  params: DWAParams | MPPIParams, inputs: EpisodeInputs, per_episode: bool = False) -> EpisodeOutput:
     """Runs ``B`` episodes of ``N`` robots (pure; jit with ``config`` and ``steps`` static).
@@ -606,22 +635,7 @@ def run_episodes(config: NavConfig, steps: int, table: ClearanceTable, free: jnp
     """
     B, N = inputs.start.shape[:2]
     chunk = config.chunk
-    zeros = jnp.zeros((B, N), jnp.int32)
-    carry = Carry(
-        state=inputs.start, waypoints=inputs.waypoints, n_wp=inputs.n_waypoints, index=zeros, done=~inputs.active,
-        reason=zeros, steps=zeros, hit=jnp.zeros((B, N), bool), pair_hit=jnp.zeros((B, N, N), bool),
-        collisions=zeros, active_contacts=zeros, pair_collisions=jnp.zeros((B, N, N), jnp.int32), replans=zeros,
-        last_replan=zeros - 10**6, origin=inputs.start[..., :2], sq_error=jnp.zeros((B, N), inputs.start.dtype),
-        error=jnp.zeros((B, N), inputs.start.dtype), watch=jnp.full((B, N, 2), jnp.nan, inputs.start.dtype),
-        closest=jnp.zeros((B, N), inputs.start.dtype), progress_t=zeros, creep=jnp.zeros((B, N), bool),
-        creep_goal=jnp.zeros((B, N), inputs.start.dtype),
-        spin=jnp.zeros((B, N), inputs.start.dtype),
-        goal_best=jnp.sqrt(jnp.sum(lax.stop_gradient(inputs.goal - inputs.start[..., :2]) ** 2, axis=-1)),
-        stall_replan=jnp.zeros((B, N), bool), detour=jnp.zeros((B, N), bool),
-        plan=_initial_plans(config, inputs.start), walkers=_initial_walkers(inputs.obstacles),
-        give_way=initial_give_way(inputs.start[..., :2]) if config.gives_way else None,
-        t=jnp.asarray(0, jnp.int32),
-    )
+    carry = initial_carry(config, inputs)
     states = jnp.broadcast_to(inputs.start[None], (steps + 1, B, N, 5))
     controls = jnp.zeros((steps, B, N, 2), inputs.start.dtype)
     recov = jnp.zeros((steps, B, N), bool)
