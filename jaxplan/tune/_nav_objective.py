@@ -13,23 +13,26 @@ Layout (the design, written down):
 * **Global plans once.** The global path does not depend on the local planner's weights:
   `jaxplan.nav.prepare_episodes` plans every (map, row, seed) once on the host, at
   construction, and the objective keeps the `EpisodeInputs`.
-* **One compiled call per map and split.** A map's episodes — walker kinds × rows × seeds — are
+* **A population is one batch per map.** A map's episodes — walker kinds × rows × seeds — are
   one batch of ``B`` episodes; the population is folded into the episode axis (``P·B``
-  episodes, each with its own weights: `run_episodes(..., per_episode=True)`), so a population
-  is ONE compiled call per map, with no Python loop over members, rows, seeds or walker kinds.
-  Not ``vmap`` over the population: the episode's re-planning branch is a `lax.cond` taken only
-  on steps where some robot needs it, and under ``vmap`` a batched predicate turns it into a
-  select that computes the re-planning fields at every step. Maps run one after the other (their
-  shapes differ); costs are concatenated along the scenario axis.
-* **Same episodes as navigate_batch.** Each walker kind's block of ``rows × seeds`` episodes is
-  padded (episodes that do not run) to a whole number of `NavConfig.replan_group` (or, when smaller than
-  a group, is a group of its own: ``replan_group`` shrinks to the block), so that the
-  re-planning groups — whose episodes share re-planning slots — are those of a `navigate_batch`
-  call on that block, and members never share a group: a member's episodes are the episodes
-  `navigate_batch` runs with its weights — step for step with DWA; with MPPI, weights given per
-  episode rather than as broadcast scalars round differently in the last bits, which its softmax
-  carries on, so an episode's time may differ slightly (docs/decisions.md). Choose rows × seeds a
-  multiple of the group (25) to pay for no padding.
+  episodes, each with its own weights: ``per_episode=True``), so a population is one batch per
+  map and split, with no Python loop over members, rows, seeds or walker kinds. Not ``vmap`` over
+  the population: the episode's re-planning branch is a `lax.cond` taken only on steps where some
+  robot needs it, and under ``vmap`` a batched predicate turns it into a select that computes the
+  re-planning fields at every step. Maps run one after the other (their shapes differ); costs are
+  concatenated along the scenario axis.
+* **Same episodes as navigate.** Every episode is a re-planning group of its own
+  (`NavConfig.replan_group` = 1, whatever the config says): it re-plans as `jaxplan.navigate` re-plans
+  one scenario, never waiting for a slot another episode of the batch holds, so members never share
+  anything — a member's episodes are the episodes `navigate_batch` runs with its weights and
+  ``replan_group=1`` (step for step with DWA; with MPPI, weights given per episode rather than as
+  broadcast scalars round differently in the last bits, which its softmax carries on, so an episode's
+  time may differ slightly: docs/decisions.md).
+* **Finished episodes are dropped.** `evaluate` steps each batch with `jaxplan.nav.run_outcomes`, which
+  gathers the unfinished episodes into a batch half the size whenever they fit: among walkers most
+  episodes end well before the one deadlock that would otherwise keep all ``P·B`` stepping to the time
+  limit. Its outcomes equal `run_episodes`' (tested), so `map_program` — the same scores as one pure
+  compiled program — agrees with `evaluate`.
 * **Splits.** `Split` carries ``map_index`` (into `NavObjective.maps`) and ``rows`` (the
   scenario file's row numbers); train and held-out splits must be disjoint in (map, row) and in
   seeds (checked at construction: ``ValueError``).
@@ -184,16 +187,6 @@ def _walkers(grid, starts: np.ndarray, goals: np.ndarray, n: int, speed: float, 
     return make
 
 
-def _pad_block(inputs, size: int):
-    """``inputs`` (leading axis ``[B]``) padded to ``size`` episodes with copies of the last that do not run."""
-    B = inputs.start.shape[0]
-    if size == B:
-        return inputs
-    idx = np.minimum(np.arange(size), B - 1)
-    out = jax.tree_util.tree_map(lambda a: jnp.asarray(a)[idx], inputs)
-    return out._replace(active=out.active.at[B:].set(False))
-
-
 def _concat_blocks(blocks):
     """Episode blocks (`EpisodeInputs`) concatenated along the episode axis, waypoint and route axes padded."""
     from jaxplan.nav import pad_obstacles, with_reactive
@@ -237,18 +230,12 @@ def _prepare_map(m: NavMap, rows: Sequence[int], seeds: Sequence[int], pipeline:
         p = prepare_episodes(m.grid, S, G, pipeline, list(seeds), _walkers(m.grid, S, G, n_walkers, speed, radius,
                                                                            WALKER_KINDS[kind]),
                              config=config, time_limit=time_limit, mesh=None)
-        cfg = p.config
-        G_ = cfg.replan_group if cfg.replan else 0
-        if 0 < E * R < G_:
-            # A block smaller than a group is one group of its own in navigate_batch (a partial group), so the
-            # group shrinks to the block: the same groups, and no padded episodes to step through.
-            cfg = dataclasses.replace(cfg, replan_group=E * R)
-            G_ = E * R
-        size = E * R if G_ <= 0 else -(-(E * R) // G_) * G_
-        blocks.append(_pad_block(p.inputs, size))
+        blocks.append(p.inputs)
         index[:, k, :] = offset + np.arange(E * R).reshape(E, R)
-        offset += size
+        offset += E * R
         params = p.params
+    # Every episode re-plans on its own (module docstring): no group couples two episodes, members or not.
+    cfg = dataclasses.replace(p.config, replan_group=1)
     inputs = _concat_blocks(blocks)
     return _MapEpisodes(cfg, p.steps, p.table, jnp.asarray(p.free), inputs, index, offset), params
 
@@ -270,57 +257,69 @@ class NavObjective(Objective):
     episodes: Mapping[str, Any] = dataclasses.field(default_factory=dict, repr=False)
     base_params: Any = dataclasses.field(default=None, repr=False)  # DWAParams | MPPIParams: the pipeline's defaults
 
-    def map_program(self, split: str, i: int):
-        """Map ``i``'s pure program ``pop [P, D] -> (cost [P, E·K, R], metrics {k: [P, ·, R]})`` on ``split``."""
-        from jaxplan.nav import REASONS, run_episodes
-
-        ep: _MapEpisodes = self.episodes[split][i]
+    def _population(self, ep: _MapEpisodes, pop):
+        """``pop [P, D]`` as per-episode params and the map's inputs repeated per member (``[P·B]`` leaves)."""
         params_type = type(self.base_params)
         base_j = {k: jnp.asarray(v, jnp.float32) for k, v in self.base.items()}
         slots = _slots(self.bounds)
+        P = pop.shape[0]
+        params = jax.vmap(lambda x: params_type(**_scatter(base_j, slots, x)))(pop)  # leaves [P]
+        params = jax.tree_util.tree_map(lambda a: jnp.repeat(a, ep.B, axis=0), params)  # [P·B]
+        inputs = jax.tree_util.tree_map(lambda a: jnp.tile(a, (P,) + (1,) * (a.ndim - 1)), ep.inputs)
+        return params, inputs
+
+    def _score(self, ep: _MapEpisodes, P: int, inputs, steps, reason, collisions, active_contacts):
+        """Cost ``[P, E·K, R]`` and metrics of a population's episodes (``inputs``: `_population`'s) from how
+        they ended (``[P·B, 1]`` each)."""
+        from jaxplan.nav import REASONS
+
         E, K, R = ep.index.shape
         idx = jnp.asarray(ep.index.reshape(-1))
-        goal = REASONS.index("goal")
-        period = float(ep.config.dwa.period)
-        weights = dict(self.weights)
-        kinds = self.walkers
+
+        def pick(a):  # [P·B, 1] -> [P, E, K, R]
+            return jnp.asarray(a)[:, 0].reshape(P, ep.B)[:, idx].reshape(P, E, K, R)
+
+        active, coll = pick(inputs.active), pick(collisions)
+        success = active & (pick(reason) == REASONS.index("goal")) & (coll == 0)
+        t = pick(steps).astype(jnp.float32) * float(ep.config.dwa.period)
+        limit = pick(inputs.time_limit)
+        act = pick(active_contacts).astype(jnp.float32)
+        m = {
+            "time": jnp.where(success, t / limit, 1.0),
+            "failure": 1.0 - success.astype(jnp.float32),
+            "collision": (coll > 0).astype(jnp.float32),
+            "active_contacts": act,
+            "passive_contacts": coll.astype(jnp.float32) - act,
+            "success": success.astype(jnp.float32),
+            "time_s": t,
+        }
+        cost = sum(w * m[k] for k, w in self.weights.items())
+        flat = lambda a: a.reshape(P, E * K, R)  # noqa: E731
+        metrics = {k: flat(v) for k, v in m.items()}
+        for j, kind in enumerate(self.walkers):
+            metrics[f"success_{kind}"] = success[:, :, j].astype(jnp.float32)
+        return flat(cost), metrics
+
+    def map_program(self, split: str, i: int):
+        """Map ``i``'s pure program ``pop [P, D] -> (cost [P, E·K, R], metrics {k: [P, ·, R]})`` on ``split``: one
+        compiled `run_episodes` call, every episode stepped until the batch's last ends (`evaluate` drops
+        finished ones instead, with the same scores)."""
+        from jaxplan.nav import run_episodes
+
+        ep: _MapEpisodes = self.episodes[split][i]
 
         def run(pop):
-            P = pop.shape[0]
-            params = jax.vmap(lambda x: params_type(**_scatter(base_j, slots, x)))(pop)  # leaves [P]
-            params = jax.tree_util.tree_map(lambda a: jnp.repeat(a, ep.B, axis=0), params)  # [P·B]
-            inputs = jax.tree_util.tree_map(lambda a: jnp.tile(a, (P,) + (1,) * (a.ndim - 1)), ep.inputs)
+            params, inputs = self._population(ep, pop)
             out = run_episodes(ep.config, ep.steps, ep.table, ep.free, params, inputs, per_episode=True)
-
-            def pick(a):  # [P·B, 1] -> [P, E, K, R]
-                return a[:, 0].reshape(P, ep.B)[:, idx].reshape(P, E, K, R)
-
-            active = pick(inputs.active)
-            coll = pick(out.collisions)
-            success = active & (pick(out.reason) == goal) & (coll == 0)
-            t = pick(out.steps).astype(jnp.float32) * period
-            limit = pick(inputs.time_limit)
-            act = pick(out.active_contacts).astype(jnp.float32)
-            m = {
-                "time": jnp.where(success, t / limit, 1.0),
-                "failure": 1.0 - success.astype(jnp.float32),
-                "collision": (coll > 0).astype(jnp.float32),
-                "active_contacts": act,
-                "passive_contacts": coll.astype(jnp.float32) - act,
-                "success": success.astype(jnp.float32),
-                "time_s": t,
-            }
-            cost = sum(w * m[k] for k, w in weights.items())
-            flat = lambda a: a.reshape(P, E * K, R)  # noqa: E731
-            metrics = {k: flat(v) for k, v in m.items()}
-            for j, kind in enumerate(kinds):
-                metrics[f"success_{kind}"] = success[:, :, j].astype(jnp.float32)
-            return flat(cost), metrics
+            return self._score(ep, pop.shape[0], inputs, out.steps, out.reason, out.collisions, out.active_contacts)
 
         return run
 
     def evaluate(self, pop, split: str = "train") -> Evaluation:
-        """Evaluates ``pop [P, D]`` (or one vector) on ``split``: one compiled call per map (on one device)."""
+        """Evaluates ``pop [P, D]`` (or one vector) on ``split``: one batch per map, stepped by
+        `jaxplan.nav.run_outcomes` (finished episodes dropped; its programs compiled once per batch size)."""
+        from jaxplan.nav import run_outcomes
+
         pop = jnp.atleast_2d(jnp.asarray(pop, jnp.float32))
         if pop.shape[-1] != self.bounds.dim:
             raise ValueError(f"population has {pop.shape[-1]} columns, the space has {self.bounds.dim} "
@@ -328,15 +327,24 @@ class NavObjective(Objective):
         self.check_population(pop.shape[0], split)
         compile_s = run_s = 0.0
         costs, metrics = [], {}
-        for i in range(len(self.maps)):
-            key = (split, i, pop.shape)
-            if key not in self._compiled:
-                t0 = time.perf_counter()
-                self._compiled[key] = jax.jit(self.map_program(split, i)).lower(pop).compile()
-                compile_s += time.perf_counter() - t0
+        # A member equal to an earlier one (a held-out chunk padded with copies, a strategy proposing a vector
+        # twice) does not run: its episodes end at step 0, are dropped with the first finished ones, and it
+        # takes the earlier member's scores.
+        P = pop.shape[0]
+        _, first, back = np.unique(np.asarray(pop), axis=0, return_index=True, return_inverse=True)
+        source = first[back.reshape(-1)]  # [P]: the member whose episodes stand for this one
+        for i, ep in enumerate(self.episodes[split]):
             t0 = time.perf_counter()
-            c, m = jax.block_until_ready(self._compiled[key](pop))
-            run_s += time.perf_counter() - t0
+            params, inputs = self._population(ep, pop)
+            runs = jnp.asarray(np.repeat(source == np.arange(P), ep.B))[:, None]
+            out = run_outcomes(ep.config, ep.steps, ep.table, ep.free, params,
+                               inputs._replace(active=inputs.active & runs), per_episode=True,
+                               programs=self._compiled.setdefault(("outcomes", split, i), {}))
+            rows = (source[:, None] * ep.B + np.arange(ep.B)).reshape(-1)
+            c, m = self._score(ep, P, inputs, *(getattr(out, f)[rows] for f in
+                                                ("steps", "reason", "collisions", "active_contacts")))
+            run_s += time.perf_counter() - t0 - out.compile_s
+            compile_s += out.compile_s
             costs.append(np.asarray(c))
             for k, v in m.items():
                 metrics.setdefault(k, []).append(np.asarray(v))
@@ -388,9 +396,6 @@ def nav_objective(maps: Sequence[NavMap], train_seeds: Sequence[int], test_seeds
     for what, v in (("speed", speed), ("walker_radius", walker_radius)):
         if not (math.isfinite(v) and v > 0):
             raise ValueError(f"nav_objective: {what} must be a finite number > 0, got {v!r}")
-    if config is not None and config.replan and config.replan_group == 0:
-        raise ValueError("nav_objective: NavConfig.replan_group = 0 shares re-planning slots over the whole batch, "
-                         "so the weight vectors of a population would change each other's episodes; set a group size")
     maps = tuple(maps)
     _check_splits(maps, train_seeds, test_seeds)
     if local == "dwa":
