@@ -419,7 +419,8 @@ def _run_one(cfg: StudyConfig, objective: Objective, method: str, seed: int, fol
 
 def _sessions(folder: Path, wall: float, load0, generations: int) -> list[dict]:
     """The study's sessions so far (``sessions.json``), this one appended: wall seconds, load averages, generations
-    run. A folder from before sessions.json takes its first session from summary.json."""
+    run, the process's niceness and the cores it could use. A folder from before sessions.json takes its first
+    session from summary.json."""
     path = folder / "sessions.json"
     sessions: list[dict] = []
     if path.is_file():
@@ -428,8 +429,9 @@ def _sessions(folder: Path, wall: float, load0, generations: int) -> list[dict]:
         old = json.loads((folder / "summary.json").read_text())
         sessions = [{"wall_s": old.get("wall_s_this_session", 0.0), "loadavg_start": old.get("loadavg_start"),
                      "loadavg_end": old.get("loadavg_end"), "generations": None}]
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     sessions.append({"wall_s": wall, "loadavg_start": list(load0), "loadavg_end": list(os.getloadavg()),
-                     "generations": generations})
+                     "generations": generations, "nice": os.nice(0), "cores": cores})
     atomic_write(path, json.dumps(sessions, indent=1).encode())
     return sessions
 
@@ -807,8 +809,9 @@ def _page(cfg: StudyConfig, s: dict, frag: str, results) -> str:
              f"{s['wall_s_total'] / 60:.1f} min wall in total"
              + (f" over {n_sess} sessions (the longest {main['wall_s'] / 60:.1f} min; later ones resumed from the "
                 "checkpoints)" if n_sess > 1 else "")
-             + f", at `nice -n 10` on 2 cores shared with other work (1-, 5-, 15-min load averages {load} at the "
-             f"start and {load_end} at the end of the longest session).", "",
+             + (f", at niceness {main['nice']} on {main['cores']} cores" if main.get("nice") is not None else "")
+             + f" (1-, 5-, 15-min load averages {load} at the start and {load_end} at the end of the longest "
+             "session).", "",
              "## Setup", "",
              f"- Planner: `{t0.planner}` with overrides {_inline(dict(t0.overrides)) if t0.overrides else '{}'}; "
              f"tuned: {space}.",
