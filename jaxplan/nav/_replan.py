@@ -247,13 +247,13 @@ def replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: Carry, inp
     what is left of the current one.
 
     ``centres [B, N, D, 2]`` / ``reach [B, N, D]``: the discs whose nearby cells are closed.
-    Only the chosen robots' fields are computed (a gather into fixed slots), so the cost
-    grows with the number of groups, not with the batch; robots left over try again on the
-    next step. Groups are consecutive episodes, so a device holding whole groups computes
-    exactly what one device computes for them. The slots of all groups are planned one after
-    another (`lax.map`), not vectorised: an unused slot then costs nothing, where under
-    ``vmap`` every slot ran the relaxation sweeps of the longest one (with identical
-    trajectories). Returns the carry, ``bool[B, N]``: the robots that were attempted, and
+    Only the chosen robots' fields are computed (a gather into fixed slots); robots left over
+    try again on the next step. Groups are consecutive episodes, so a device holding whole
+    groups computes exactly what one device computes for them. The slots in use are planned
+    one after another (a `lax.while_loop` over them alone), not vectorised: under ``vmap``
+    every slot ran the relaxation sweeps of the longest one, and a loop over every slot paid
+    for each unused one's disc mask and descent (with identical trajectories either way).
+    Returns the carry, ``bool[B, N]``: the robots that were attempted, and
     ``bool[B, N]``: those whose path was replaced.
     """
     B, N, K = c.waypoints.shape[:3]
@@ -291,7 +291,22 @@ def replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: Carry, inp
         better = new_len + config.recheck_gain < left
         return (pts + 0.5) * resolution, m, need1 & (n > 1) & (~check1 | better)
 
-    pts, m, ok = lax.map(one, (use, check, state, wp, n_wp, index, take(inputs.goal_cell), take(centres), take(reach)))
+    args = (use, check, state, wp, n_wp, index, take(inputs.goal_cell), take(centres), take(reach))
+    # Only the slots in use are planned, one after another: a loop over all S slots paid for every unused
+    # one's disc mask and descent (a batch of one-episode groups has S = B slots, mostly unused). An unused
+    # slot's outputs are never read (`put` masks by ``ok``, which is False for it).
+    order = jnp.argsort(~use, stable=True)  # the slots in use first, in slot order
+    S = use.shape[0]
+
+    def body(loop):
+        i, pts_, m_, ok_ = loop
+        k = order[i]
+        p1, m1, ok1 = one(jax.tree_util.tree_map(lambda a: a[k], args))
+        return i + 1, pts_.at[k].set(p1), m_.at[k].set(m1), ok_.at[k].set(ok1)
+
+    out0 = jax.eval_shape(one, jax.tree_util.tree_map(lambda a: a[0], args))
+    init = tuple(jnp.zeros((S,) + o.shape, o.dtype) for o in out0)
+    _, pts, m, ok = lax.while_loop(lambda loop: loop[0] < jnp.sum(use), body, (jnp.asarray(0), *init))
     g = take(inputs.goal)
     # The last waypoint is the goal itself.
     pts = jnp.where(jnp.arange(K)[None, :, None] >= m[:, None, None] - 1, g[:, None, :], pts)
