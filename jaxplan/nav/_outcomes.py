@@ -30,9 +30,10 @@ from jaxplan.dwa import ClearanceTable, DWAParams
 from jaxplan.mppi import MPPIParams
 from jaxplan.nav._config import NavConfig
 from jaxplan.nav._episode import initial_carry, run_chunk
+from jaxplan.nav._replan import group_size
 from jaxplan.nav._state import Carry, EpisodeInputs
 
-__all__ = ["EpisodeOutcomes", "run_outcomes", "group_size"]
+__all__ = ["EpisodeOutcomes", "run_outcomes"]
 
 
 class EpisodeOutcomes(NamedTuple):
@@ -55,13 +56,6 @@ class EpisodeOutcomes(NamedTuple):
 
 
 _INITIAL = jax.jit(initial_carry, static_argnums=0)
-
-
-def group_size(config: NavConfig, batch: int) -> int:
-    """Episodes that must stay together in a batch of ``batch``: a re-planning group (1 without re-planning)."""
-    if not config.replan:
-        return 1
-    return min(config.replan_group or batch, batch)
 
 
 def _take(tree: Any, rows: np.ndarray) -> Any:

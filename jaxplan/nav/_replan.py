@@ -33,7 +33,8 @@ from jax import lax
 from jaxplan.nav._config import NavConfig
 from jaxplan.nav._state import Carry, EpisodeInputs
 
-__all__ = ["MOVES", "distance_field", "descend", "turn_vertices", "path_blocked", "disc_cells", "replan_slots"]
+__all__ = ["MOVES", "distance_field", "descend", "turn_vertices", "path_blocked", "disc_cells", "replan_slots",
+           "group_size"]
 
 MOVES = ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1))
 """The 8 grid moves ``(dx, dy)``: four straight, then four diagonal."""
@@ -235,6 +236,13 @@ _SPAN = 3
 """Cells around a blocking disc's cell that re-planning examines (reach up to 3.5 cells)."""
 
 
+def group_size(config: NavConfig, batch: int) -> int:
+    """Consecutive episodes of a batch of ``batch`` that share re-planning slots (1 without re-planning)."""
+    if not config.replan:
+        return 1
+    return min(config.replan_group or batch, batch)
+
+
 def replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: Carry, inputs: EpisodeInputs,
                  need: jnp.ndarray, centres: jnp.ndarray,
                  reach: jnp.ndarray) -> tuple[Carry, jnp.ndarray, jnp.ndarray]:
@@ -258,7 +266,7 @@ def replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: Carry, inp
     """
     B, N, K = c.waypoints.shape[:3]
     H, W = free.shape
-    G = min(config.replan_group or B, B)
+    G = group_size(config, B)
     Bp = -(-B // G) * G
     Q = min(config.replan_slots, G * N)
     # A partial last group is padded with robots that need nothing: only these gathers grow.
