@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import json
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -39,7 +40,7 @@ alpha = [0.5, 3.0]
 lambdas = [[0.0, 1.0], [0.0, 1.0], [0.0, 1.0]]
 delta = [0.0, 1.0]
 [study]
-methods = ["random", "cma_es"]
+methods = ["grid", "random", "cma_es"]
 tuner_seeds = 2
 budget = 8
 population = 4
@@ -80,7 +81,7 @@ def test_overlapping_splits_raise():
     (("test_seeds = [50, 51]", "test_seeds = [1, 51]"), "must not share seeds"),
     (("confirm_seeds = [70]", "confirm_seeds = [51]"), "confirm_seeds: must not meet"),
     (("budget = 8", "budget = 10"), "not a multiple of study.population"),
-    (('methods = ["random", "cma_es"]', 'methods = ["random", "cmaes"]'), "unknown strategy 'cmaes'"),
+    (('methods = ["grid", "random", "cma_es"]', 'methods = ["grid", "random", "cmaes"]'), "unknown strategy 'cmaes'"),
     (('gap = "own"', 'gap = "mine"'), "study.gap"),
     (("tuner_seeds = 2", "tuner_seed = 2"), "study.tuner_seed: unknown key"),
 ])
@@ -112,6 +113,28 @@ def test_every_strategy_spends_exactly_the_counted_budget(tmp_path):
     assert set(counts.values()) == {12}, counts
 
 
+def test_the_strategies_that_say_they_ignore_the_key_do():
+    """A study runs a strategy with ``uses_key=False`` once for all tuner seeds: that must be exactly what another
+    seed would have done, and every other strategy must really differ between seeds."""
+    from jaxplan.tune import STRATEGY_SPECS
+
+    bounds = function_objective(lambda x, s: jnp.sum(x), {"a": (0.0, 1.0), "b": (0.0, 1.0)}).bounds
+    for name, spec in STRATEGY_SPECS.items():
+        strat = make_strategy(name, 4, 3)
+        asks = []
+        for seed in (0, 1):
+            key = jax.random.key(seed)
+            state = strat.init(key, bounds, np.array([0.4, 0.6], np.float32))
+            pops = []
+            for _ in range(3):
+                key, k = jax.random.split(key)
+                pop = strat.ask(k, state)
+                state = strat.tell(state, pop, jnp.sum((pop - 0.3) ** 2, axis=1))
+                pops.append(np.asarray(pop))
+            asks.append(np.stack(pops))
+        assert np.array_equal(asks[0], asks[1]) == (not spec.uses_key), name
+
+
 def test_own_objective_path_costs_match_exact_search():
     grid = jp.grid_from_array(np.ones((6, 8), bool))
     w = dict(lambdas=(0.5, 0.3, 0.2))
@@ -135,7 +158,14 @@ def test_study_log_budget_best_toml_and_resume(tmp_path, monkeypatch):
     a = run_study(cfg, out=tmp_path / "a", progress=False, results=tmp_path / "res", confirm=True)
     s = json.loads((a / "summary.json").read_text())
     # every method and tuner seed received the same counted budget
-    assert {m: r["evaluations"] for m, r in s["methods"].items()} == {"random": 8, "cma_es": 8}
+    assert {m: r["evaluations"] for m, r in s["methods"].items()} == {"grid": 8, "random": 8, "cma_es": 8}
+    # the grid ran once (it does not depend on the tuner seed); its run stands for the second seed
+    assert sorted(p.name for p in (a / "runs").iterdir()) == ["cma_es-s0", "cma_es-s1", "grid-s0",
+                                                                      "random-s0", "random-s1"]
+    g = s["methods"]["grid"]["per_seed"]
+    assert g["0"] == g["1"]
+    sessions = json.loads((a / "sessions.json").read_text())
+    assert len(sessions) == 1 and sessions[0]["generations"] == 5 * 2  # five runs of two generations
     rows = _log(a)
     assert {int(r["evaluations"]) for r in rows if r["generation"] == "2"} == {8}
     assert all(np.isfinite(float(r["heldout_best"])) for r in rows)

@@ -45,15 +45,18 @@ class StrategySpec(NamedTuple):
       factory: ``factory(population_size, generations, **options)`` when ``uses_generations`` (a schedule or a
         budget sized by the run), else ``factory(population_size, **options)``; returns a `Strategy`.
       uses_generations: whether the factory takes the number of generations.
+      uses_key: whether its proposals depend on the PRNG key (the tuner seed). A strategy that does not (the grid)
+        repeats itself evaluation for evaluation under every seed, so a study runs it once.
     """
 
     name: str
     factory: Callable[..., Strategy]
     uses_generations: bool
+    uses_key: bool = True
 
 
 STRATEGY_SPECS: Mapping[str, StrategySpec] = MappingProxyType({s.name: s for s in (
-    StrategySpec("grid", grid_search, True),
+    StrategySpec("grid", grid_search, True, uses_key=False),
     StrategySpec("random", random_search, False),
     StrategySpec("cma_es", cma_es, False),
     StrategySpec("snes", snes, False),

@@ -68,7 +68,7 @@ from jaxplan.experiments.schema import ConfigError, Reader, declaration, setting
 from jaxplan.tune._composite import aco_own_objective, check_disjoint, concat_objectives
 from jaxplan.tune._config import TuneConfig, TuneTable, apply_tune_quick, parse_tune_config
 from jaxplan.tune._objective import Evaluation, Objective
-from jaxplan.tune._strategies import STRATEGIES, make_strategy, option_problems
+from jaxplan.tune._strategies import STRATEGIES, STRATEGY_SPECS, make_strategy, option_problems
 from jaxplan.tune._workflow import _inline, _json_safe, _splits, _toml_value, fragment_toml, tune_loop
 
 __all__ = ["StudyConfig", "load_study_config", "parse_study_config", "apply_study_quick", "CountedObjective",
@@ -417,22 +417,27 @@ def _run_one(cfg: StudyConfig, objective: Objective, method: str, seed: int, fol
             "best_f": res["best_f"], "new": cfg.generations - res["resumed_from"]}
 
 
-def _sessions(folder: Path, wall: float, load0, generations: int) -> list[dict]:
-    """The study's sessions so far (``sessions.json``), this one appended: wall seconds, load averages, generations
-    run, the process's niceness and the cores it could use. A folder from before sessions.json takes its first
-    session from summary.json."""
+def _read_sessions(folder: Path) -> list[dict]:
+    """The study's earlier sessions (``sessions.json``); a folder from before sessions.json takes its first session
+    from summary.json."""
     path = folder / "sessions.json"
-    sessions: list[dict] = []
     if path.is_file():
-        sessions = json.loads(path.read_text())
-    elif (folder / "summary.json").is_file():
+        return json.loads(path.read_text())
+    if (folder / "summary.json").is_file():
         old = json.loads((folder / "summary.json").read_text())
-        sessions = [{"wall_s": old.get("wall_s_this_session", 0.0), "loadavg_start": old.get("loadavg_start"),
-                     "loadavg_end": old.get("loadavg_end"), "generations": None}]
+        return [{"wall_s": old.get("wall_s_this_session", 0.0), "loadavg_start": old.get("loadavg_start"),
+                 "loadavg_end": old.get("loadavg_end"), "generations": None}]
+    return []
+
+
+def _sessions(folder: Path, earlier: list[dict], wall: float, load0, generations: int) -> list[dict]:
+    """``earlier`` sessions with this one (so far) appended, written to ``sessions.json``: wall seconds, load
+    averages, generations run, the process's niceness and the cores it could use. Written after every run, so a
+    session that is interrupted still counts the time of the runs it finished."""
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    sessions.append({"wall_s": wall, "loadavg_start": list(load0), "loadavg_end": list(os.getloadavg()),
-                     "generations": generations, "nice": os.nice(0), "cores": cores})
-    atomic_write(path, json.dumps(sessions, indent=1).encode())
+    sessions = earlier + [{"wall_s": wall, "loadavg_start": list(load0), "loadavg_end": list(os.getloadavg()),
+                           "generations": generations, "nice": os.nice(0), "cores": cores}]
+    atomic_write(folder / "sessions.json", json.dumps(sessions, indent=1).encode())
     return sessions
 
 
@@ -511,17 +516,25 @@ def _run_study(cfg: StudyConfig, objective: Objective, folder: Path, progress: b
     load0 = os.getloadavg()
     atomic_write(folder / "config.toml", cfg.text.encode())
     if not resume:
-        for p in (folder / "runs", folder / "heldout.json"):
+        for p in (folder / "runs", folder / "heldout.json", folder / "sessions.json", folder / "summary.json"):
             shutil.rmtree(p, ignore_errors=True) if p.is_dir() else p.unlink(missing_ok=True)
     held = _HeldOut(objective, folder / "heldout.json", cfg.population)
     names = list(objective.bounds.names)
+    earlier = _read_sessions(folder)
     runs: dict[tuple[str, int], dict] = {}
     for m in cfg.methods:
         for s in cfg.tuner_seeds:
+            first = cfg.tuner_seeds[0]
+            if s != first and not STRATEGY_SPECS[m].uses_key:
+                # Its proposals do not depend on the key and the objective is deterministic, so this seed's run
+                # would repeat the first one evaluation for evaluation: the first stands for it, wall times too.
+                runs[(m, s)] = dict(runs[(m, first)], new=0, same_as_seed=first)
+                continue
             r = _run_one(cfg, objective, m, s, folder / "runs" / f"{m}-s{s}", progress, resume)
             xs = [np.array([row[n] for n in names], np.float32) for row in r["rows"]]
             r["heldout"] = [h["fitness"] for h in held.scores(xs)]
             runs[(m, s)] = r
+            _sessions(folder, earlier, time.perf_counter() - t_start, load0, sum(x["new"] for x in runs.values()))
     counts = {m: sorted({runs[(m, s)]["evaluations"][-1] for s in cfg.tuner_seeds}) for m in cfg.methods}
     if any(c != [cfg.budget] for c in counts.values()):
         raise RuntimeError(f"unequal budgets (counted): {counts}")
@@ -529,7 +542,7 @@ def _run_study(cfg: StudyConfig, objective: Objective, folder: Path, progress: b
     d_test = held.scores([d])[0]
     d_train = objective.evaluate(np.stack([d] * cfg.population), "train")  # not charged: not part of a search
     wall = time.perf_counter() - t_start
-    sessions = _sessions(folder, wall, load0, sum(r["new"] for r in runs.values()))
+    sessions = _sessions(folder, earlier, wall, load0, sum(r["new"] for r in runs.values()))
     summary = _summary(cfg, objective, runs, d_train, d_test, held, wall, load0)
     summary["sessions"] = sessions
     summary["wall_s_total"] = sum(x["wall_s"] for x in sessions)
@@ -830,8 +843,10 @@ def _page(cfg: StudyConfig, s: dict, frag: str, results) -> str:
              f"- Budget: {cfg.budget} training evaluations (weight vectors) per method and tuner seed, counted by "
              f"the objective wrapper ({cfg.population} per generation × {cfg.generations} generations); "
              f"{len(cfg.tuner_seeds)} tuner seeds {list(cfg.tuner_seeds)}. The strategies that take a starting "
-             "point begin from the defaults (`tune_loop`'s x0); grid and random search cover the box (the grid is "
-             "the same for every tuner seed). Held-out evaluations are not charged.", "",
+             "point begin from the defaults (`tune_loop`'s x0); grid and random search cover the box. "
+             + ("The grid does not depend on the tuner seed and the objective is deterministic, so it ran once and "
+                "that run stands for every seed (its sd is 0 by construction). " if "grid" in cfg.methods else "")
+             + "Held-out evaluations are not charged.", "",
              "## Results", "",
              "Train = the best training cost the tuner found (the minimum over its evaluations, so optimistic); "
              "held-out = the cost of those same weights on the held-out split. Mean ± sd over tuner seeds, "
