@@ -195,6 +195,28 @@ def _lane_offsets(lut, width):
     return off, offp
 
 
+@njit(nogil=True, inline="always")
+def _lane_take(lane, a, start, goal, row0, local, seed, width, size, ant, pos, pp, row, n_, t_, goal_, row0_,
+               local_, seed_, stamp, u, cells, seen):
+    """Lane ``lane`` of `_walk_lanes8` starts ant ``a``: its state from the ant's inputs, its first uniform,
+    its start cell recorded and stamped in the lane's tabu region (``size`` cells of the grid padded by one)."""
+    p = np.int64(start[a])
+    ant[lane] = a
+    pos[lane] = p
+    pp[lane] = lane * size + p + (p // width) * 2 + width + 3
+    row[lane] = row0[a] + p
+    n_[lane] = 0
+    t_[lane] = 0
+    goal_[lane] = goal[a]
+    row0_[lane] = row0[a]
+    local_[lane] = local[a]
+    seed_[lane] = seed[a]
+    stamp[lane] = a + 1
+    u[lane] = uniform(seed_[lane], 0, local_[lane])
+    cells[a, 0] = p
+    seen[pp[lane]] = a + 1
+
+
 @njit(nogil=True)
 def _walk_lanes8(c, n_chunks, table, vbits, start, goal, row0, seed, local, max_steps, width, lut, mode, penalise,
                  movef, cellf, cells, moves, n_out, status_out, steps_out, penalty, stats):
@@ -240,20 +262,8 @@ def _walk_lanes8(c, n_chunks, table, vbits, start, goal, row0, seed, local, max_
         live[lane] = nxt < A
         if live[lane]:
             n_live += 1
-            a = nxt
-            ant[lane] = a
-            p = np.int64(start[a])
-            pos[lane] = p
-            pp[lane] = lane * size + p + (p // width) * 2 + wp + 1
-            goal_[lane] = goal[a]
-            row0_[lane] = row0[a]
-            row[lane] = row0_[lane] + p
-            local_[lane] = local[a]
-            seed_[lane] = seed[a]
-            stamp[lane] = a + 1
-            u[lane] = uniform(seed_[lane], 0, local_[lane])
-            cells[a, 0] = p
-            seen[pp[lane]] = a + 1
+            _lane_take(lane, nxt, start, goal, row0, local, seed, width, size, ant, pos, pp, row, n_, t_, goal_,
+                       row0_, local_, seed_, stamp, u, cells, seen)
         nxt += n_chunks
     while n_live > 0:
         tabu_draw_lanes(table, seen, vbits32, offp, pp, stamp, row, pos, u, k_, total_)
@@ -299,22 +309,8 @@ def _walk_lanes8(c, n_chunks, table, vbits, start, goal, row0, seed, local, max_
             _finish_ant(a, n, t, status, cells, moves, n_out, status_out, steps_out, movef, cellf, 8, stats)
             live[lane] = nxt < A
             if live[lane]:  # the lane takes the chunk's next ant
-                a = nxt
-                ant[lane] = a
-                p = np.int64(start[a])
-                pos[lane] = p
-                pp[lane] = lane * size + p + (p // width) * 2 + wp + 1
-                n_[lane] = 0
-                t_[lane] = 0
-                goal_[lane] = goal[a]
-                row0_[lane] = row0[a]
-                row[lane] = row0_[lane] + p
-                local_[lane] = local[a]
-                seed_[lane] = seed[a]
-                stamp[lane] = a + 1
-                u[lane] = uniform(seed_[lane], 0, local_[lane])
-                cells[a, 0] = p
-                seen[pp[lane]] = a + 1
+                _lane_take(lane, nxt, start, goal, row0, local, seed, width, size, ant, pos, pp, row, n_, t_, goal_,
+                           row0_, local_, seed_, stamp, u, cells, seen)
                 nxt += n_chunks
             else:
                 n_live -= 1
