@@ -160,10 +160,16 @@ def test_study_log_budget_best_toml_and_resume(tmp_path, monkeypatch):
     # every method and tuner seed received the same counted budget
     assert {m: r["evaluations"] for m, r in s["methods"].items()} == {"grid": 8, "random": 8, "cma_es": 8}
     # the grid ran once (it does not depend on the tuner seed); its run stands for the second seed
-    assert sorted(p.name for p in (a / "runs").iterdir()) == ["cma_es-s0", "cma_es-s1", "grid-s0",
-                                                                      "random-s0", "random-s1"]
+    assert sorted(p.name for p in (a / "runs").iterdir()) == ["cma_es-s0", "cma_es-s1", "grid-s0", "random-s0",
+                                                              "random-s1"]
     g = s["methods"]["grid"]["per_seed"]
     assert g["0"] == g["1"]
+    # compilation is paid in the process's first run (the grid's) and taken out of the wall times compared
+    assert s["methods"]["grid"]["compile_s"]["mean"] > 0
+    assert s["compile_s_total"] >= s["methods"]["grid"]["compile_s"]["mean"]
+    for r in s["methods"].values():
+        assert r["run_s"]["mean"] == pytest.approx(r["wall_s"]["mean"] - r["compile_s"]["mean"])
+        assert 0 < r["run_s"]["mean"] < r["wall_s"]["mean"] or r["compile_s"]["mean"] == 0
     sessions = json.loads((a / "sessions.json").read_text())
     assert len(sessions) == 1 and sessions[0]["generations"] == 5 * 2  # five runs of two generations
     rows = _log(a)
