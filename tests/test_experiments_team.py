@@ -191,3 +191,32 @@ def test_a_team_chunk_is_budgeted_for_every_robot(tmp_path):
     solo = prepare(_config(tmp_path).replace(planners=(prep.config.planners[0].__class__(
         **{**prep.config.planners[0].__dict__, "team": None}),)))
     assert chunk_memory(prep, 0, 0).runs == 5 * chunk_memory(solo, 0, 0).runs
+
+
+def test_the_trajectories_figure_of_a_team_draws_every_robot(tmp_path):
+    """Robot 0 with its global path, and each teammate's executed path from its own start."""
+    from jaxplan.experiments import run_experiment
+    from jaxplan.experiments.figure_kinds import DRAW
+    from jaxplan.experiments.plots import plt
+    from jaxplan.experiments.run_data import load_run
+
+    text = TEAM % {"robot": ACKERMANN, "team": "{ robots = 3 }"}
+    text = text.replace("seeds = 2", "seeds = 1").replace("count = 2", "count = 1")
+    text += '[[figures]]\nkind = "trajectories"\n'
+    (tmp_path / "team.toml").write_text(text)
+    run = load_run(run_experiment(tmp_path / "team.toml", tmp_path / "runs", data_dir=tmp_path, progress=False))
+    spec = run.config.figures[0]
+    fig, caption = DRAW["trajectories"](run, spec)
+    try:
+        ax = fig.axes[0]
+        mates = [ln for ln in ax.get_lines() if ln.get_color() == "tab:purple" and len(ln.get_xdata()) > 1]
+        a, i = run.arrays(0, 0, 0)
+        assert len(mates) == 2  # robots 1 and 2
+        grid = run.prep.maps[0].grid
+        for j, ln in enumerate(mates, start=1):
+            steps = int(a["team_steps"][i, 0, j])
+            assert np.allclose(ln.get_xydata(), a["team_positions"][i, 0, j, :steps + 1], atol=1e-5)
+            assert np.allclose(ln.get_xydata()[0], grid.centre(a["team_starts"][i, j]), atol=1e-4)
+        assert "team of 3 robots" in caption
+    finally:
+        plt.close(fig)

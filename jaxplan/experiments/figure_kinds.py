@@ -338,13 +338,29 @@ def _nav_trial(run, m, p, sc, r):
     return pos, states, steps, plan
 
 
+def _teammates(run, m, p, sc, r) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """``(positions f64[T_j, 2] m, start m [2], goal m [2])`` of robots 1.. of a team trial (`team_positions`);
+    empty for a single-robot planner. Robot 0 is the trial's own (`_nav_trial`)."""
+    got = run.arrays(m, p, sc)
+    if got is None or "team_positions" not in got[0]:
+        return []
+    a, i = got
+    grid = run.prep.maps[m].grid
+    out = []
+    for j in range(1, a["team_positions"].shape[2]):
+        steps = int(a["team_steps"][i, r, j])
+        ends = cell_path_m(np.stack([a["team_starts"][i, j], a["team_goals"][i, j]]), 2, grid)
+        out.append((np.asarray(a["team_positions"][i, r, j, :steps + 1], np.float64), ends[0], ends[1]))
+    return out
+
+
 def _trajectories(run, spec):
     mi, pi = selected(run, spec, "navigate")
     if not pi:
         raise ValueError(f"figure {spec.name!r}: no navigate planner selected")
     sc, seed, r = scenario_seed(run, spec, mi)
     fig, axes = panel_grid(len(mi) * len(pi), w=6.0, h=4.8)
-    k = 0
+    k = team = 0
     for m in mi:
         mw = run.prep.maps[m]
         for p in pi:
@@ -368,11 +384,22 @@ def _trajectories(run, spec):
                     t_close = int(np.argmin(np.hypot(*(d[:, j] - pos[:len(d)]).T)))
                     ax.add_patch(plt.Circle(tuple(d[t_close, j]), radii[j], color="tab:red", alpha=0.5))
                     ax.plot(*pos[t_close], "x", color="tab:red", ms=5)
+            mates = _teammates(run, m, p, sc, r)
+            team = max(team, len(mates) + 1)
+            for j, (tp, ts, tg) in enumerate(mates):
+                ax.plot(tp[:, 0], tp[:, 1], color="tab:purple", lw=1.0, alpha=0.8,
+                        label="teammates (executed)" if j == 0 else None)
+                ax.plot(*ts, "o", color="tab:purple", ms=4)
+                ax.plot(*tg, "*", color="tab:purple", ms=7)
             plots.plot_paths(ax, mw.grid, [plan, pos], labels=["global path", "executed"],
                              start=pos[0], goal=cell_path_m(mw.goals[sc][None], 1, mw.grid)[0], coords="m", lw=1.5)
     fig.suptitle(figure_title(spec, f"Executed trajectories, scenario {sc}, seed {seed}"))
-    return fig, (f"Executed trajectories (scenario {sc}, seed {seed}) over the global path; dotted: the moving "
-                 "discs' tracks, red discs where each disc was at the robot's closest approach (x).")
+    caption = (f"Executed trajectories (scenario {sc}, seed {seed}) over the global path; dotted: the moving "
+               "discs' tracks, red discs where each disc was at the robot's closest approach (x).")
+    if team > 1:
+        caption += (f" A team of {team} robots shares each episode: robot 0 (the scenario's start and goal) is drawn "
+                    "with its global path; purple: its teammates' executed paths, starts (o) and goals (*).")
+    return fig, caption
 
 
 def _controls(run, spec):
