@@ -159,10 +159,29 @@ _RESOLUTION_HELP = ("metres per cell (default: 1.0 for a MovingAI .map; a ROS .y
                    "value it is resampled: a coarse cell is blocked if any fine cell it covers is)")
 
 
+def _add_map_args(parser: argparse.ArgumentParser) -> None:
+    """``--resolution`` and a ROS map's Nav2 filter masks (`jaxplan.grid.load_ros_map`)."""
+    parser.add_argument("--resolution", type=float, default=None, help=_RESOLUTION_HELP)
+    parser.add_argument("--keepout", default=None, metavar="YAML", help="a Nav2 keep-out mask of a ROS map: its "
+                        "occupied cells become blocked")
+    parser.add_argument("--speed-mask", default=None, metavar="YAML", help="a Nav2 speed mask of a ROS map (percent "
+                        "of top speed, Nav2's type 1 filter with base 100 and multiplier -1): the map's speed limits")
+    parser.add_argument("--unknown", default=None, choices=("blocked", "free"), help="a ROS map's unknown cells "
+                        "(default blocked)")
+
+
+def _load_map_args(args: argparse.Namespace):
+    """The map of ``plan``/``navigate`` and the ROS options given (for the output record)."""
+    from jaxplan.grid import load_map
+
+    ros = {k: v for k, v in (("keepout", args.keepout), ("speed", args.speed_mask), ("unknown", args.unknown))
+           if v is not None}
+    return load_map(args.map, resolution=args.resolution, **ros), ros
+
+
 def cmd_plan(args: argparse.Namespace) -> int:
     """``jaxplan plan MAP --start X Y --goal X Y``: one path, a table, and with ``--out`` a .json/.csv/.png file."""
     from jaxplan.experiments.tables import PATH_ROWS, path_column, text_table
-    from jaxplan.grid import load_map
     from jaxplan.planning import plan
 
     overrides = _parse_sets(args.set)
@@ -174,7 +193,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
         from jaxplan.experiments.outputs import PLAN_SUFFIXES, check_suffix
 
         check_suffix(args.out, PLAN_SUFFIXES, "jaxplan plan")  # before any work
-    grid = load_map(args.map, resolution=args.resolution)
+    grid, masks = _load_map_args(args)
     start, goal = tuple(args.start), tuple(args.goal)
     from jaxplan.core.progress import ProgressBar
 
@@ -200,9 +219,9 @@ def cmd_plan(args: argparse.Namespace) -> int:
     if args.out is not None:
         from jaxplan.experiments.outputs import plan_record, write_plan
 
-        record = plan_record(map_path=args.map, grid=grid, start=start, goal=goal, planner=args.planner,
-                             seed=args.seed, params=params, overrides=overrides, result=res, metrics=metrics,
-                             smoothed=smoothed, smooth_method=args.smooth, failure=failure)
+        record = plan_record(map_path=args.map, map_options=masks, grid=grid, start=start, goal=goal,
+                             planner=args.planner, seed=args.seed, params=params, overrides=overrides, result=res,
+                             metrics=metrics, smoothed=smoothed, smooth_method=args.smooth, failure=failure)
         print(f"wrote {write_plan(args.out, record, grid, res, smoothed)}")
     return 0 if res.success else 1
 
@@ -211,7 +230,6 @@ def cmd_navigate(args: argparse.Namespace) -> int:
     """``jaxplan navigate MAP --start X Y --goal X Y``: one two-level episode among random walkers."""
     import numpy as np
 
-    from jaxplan.grid import load_map
     from jaxplan.nav import navigate, pipelines, random_obstacles
 
     overrides = _parse_sets(args.set)
@@ -226,7 +244,7 @@ def cmd_navigate(args: argparse.Namespace) -> int:
         check_suffix(args.out, EPISODE_SUFFIXES, "jaxplan navigate")
     if args.walkers < 0:
         raise ValueError(f"--walkers must be >= 0, got {args.walkers}")
-    grid = load_map(args.map, resolution=args.resolution)
+    grid, masks = _load_map_args(args)
     start, goal = tuple(args.start), tuple(args.goal)
     res = float(grid.resolution)
     avoid = grid.centre(np.array([start, goal], np.float64))  # world metres, as random_obstacles takes
@@ -242,7 +260,8 @@ def cmd_navigate(args: argparse.Namespace) -> int:
     if args.out is not None:
         from jaxplan.experiments.outputs import write_episode
 
-        record = {"map": str(args.map), "resolution_m": res, "origin_m": [float(v) for v in grid.origin],
+        record = {"map": str(args.map), **({"map_options": masks} if masks else {}), "resolution_m": res,
+                  "origin_m": [float(v) for v in grid.origin],
                   "start": list(start), "goal": list(goal),
                   "pipeline": args.pipeline, "seed": args.seed, "overrides": overrides, "walkers":
                   {"n": args.walkers, "speed": args.walker_speed, "radius": args.walker_radius}}
@@ -420,7 +439,7 @@ def build_parser() -> argparse.ArgumentParser:
                                                                    "bspline, or a chain such as los,fillet")
     q.add_argument("--connectivity", type=int, default=None, choices=(4, 8, 16),
                    help="grid moves per cell (default: the planner's own, 8 for the grid planners)")
-    q.add_argument("--resolution", type=float, default=None, help=_RESOLUTION_HELP)
+    _add_map_args(q)
     q.add_argument("--out", default=None, metavar="FILE", help="write the plan: .json (path in cells and metres, "
                    "metrics, planner and parameters, provenance), .csv (path points) or .png/.svg/.pdf (path on map)")
     q.add_argument("--no-progress", action="store_true", help="no progress spinner on stderr")
@@ -437,7 +456,7 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--walker-speed", type=float, default=0.5, help="walkers' speed in m/s (default 0.5)")
     v.add_argument("--walker-radius", type=float, default=0.25, help="walkers' radius in m (default 0.25)")
     v.add_argument("--time-limit", type=float, default=None, help="seconds (default: from the path length)")
-    v.add_argument("--resolution", type=float, default=None, help=_RESOLUTION_HELP)
+    _add_map_args(v)
     v.add_argument("--out", default=None, metavar="FILE", help="write the episode: .json (trajectory, controls, "
                    "metrics, walkers, provenance), .gif (animation; needs Pillow) or .png/.svg/.pdf")
     v.add_argument("--no-progress", action="store_true", help="no progress stages on stderr")

@@ -399,6 +399,8 @@ class MapSpec:
       tour: absolute ``.opt.tour`` path of the instance's optimal tour, or None.
       optimum: the instance's optimal tour length as configured, or None.
       key: where it was configured (``maps[i]`` or ``instances[j]``), for error messages.
+      ros: a ROS map's `jaxplan.grid.load_ros_map` options (``keepout``, ``speed`` as absolute paths,
+        ``speed_filter``, ``top_speed``, ``unknown``); empty for any other map.
     """
 
     name: str
@@ -413,6 +415,7 @@ class MapSpec:
     tour: Path | None = None
     optimum: float | None = None
     key: str = ""
+    ros: Mapping[str, Any] = dataclasses.field(default_factory=lambda: frozen({}))
 
     @property
     def is_tsp(self) -> bool:
@@ -520,6 +523,19 @@ class MapTable:
                                 default_text="1.0 for a MovingAI or generated map; a ROS map's own")
     scenarios: Any = setting("section", None, "this map's scenario keys, replacing those of `[scenarios]`",
                              section=ScenarioSpec)
+    keepout: str = setting("str", None, "a ROS map's Nav2 keep-out mask (.yaml), relative to the data folder or "
+                           "absolute: its occupied cells become blocked")
+    speed_mask: str = setting("str", None, "a ROS map's Nav2 speed mask (.yaml): the map's speed limits, which the "
+                              "navigation episodes obey")
+    speed_filter: Any = setting("custom", None, "the speed mask's filter `[type, base, multiplier]` (Nav2's "
+                                "CostmapFilterInfo): type 1 is percent of the top speed, type 2 metres per second "
+                                "(then give `top_speed`)", default_text="[1, 100.0, -1.0], Nav2's tutorial",
+                                json={"type": "array", "items": {"type": "number"}, "minItems": 3, "maxItems": 3},
+                                type_text="array of 3 numbers")
+    top_speed: float = setting("float", None, "the robot's top speed in m/s, for a type 2 (absolute) speed mask",
+                               gt=0)
+    unknown: str = setting("str", None, "a ROS map's unknown cells", choices=("blocked", "free"),
+                           default_text="blocked")
 
 
 @declaration
@@ -689,7 +705,8 @@ def read_maps(r: Reader, raw: Mapping[str, Any], data_dir: Path, required: bool 
 
     out, names = [], {}
     for i, (p, m) in enumerate(entries):
-        t = r.section(m, p, MapTable, skip=("name", "path", "scen", "generator", "params"))
+        t = r.section(m, p, MapTable, skip=("name", "path", "scen", "generator", "params", "keepout", "speed_mask",
+                                            "speed_filter"))
         if not isinstance(m, dict):
             continue
         has_path, has_gen = "path" in m, "generator" in m
@@ -736,7 +753,9 @@ def read_maps(r: Reader, raw: Mapping[str, Any], data_dir: Path, required: bool 
         if has_path and spec.source == "scen" and scen_path is None and map_path is not None and map_path.is_file():
             r.bad(join(p, "scen"), f"no scenario file for {map_path.name} (looked for {map_path.name}.scen and "
                                    f"{map_path.stem}-random-1.scen); give 'scen' or use source = 'random'")
-        out.append(MapSpec(name, map_path, scen_path, gen, frozen(params), seed, resolution, spec, key=p))
+        ros = _read_ros_options(r, m, p, t, data_dir, has_path and map_path is not None and is_ros_map(map_path))
+        out.append(MapSpec(name, map_path, scen_path, gen, frozen(params), seed, resolution, spec, key=p,
+                           ros=frozen(ros)))
     return tuple(out)
 
 
@@ -770,6 +789,43 @@ def _read_instances(r: Reader, raw: dict, data_dir: Path, taken: set[str]) -> tu
 def _resolve(data_dir: Path, rel: str) -> Path:
     p = Path(rel).expanduser()
     return p if p.is_absolute() else (data_dir / p)
+
+
+_ROS_KEYS = ("keepout", "speed_mask", "speed_filter", "top_speed", "unknown")
+
+
+def _read_ros_options(r: Reader, m: dict, p: str, t: Mapping[str, Any], data_dir: Path, is_ros: bool) -> dict:
+    """A ROS map entry's mask options as `load_ros_map` keywords; any of them on another map is a problem."""
+    given = [k for k in _ROS_KEYS if k in m]
+    if not is_ros:
+        for k in given:
+            r.bad(join(p, k), "only applies to a ROS map_server map (a .yaml path)")
+        return {}
+    out: dict[str, Any] = {}
+    for key, kw in (("keepout", "keepout"), ("speed_mask", "speed")):
+        f = _data_file(r, m, p, setting_of(MapTable, key), data_dir)
+        if f is not None:
+            out[kw] = f
+    if t["unknown"] is not None:
+        out["unknown"] = t["unknown"]
+    if "speed_filter" in m:
+        f = m["speed_filter"]
+        ok = (isinstance(f, list) and len(f) == 3 and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                                          and math.isfinite(v) for v in f) and f[0] in (1, 2))
+        if not ok:
+            r.bad(join(p, "speed_filter"), f"expected [type, base, multiplier] with type 1 (percent) or 2 (m/s) and "
+                                           f"finite numbers, got {describe(f)}")
+        else:
+            out["speed_filter"] = (int(f[0]), float(f[1]), float(f[2]))
+    if t["top_speed"] is not None:
+        out["top_speed"] = t["top_speed"]
+    if "speed" not in out:
+        for k in ("speed_filter", "top_speed"):
+            if k in m:
+                r.bad(join(p, k), "only applies with a speed_mask")
+    elif out.get("speed_filter", (1,))[0] == 2 and "top_speed" not in out:
+        r.bad(join(p, "top_speed"), "a type 2 speed mask gives metres per second: give the robot's top speed")
+    return out
 
 
 def _data_file(r: Reader, t: dict, p: str, s: Setting, data_dir: Path, hint: bool = False) -> Path | None:

@@ -45,7 +45,8 @@ def check_suffix(path: str | os.PathLike, suffixes: tuple[str, ...], what: str) 
 
 def plan_record(*, map_path: str, grid: Any, start, goal, planner: str, seed: int, params: Mapping[str, Any],
                 overrides: Mapping[str, Any], result: Any, metrics: Mapping[str, Any] | None,
-                smoothed: Any = None, smooth_method: str | None = None, failure: str | None = None) -> dict:
+                smoothed: Any = None, smooth_method: str | None = None, failure: str | None = None,
+                map_options: Mapping[str, Any] | None = None) -> dict:
     """The ``.json`` record of one plan (see the module docstring)."""
     from jaxplan.core.provenance import provenance
 
@@ -53,7 +54,8 @@ def plan_record(*, map_path: str, grid: Any, start, goal, planner: str, seed: in
     info = {k: v for k, v in result.info.items() if k != "tau"}
     rec = {
         "map": {"path": str(map_path), "height": int(grid.shape[0]), "width": int(grid.shape[1]),
-                "resolution_m": float(grid.resolution), "origin_m": [float(v) for v in grid.origin]},
+                "resolution_m": float(grid.resolution), "origin_m": [float(v) for v in grid.origin],
+                **({"options": plain(dict(map_options))} if map_options else {})},
         "start": [int(v) for v in start], "goal": [int(v) for v in goal],
         "planner": planner, "seed": int(seed), "parameters": plain(dict(params)), "overrides": plain(dict(overrides)),
         "success": bool(result.success), "length_m": float(result.length), "cost": float(result.cost),

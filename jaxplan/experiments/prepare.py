@@ -102,9 +102,9 @@ def load_map_spec(spec: MapSpec):
     from jaxplan.grid import load_map
 
     if spec.path is not None:
-        grid = load_map(spec.path, resolution=spec.resolution)
+        grid = load_map(spec.path, resolution=spec.resolution, **spec.ros)
         extra = spec.scen.read_bytes() if (spec.scen is not None and spec.scenarios.source == "scen") else b""
-        return grid, None, None, sha256(spec.path.read_bytes(), extra)
+        return grid, None, None, sha256(*_map_file_bytes(spec), extra)
     factory, is_dc = _generators()[spec.generator]
     params = {k: tuple(v) if isinstance(v, (list, tuple)) else v for k, v in spec.params.items()}
     if is_dc:
@@ -119,6 +119,21 @@ def load_map_spec(spec: MapSpec):
     arrays = [np.ascontiguousarray(a).tobytes() for a in (grid.free, grid.height, grid.clearance_height, grid.risk,
                                                             grid.turn_rule)]
     return grid, np.asarray(scene.start), np.asarray(scene.goal), sha256(*arrays, repr(grid.resolution).encode())
+
+
+def _map_file_bytes(spec: MapSpec) -> list[bytes]:
+    """The bytes a file map's grid is read from: a MovingAI file; a ROS map's YAML and image, each mask's too,
+    and the mask options (so that a changed image or mask is a changed map, not a silent resume)."""
+    from jaxplan.grid import is_ros_map, read_ros_yaml
+
+    if not is_ros_map(spec.path):
+        return [spec.path.read_bytes()]
+    out = []
+    for f in (spec.path, spec.ros.get("keepout"), spec.ros.get("speed")):
+        if f is not None:
+            out += [Path(f).read_bytes(), Path(read_ros_yaml(f)["image"]).read_bytes()]
+    opts = {k: v for k, v in spec.ros.items() if k not in ("keepout", "speed")}
+    return out + [repr(sorted(opts.items())).encode()]
 
 
 _CELL_BYTES = 64
@@ -295,13 +310,16 @@ def _plain(x: Any) -> Any:
 
 
 def _spec_doc(spec: MapSpec) -> dict:
-    """A map's part of the fingerprint. The instance fields are left out while unset (and ``key`` always: it names
-    the config entry, it does not shape trials), so a map's fingerprint is the one written before instances."""
+    """A map's part of the fingerprint. The instance fields and ROS mask options are left out while unset (and
+    ``key`` always: it names the config entry, it does not shape trials), so a map's fingerprint is the one
+    written before instances and masks."""
     doc = _plain(spec)
     doc.pop("key", None)
     for k in ("tsplib", "tour", "optimum"):
         if doc.get(k) is None:
             doc.pop(k, None)
+    if not doc.get("ros"):
+        doc.pop("ros", None)
     return doc
 
 
