@@ -65,6 +65,7 @@ import numpy as np
 from jaxplan.core.io import atomic_write, confined, folder_lock
 from jaxplan.experiments.config import MapTable, ScenarioSpec
 from jaxplan.experiments.schema import ConfigError, Reader, declaration, setting
+from jaxplan.tune._base import Strategy
 from jaxplan.tune._composite import aco_own_objective, check_disjoint, concat_objectives
 from jaxplan.tune._config import TuneConfig, TuneTable, apply_tune_quick, parse_tune_config
 from jaxplan.tune._objective import Evaluation, Objective
@@ -379,11 +380,10 @@ class _HeldOut:
         return [self.cache[_key(x)] for x in xs]
 
 
-def _run_one(cfg: StudyConfig, objective: Objective, method: str, seed: int, folder: Path, progress: bool,
-             resume: bool) -> dict:
+def _run_one(cfg: StudyConfig, objective: Objective, method: str, strategy: Strategy, seed: int, folder: Path,
+             progress: bool, resume: bool) -> dict:
     """One method with one tuner seed: `tune_loop` on the counted objective; returns rows, counts, wall times."""
     counted = CountedObjective(objective)
-    strategy = make_strategy(method, cfg.population, cfg.generations, **cfg.options.get(method, {}))
     fp = hashlib.sha256(cfg.text.encode() + f"|{cfg.is_quick}|{method}|{seed}".encode()).hexdigest()
     folder.mkdir(parents=True, exist_ok=True)
     counts_path = folder / "counts.json"
@@ -531,6 +531,9 @@ def _run_study(cfg: StudyConfig, objective: Objective, folder: Path, progress: b
     earlier = _read_sessions(folder)
     runs: dict[tuple[str, int], dict] = {}
     for m in cfg.methods:
+        # One strategy serves every tuner seed: its ask and tell are then the same functions, so JAX compiles
+        # them once per study instead of once per run (each compile also maps more code into the process).
+        strategy = make_strategy(m, cfg.population, cfg.generations, **cfg.options.get(m, {}))
         for s in cfg.tuner_seeds:
             first = cfg.tuner_seeds[0]
             if s != first and not STRATEGY_SPECS[m].uses_key:
@@ -538,7 +541,7 @@ def _run_study(cfg: StudyConfig, objective: Objective, folder: Path, progress: b
                 # would repeat the first one evaluation for evaluation: the first stands for it, wall times too.
                 runs[(m, s)] = dict(runs[(m, first)], new=0, same_as_seed=first)
                 continue
-            r = _run_one(cfg, objective, m, s, folder / "runs" / f"{m}-s{s}", progress, resume)
+            r = _run_one(cfg, objective, m, strategy, s, folder / "runs" / f"{m}-s{s}", progress, resume)
             xs = [np.array([row[n] for n in names], np.float32) for row in r["rows"]]
             r["heldout"] = [h["fitness"] for h in held.scores(xs)]
             runs[(m, s)] = r
