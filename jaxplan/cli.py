@@ -390,9 +390,13 @@ def cmd_study(args: argparse.Namespace) -> int:
     """``jaxplan study CONFIG``: run (or resume) a tuning study; writes OUT/NAME/ with its log, figure and page."""
     from jaxplan.tune import run_study
 
+    only = None if args.only is None else [m.strip() for m in args.only.split(",") if m.strip()]
     folder = run_study(args.config, out=args.out, quick=args.quick, data_dir=args.data_dir,
                        progress=not args.no_progress, resume=not args.no_resume, results=args.results,
-                       confirm=args.confirm)
+                       confirm=args.confirm, only=only)
+    if only is not None:
+        print(f"ran {', '.join(only)} in {folder}/runs/; run the command without --only for the page")
+        return 0
     print(f"wrote {folder}/ (log.csv, summary.json, convergence.png, best.toml, confirm.toml, page.md"
           + (", confirm.md)" if args.confirm else ")"))
     return 0
@@ -519,6 +523,9 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("--confirm", action="store_true", help="then run confirm.toml (defaults vs tuned on fresh "
                                                              "scenarios) with `jaxplan run` and write its page")
     st.add_argument("--no-resume", action="store_true", help="start afresh instead of resuming")
+    st.add_argument("--only", default=None, metavar="METHOD[,METHOD]", help="a worker: run only these methods' "
+                    "runs (in the same study folder; workers with disjoint methods run side by side, one per core), "
+                    "then stop; the command without --only writes the page")
     st.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
     st.set_defaults(func=cmd_study)
     b = sub.add_parser("bench", help="every benchmark of the library in one table (benchmarks/run_all.py; "

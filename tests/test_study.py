@@ -204,6 +204,36 @@ def test_study_log_budget_best_toml_and_resume(tmp_path, monkeypatch):
     c = run_study(cfg, out=tmp_path / "c", progress=False)
     assert _log(c) == rows
 
+    # two workers with disjoint methods in one folder (side by side in practice, one per core), then the page
+    # pass: the same log, and the page pass finds every run done and every held-out score stored by the workers
+    w = tmp_path / "w"
+    run_study(cfg, out=w, progress=False, only=["cma_es", "grid"])
+    run_study(cfg, out=w, progress=False, only=["random"])
+    assert not (w / "s" / "heldout.json").exists() and not (w / "s" / "log.csv").exists()
+    assert len(list((w / "s").glob("worker-*.json"))) == 2
+    evaluated = []
+    real_eval = study._HeldOut.scores
+
+    def counted_scores(self, xs):
+        evaluated.extend(study._key(x) for x in xs if study._key(x) not in self.cache)
+        return real_eval(self, xs)
+
+    def finished(*args, **kw):
+        res = real(*args, **kw)
+        assert res["resumed_from"] == args[2]  # every generation was done by a worker
+        return res
+
+    monkeypatch.setattr(study._HeldOut, "scores", counted_scores)
+    monkeypatch.setattr(study, "tune_loop", finished)
+    d = run_study(cfg, out=w, progress=False)
+    monkeypatch.undo()
+    assert _log(d) == rows
+    assert len(evaluated) == 1  # the defaults alone: the runs' held-out scores came from the workers' folders
+    sessions = json.loads((d / "sessions.json").read_text())
+    assert sorted(x.get("worker") is not None for x in sessions) == [False, True, True]
+    assert not list(d.glob("worker-*.json"))
+    assert "2 of them workers (`--only`) running side by side" in (d / "page.md").read_text()
+
     # best.toml round-trips into `jaxplan run`: the confirmation ran the defaults and the tuned weights
     run = tmp_path / "a" / "s_confirm"
     exp = load_config(run / "config.toml")
@@ -214,6 +244,16 @@ def test_study_log_budget_best_toml_and_resume(tmp_path, monkeypatch):
     with open(run / "trials.csv", newline="") as f:
         planners = {r["planner"] for r in csv.DictReader(f)}
     assert planners == {"IACO (defaults)", "IACO (tuned)"}
+
+
+@pytest.mark.parametrize("kw, match", [({"only": ["sparrow"]}, "sparrow not among the study's methods"),
+                                       ({"only": []}, "no method not among"),
+                                       ({"only": ["grid"], "resume": False}, "not with a fresh start"),
+                                       ({"only": ["grid"], "confirm": True}, "or the confirmation")])
+def test_a_worker_is_refused_a_method_the_study_lacks_or_a_fresh_start(tmp_path, kw, match):
+    with pytest.raises(ValueError, match=match):
+        run_study(_write(tmp_path), out=tmp_path / "w", progress=False, **kw)
+    assert not (tmp_path / "w").exists()  # refused before any work
 
 
 def test_the_study_command_lists_every_config_problem_before_any_work(tmp_path, capsys):

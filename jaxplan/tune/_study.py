@@ -33,7 +33,9 @@ Study folder ``OUT/NAME`` (``NAME-quick``)::
     config.toml                the study config, verbatim
     runs/<method>-s<seed>/     one `tune_loop` folder per method and tuner seed (checkpoints: exact resume),
                                with counts.json (counted evaluations and wall seconds after each generation)
-    heldout.json               held-out scores by weight vector (the cache)
+    heldout.json               held-out scores by weight vector (the cache; a worker's runs keep theirs in
+                               runs/<method>-s<seed>/heldout.json, read as part of it)
+    worker-*.json              a worker's session (`run_study(only=...)`, ``--only``), until the page pass takes it in
     log.csv                    method, tuner_seed, generation, evaluations (counted), train_best,
                                heldout_best (held-out score of the best-so-far weights), wall_s, weights
     summary.json               per method: train and held-out scores over tuner seeds, 95 % intervals, wall time
@@ -54,11 +56,12 @@ import json
 import math
 import os
 import shutil
+import sys
 import time
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -351,16 +354,17 @@ def _key(x) -> str:
 
 class _HeldOut:
     """Held-out scores by weight vector: evaluated in padded chunks of ``chunk`` rows (one compiled program),
-    cached in ``path`` (JSON)."""
+    cached in ``path`` (JSON); the caches in ``read`` (other processes' files) are read too, never written."""
 
-    def __init__(self, objective: Objective, path: Path, chunk: int):
+    def __init__(self, objective: Objective, path: Path, chunk: int, read: Sequence[Path] = ()):
         self.objective, self.path, self.chunk = objective, path, chunk
         self.cache: dict[str, dict] = {}
-        if path.is_file():
-            try:
-                self.cache = json.loads(path.read_text())
-            except ValueError:
-                self.cache = {}
+        for f in (*read, path):
+            if f.is_file():
+                try:
+                    self.cache.update(json.loads(f.read_text()))
+                except ValueError:  # a damaged cache only costs its evaluations again
+                    pass
         self.seconds = 0.0
 
     def scores(self, xs: list[np.ndarray]) -> list[dict]:
@@ -426,26 +430,41 @@ def _compile_seconds(run_dir: Path) -> float:
 
 
 def _read_sessions(folder: Path) -> list[dict]:
-    """The study's earlier sessions (``sessions.json``); a folder from before sessions.json takes its first session
-    from summary.json."""
+    """The study's earlier sessions (``sessions.json``) and its workers' (``worker-*.json``, each entry once); a
+    folder from before sessions.json takes its first session from summary.json."""
     path = folder / "sessions.json"
+    out: list[dict] = []
     if path.is_file():
-        return json.loads(path.read_text())
-    if (folder / "summary.json").is_file():
+        out = json.loads(path.read_text())
+    elif (folder / "summary.json").is_file():
         old = json.loads((folder / "summary.json").read_text())
-        return [{"wall_s": old.get("wall_s_this_session", 0.0), "loadavg_start": old.get("loadavg_start"),
-                 "loadavg_end": old.get("loadavg_end"), "generations": None}]
-    return []
+        out = [{"wall_s": old.get("wall_s_this_session", 0.0), "loadavg_start": old.get("loadavg_start"),
+                "loadavg_end": old.get("loadavg_end"), "generations": None}]
+    seen = {s.get("worker") for s in out}
+    for f in sorted(folder.glob("worker-*.json")):
+        entry = json.loads(f.read_text())
+        if entry.get("worker") not in seen:
+            out.append(entry)
+    return out
+
+
+def _session_entry(wall: float, load0, generations: int) -> dict:
+    """A session's wall seconds, load averages, generations run, the process's niceness and the cores it could
+    use."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    return {"wall_s": wall, "loadavg_start": list(load0), "loadavg_end": list(os.getloadavg()),
+            "generations": generations, "nice": os.nice(0), "cores": cores}
 
 
 def _sessions(folder: Path, earlier: list[dict], wall: float, load0, generations: int) -> list[dict]:
-    """``earlier`` sessions with this one (so far) appended, written to ``sessions.json``: wall seconds, load
-    averages, generations run, the process's niceness and the cores it could use. Written after every run, so a
-    session that is interrupted still counts the time of the runs it finished."""
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    sessions = earlier + [{"wall_s": wall, "loadavg_start": list(load0), "loadavg_end": list(os.getloadavg()),
-                           "generations": generations, "nice": os.nice(0), "cores": cores}]
+    """``earlier`` sessions with this one (so far) appended (`_session_entry`), written to ``sessions.json``.
+    Written after every run, so a session that is interrupted still counts the time of the runs it finished; the
+    workers' files it took in are then removed (their entries live on in sessions.json)."""
+    sessions = earlier + [_session_entry(wall, load0, generations)]
     atomic_write(folder / "sessions.json", json.dumps(sessions, indent=1).encode())
+    for f in folder.glob("worker-*.json"):
+        if any(s.get("worker") == f.stem for s in earlier):
+            f.unlink(missing_ok=True)
     return sessions
 
 
@@ -464,7 +483,8 @@ def _stats(v) -> dict:
 
 
 def run_study(config_path, out="runs", quick: bool = False, data_dir=None, progress: bool = True,
-              resume: bool = True, results: str | os.PathLike | None = None, confirm: bool = False) -> Path:
+              resume: bool = True, results: str | os.PathLike | None = None, confirm: bool = False,
+              only: Sequence[str] | None = None) -> Path:
     """Runs (or resumes) the study config at ``config_path``; returns its folder ``OUT/NAME`` (``NAME-quick``).
 
     Every method runs once per tuner seed with the same counted budget; then the log, summary, figure,
@@ -472,15 +492,35 @@ def run_study(config_path, out="runs", quick: bool = False, data_dir=None, progr
     best.toml and confirm.toml are copied to ``results/NAME.md``, ``NAME.png``, ``NAME_best.toml`` and
     ``NAME_confirm.toml``. With ``confirm``, the confirmation experiment then runs (`jaxplan run` of confirm.toml,
     into ``OUT/NAME_confirm``) and its report becomes ``confirm.md`` (and ``results/NAME_confirm.md``).
+
+    With ``only`` (method names), this process is a worker: it runs (or resumes) those methods' runs alone, each
+    under its own run folder's lock and with its held-out scores in that folder, and writes nothing else, so
+    workers with disjoint methods share one study folder (one per core or machine). A later call without
+    ``only`` finds their runs done, reads their held-out scores and writes the page.
+
+    Raises:
+      ValueError: ``only`` names a method the study does not run, or is combined with ``resume=False`` (a fresh
+        start would delete the other workers' runs) or ``confirm``.
     """
     cfg = load_study_config(config_path, data_dir=data_dir)
     if quick:
         cfg = apply_study_quick(cfg)
+    if only is not None:
+        bad = sorted(set(only) - set(cfg.methods))
+        if bad or not only:
+            raise ValueError(f"only: {', '.join(bad) or 'no method'} not among the study's methods "
+                             f"({', '.join(cfg.methods)})")
+        if not resume or confirm:
+            raise ValueError("only (a worker) resumes and runs its methods' runs alone: not with a fresh start "
+                             "(it would delete the other workers' runs) or the confirmation")
     objective = build_study_objective(cfg)
     objective.check_population(cfg.population)
     objective.check_population(cfg.population, "test")
     folder = confined(out, cfg.name + ("-quick" if cfg.is_quick else ""))
     folder.mkdir(parents=True, exist_ok=True)
+    if only is not None:
+        _run_worker(cfg, objective, folder, [m for m in cfg.methods if m in set(only)], progress)
+        return folder
     with folder_lock(folder):
         _run_study(cfg, objective, folder, progress, resume, results, data_dir)
     if confirm:
@@ -524,27 +564,16 @@ def _run_study(cfg: StudyConfig, objective: Objective, folder: Path, progress: b
     load0 = os.getloadavg()
     atomic_write(folder / "config.toml", cfg.text.encode())
     if not resume:
-        for p in (folder / "runs", folder / "heldout.json", folder / "sessions.json", folder / "summary.json"):
+        for p in (folder / "runs", folder / "heldout.json", folder / "sessions.json", folder / "summary.json",
+                  *folder.glob("worker-*.json")):
             shutil.rmtree(p, ignore_errors=True) if p.is_dir() else p.unlink(missing_ok=True)
-    held = _HeldOut(objective, folder / "heldout.json", cfg.population)
+    held = _HeldOut(objective, folder / "heldout.json", cfg.population,
+                    read=sorted(folder.glob(f"runs/*/{HELDOUT_FILE}")))
     names = list(objective.bounds.names)
     earlier = _read_sessions(folder)
     runs: dict[tuple[str, int], dict] = {}
     for m in cfg.methods:
-        # One strategy serves every tuner seed: its ask and tell are then the same functions, so JAX compiles
-        # them once per study instead of once per run (each compile also maps more code into the process).
-        strategy = make_strategy(m, cfg.population, cfg.generations, **cfg.options.get(m, {}))
-        for s in cfg.tuner_seeds:
-            first = cfg.tuner_seeds[0]
-            if s != first and not STRATEGY_SPECS[m].uses_key:
-                # Its proposals do not depend on the key and the objective is deterministic, so this seed's run
-                # would repeat the first one evaluation for evaluation: the first stands for it, wall times too.
-                runs[(m, s)] = dict(runs[(m, first)], new=0, same_as_seed=first)
-                continue
-            r = _run_one(cfg, objective, m, strategy, s, folder / "runs" / f"{m}-s{s}", progress, resume)
-            xs = [np.array([row[n] for n in names], np.float32) for row in r["rows"]]
-            r["heldout"] = [h["fitness"] for h in held.scores(xs)]
-            runs[(m, s)] = r
+        for _ in _method_runs(cfg, objective, m, folder, progress, resume, lambda _run_dir: held, runs):
             _sessions(folder, earlier, time.perf_counter() - t_start, load0, sum(x["new"] for x in runs.values()))
     counts = {m: sorted({runs[(m, s)]["evaluations"][-1] for s in cfg.tuner_seeds}) for m in cfg.methods}
     if any(c != [cfg.budget] for c in counts.values()):
@@ -582,6 +611,54 @@ def _run_study(cfg: StudyConfig, objective: Objective, folder: Path, progress: b
         atomic_write(res / f"{cfg.name}_best.toml", frag.encode())
         atomic_write(res / f"{cfg.name}_confirm.toml", confirm.encode())
     return folder
+
+
+HELDOUT_FILE = "heldout.json"
+"""A worker's run keeps the held-out scores of its best-so-far weights here, in its own folder."""
+
+
+def _method_runs(cfg: StudyConfig, objective: Objective, m: str, folder: Path, progress: bool, resume: bool,
+                 held_for, runs: dict):
+    """Runs (or resumes) method ``m`` for every tuner seed into ``runs``, scoring each run's best-so-far weights
+    on the held-out split with ``held_for(run_dir)``; yields ``(seed, run)`` after each."""
+    names = list(objective.bounds.names)
+    # One strategy serves every tuner seed: its ask and tell are then the same functions, so JAX compiles
+    # them once per study instead of once per run (each compile also maps more code into the process).
+    strategy = make_strategy(m, cfg.population, cfg.generations, **cfg.options.get(m, {}))
+    first = cfg.tuner_seeds[0]
+    for s in cfg.tuner_seeds:
+        if s != first and not STRATEGY_SPECS[m].uses_key:
+            # Its proposals do not depend on the key and the objective is deterministic, so this seed's run
+            # would repeat the first one evaluation for evaluation: the first stands for it, wall times too.
+            runs[(m, s)] = dict(runs[(m, first)], new=0, same_as_seed=first)
+            continue
+        run_dir = folder / "runs" / f"{m}-s{s}"
+        run_dir.mkdir(parents=True, exist_ok=True)
+        with folder_lock(run_dir):  # a worker may hold it (`run_study(only=...)`)
+            r = _run_one(cfg, objective, m, strategy, s, run_dir, progress, resume)
+            xs = [np.array([row[n] for n in names], np.float32) for row in r["rows"]]
+            r["heldout"] = [h["fitness"] for h in held_for(run_dir).scores(xs)]
+        runs[(m, s)] = r
+        yield s, r
+
+
+def _run_worker(cfg: StudyConfig, objective: Objective, folder: Path, methods: list[str], progress: bool) -> None:
+    """`run_study` with ``only``: these methods' runs, each run's held-out scores in its own folder."""
+    atomic_write(folder / "config.toml", cfg.text.encode())
+    shared = [folder / "heldout.json"]
+    t0, load0 = time.perf_counter(), os.getloadavg()
+    me = f"worker-{os.getpid()}-{int(time.time())}"
+
+    def held_for(run_dir: Path) -> _HeldOut:
+        return _HeldOut(objective, run_dir / HELDOUT_FILE, cfg.population, read=shared)
+
+    runs: dict[tuple[str, int], dict] = {}
+    for m in methods:
+        for s, r in _method_runs(cfg, objective, m, folder, progress, True, held_for, runs):
+            entry = _session_entry(time.perf_counter() - t0, load0, sum(x["new"] for x in runs.values()))
+            atomic_write(folder / f"{me}.json", json.dumps({**entry, "worker": me, "methods": methods}).encode())
+            print(f"{cfg.name}: {m}-s{s} done ({r['evaluations'][-1]} counted evaluations)", file=sys.stderr,
+                  flush=True)
 
 
 def _log_csv(cfg: StudyConfig, runs: dict, names: list[str]) -> str:
@@ -823,6 +900,7 @@ def _page(cfg: StudyConfig, s: dict, frag: str, results) -> str:
     main = max(s["sessions"], key=lambda x: x["wall_s"])
     load = ", ".join(f"{v:.2f}" for v in (main["loadavg_start"] or s["loadavg_start"]))
     n_sess = len(s["sessions"])
+    n_work = sum(1 for x in s["sessions"] if x.get("worker"))
     load_end = ", ".join(f"{v:.2f}" for v in (main["loadavg_end"] or s["loadavg_end"]))
     gap = {"own": "the gap of the best path's own IACO cost (at the default λ) to its exact own optimum "
                   "(`jaxplan.search.exact_objectives`)",
@@ -835,7 +913,8 @@ def _page(cfg: StudyConfig, s: dict, frag: str, results) -> str:
              f"Regenerate: `{cmd}` (add `--confirm` to run the confirmation too) — measured "
              f"{s['wall_s_total'] / 60:.1f} min wall in total"
              + (f" over {n_sess} sessions (the longest {main['wall_s'] / 60:.1f} min; later ones resumed from the "
-                "checkpoints)" if n_sess > 1 else "")
+                "checkpoints" + (f"; {n_work} of them workers (`--only`) running side by side" if n_work else "")
+                + ")" if n_sess > 1 else "")
              + (f", at niceness {main['nice']} on {main['cores']} cores" if main.get("nice") is not None else "")
              + f" (1-, 5-, 15-min load averages {load} at the start and {load_end} at the end of the longest "
              "session).", "",
