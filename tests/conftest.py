@@ -36,6 +36,15 @@ def tsplib() -> Path:
     return _benchmark_folder("tsplib", "TSPLIB")
 
 
+@pytest.fixture(scope="session")
+def ros() -> Path:
+    """The ROS map_server maps (Nav2's warehouse with its keep-out and speed masks, a depot)."""
+    d = _benchmark_folder("ros", "ROS map")
+    if not (d / "warehouse.yaml").is_file():
+        pytest.skip(f"ROS maps not found at {d} (set JAXPLAN_DATA to the benchmarks folder)")
+    return d
+
+
 def manifest(folder: Path) -> list[dict[str, str]]:
     lines = (folder / "MANIFEST.tsv").read_text().splitlines()
     head = lines[0].split("\t")

@@ -9,18 +9,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import data_dir
 
 import jaxplan as jp
 from jaxplan.grid import load_ros_map, read_pgm, resampled_shape
-
-
-@pytest.fixture(scope="session")
-def ros() -> Path:
-    d = data_dir() / "ros"
-    if not (d / "warehouse.yaml").is_file():
-        pytest.skip(f"ROS maps not found at {d} (set JAXPLAN_DATA to the benchmarks folder)")
-    return d
 
 
 @pytest.fixture(scope="session")
