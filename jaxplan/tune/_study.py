@@ -889,6 +889,10 @@ def own_gap_table(cfg: StudyConfig, run: Path, data_dir=None) -> list[str]:
     return lines
 
 
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}" + ("" if n == 1 else "s")
+
+
 def _fmt(v: float, d: int = 4) -> str:
     return f"{v:.{d}f}" if isinstance(v, float) and math.isfinite(v) else "–"
 
@@ -915,7 +919,8 @@ def _page(cfg: StudyConfig, s: dict, frag: str, results) -> str:
              + (f" over {n_sess} sessions (the longest {main['wall_s'] / 60:.1f} min; later ones resumed from the "
                 "checkpoints" + (f"; {n_work} of them workers (`--only`) running side by side" if n_work else "")
                 + ")" if n_sess > 1 else "")
-             + (f", at niceness {main['nice']} on {main['cores']} cores" if main.get("nice") is not None else "")
+             + (f", at niceness {main['nice']} on {_count(main['cores'], 'core')}" if main.get("nice") is not None
+                else "")
              + f" (1-, 5-, 15-min load averages {load} at the start and {load_end} at the end of the longest "
              "session).", "",
              "## Setup", "",
@@ -929,10 +934,10 @@ def _page(cfg: StudyConfig, s: dict, frag: str, results) -> str:
               f"{t0.walker_speed:g} m/s, each vector scored among each kind: {', '.join(t0.walkers)}."),
              "- Maps: " + "; ".join(f"{m['name']} (train seeds {m['train_seeds']}, held-out seeds "
                                     f"{m['heldout_seeds']})" for m in s["maps"]) + ".",
-             f"- Training split: {s['train_rows']} scenario rows × {len(t0.train_seeds)} seeds{kinds} = "
+             f"- Training split: {s['train_rows']} scenario rows × {_count(len(t0.train_seeds), 'seed')}{kinds} = "
              f"{s['train_runs']} runs per evaluation; held-out split: {s['heldout_rows']} other rows × "
-             f"{len(t0.test_seeds)} other seeds{kinds} = {s['heldout_runs']} runs. Rows and seeds are disjoint "
-             "(checked: the study refuses to run otherwise).",
+             f"{_count(len(t0.test_seeds), 'other seed')}{kinds} = {s['heldout_runs']} runs. Rows and seeds are "
+             "disjoint (checked: the study refuses to run otherwise).",
              f"- Budget: {cfg.budget} training evaluations (weight vectors) per method and tuner seed, counted by "
              f"the objective wrapper ({cfg.population} per generation × {cfg.generations} generations); "
              f"{len(cfg.tuner_seeds)} tuner seeds {list(cfg.tuner_seeds)}. The strategies that take a starting "
