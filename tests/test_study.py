@@ -247,7 +247,7 @@ def test_study_log_budget_best_toml_and_resume(tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize("kw, match", [({"only": ["sparrow"]}, "sparrow not among the study's methods"),
-                                       ({"only": []}, "no method not among"),
+                                       ({"only": []}, "give at least one of the study's methods"),
                                        ({"only": ["grid"], "resume": False}, "not with a fresh start"),
                                        ({"only": ["grid"], "confirm": True}, "or the confirmation")])
 def test_a_worker_is_refused_a_method_the_study_lacks_or_a_fresh_start(tmp_path, kw, match):

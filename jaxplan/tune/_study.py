@@ -508,8 +508,8 @@ def run_study(config_path, out="runs", quick: bool = False, data_dir=None, progr
     if only is not None:
         bad = sorted(set(only) - set(cfg.methods))
         if bad or not only:
-            raise ValueError(f"only: {', '.join(bad) or 'no method'} not among the study's methods "
-                             f"({', '.join(cfg.methods)})")
+            what = f"{', '.join(bad)} not among" if bad else "give at least one of"
+            raise ValueError(f"only: {what} the study's methods ({', '.join(cfg.methods)})")
         if not resume or confirm:
             raise ValueError("only (a worker) resumes and runs its methods' runs alone: not with a fresh start "
                              "(it would delete the other workers' runs) or the confirmation")
