@@ -25,7 +25,10 @@ def test_every_shared_map_and_scenario_file_loads_with_its_manifest_size(movinga
             assert g.free.any() and (~g.free).any()
         else:
             s = jp.load_scenarios(path)
-            assert len(s) == int(row["scenario_rows"])
+            # The manifest counts the lines after the version line; den520d's and ost003d's files end in blank
+            # lines, which are no rows.
+            blank = sum(not ln.strip() for ln in path.read_text().splitlines()[1:])
+            assert len(s) == int(row["scenario_rows"]) - blank
             assert (s.width, s.height) == (int(row["width"]), int(row["height"]))
 
 

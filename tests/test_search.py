@@ -13,24 +13,33 @@ from scipy.sparse.csgraph import dijkstra as scipy_dijkstra
 
 import jaxplan as jp
 
+DRAGON_AGE = {"brc202d": 2519, "den520d": 888, "ost003d": 846}
+"""cui2025's three Dragon Age maps in the manifest -> rows of their .scen files (the other pairs are the small
+MAPF maps)."""
 
-def _check_scenarios(m, sc):
+
+def _check_scenarios(m, sc) -> int:
+    """Checks every row's published optimum against `shortest_lengths`; returns the number of rows."""
     g = jp.load_map(m)
     s = jp.load_scenarios(sc, grid=g)
     got = jp.shortest_lengths(g, s.starts, s.goals)
     np.testing.assert_allclose(got, s.optimal, rtol=1e-4, err_msg=f"{sc.name}")
+    return len(s)
 
 
 def test_every_scenario_row_of_the_small_maps(movingai):
-    pairs = [p for p in scenario_pairs(movingai) if "brc202d" not in p[0].name]
-    assert len(pairs) == 5
-    for m, sc in pairs:
+    pairs = scenario_pairs(movingai)
+    assert sorted(m.stem for m, _ in pairs if m.stem in DRAGON_AGE) == sorted(DRAGON_AGE)
+    small = [p for p in pairs if p[0].stem not in DRAGON_AGE]
+    assert len(small) == 5
+    for m, sc in small:
         _check_scenarios(m, sc)
 
 
-def test_every_scenario_row_of_brc202d(movingai):
-    """All 2,519 rows of the Dragon Age map (about 10 s on 2 cores)."""
-    _check_scenarios(movingai / "brc202d.map", movingai / "brc202d.map.scen")
+@pytest.mark.parametrize("name", sorted(DRAGON_AGE))
+def test_every_scenario_row_of_the_dragon_age_maps(movingai, name):
+    """All rows of each of cui2025's maps (brc202d about 10 s on 2 cores, den520d and ost003d under 1 s each)."""
+    assert _check_scenarios(movingai / f"{name}.map", movingai / f"{name}.map.scen") == DRAGON_AGE[name]
 
 
 def _assert_valid_path(g: jp.GridMap, res: jp.PlanResult, start, goal, k: int) -> None:
