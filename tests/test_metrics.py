@@ -432,7 +432,7 @@ def test_path_metrics_rejects_bad_paths():
 
 
 def test_converged_iteration():
-    h = jnp.array([[jnp.inf, jnp.inf, 12.0, 10.02, 10.005, 10.0],  # 10.005 <= 10 * 1.001 < 10.02
+    h = jnp.array([[jnp.inf, jnp.inf, 12.0, 10.2, 10.05, 10.0],    # 10.05 <= 10 * 1.01 < 10.2
                    [jnp.inf] * 6,                                   # never found a path
                    [5.0] * 6])                                      # converged at once
     np.testing.assert_array_equal(np.asarray(M.converged_iteration(h)), [4, -1, 0])
@@ -455,7 +455,7 @@ def test_colony_reports_the_run_metrics():
     r = jp.plan_batch(scene.grid, [scene.start], [scene.goal], planner="aco", seeds=[0, 1], ants=8, iterations=6)
     for h, conv, div, ok in zip(r.history[0], r.converged[0], r.diversity[0], r.successes[0], strict=True):
         final = h[-1]
-        assert conv == (np.flatnonzero(h <= final * 1.001)[0] if np.isfinite(final) else -1)
+        assert conv == (np.flatnonzero(h <= final * 1.01)[0] if np.isfinite(final) else -1)  # within 1 %
         assert np.all(div >= 0) and np.all(div[ok < 2] == 0)
 
 

@@ -6,7 +6,7 @@ Batched JAX functions over padded arrays (``jit``/``vmap``-able, shapes in the d
   `count_sharp_turns_padded`, `smoothness_padded`, `max_curvature_padded`,
   `geometry_metrics`, `vertex_turns`, `clearance_metrics`, `vertex_clearance`,
   `point_polyline_distance`, `hausdorff`, `hausdorff_bounds`;
-* runs (`_run`): `converged_iteration`, `diversity`;
+* runs (`_run`): `converged_iteration`, `optimum_iteration`, `turning_point`, `diversity`;
 * episodes (`_episode`): `collision_steps`, `collisions`, `arrival_time`, `success`,
   `rmse`, `energy`, `EnergyModel`, `EpisodeTiming`.
 
@@ -48,13 +48,22 @@ from jaxplan.metrics._path import (
     vertex_turns,
 )
 from jaxplan.metrics._polyline import HAUSDORFF_SAMPLES, hausdorff, hausdorff_bounds, point_polyline_distance
-from jaxplan.metrics._run import CONVERGED_RTOL, converged_iteration, diversity
+from jaxplan.metrics._run import (
+    CONVERGED_RTOL,
+    CONVERGED_RTOL_STRICT,
+    converged_iteration,
+    diversity,
+    optimum_iteration,
+    turning_point,
+)
 
 __all__ = [
-    "CONVERGED_RTOL", "EnergyModel", "EpisodeTiming", "HAUSDORFF_SAMPLES", "PATH_METRICS", "SHARP_TURN", "TURN_EPS",
+    "CONVERGED_RTOL", "CONVERGED_RTOL_STRICT", "EnergyModel", "EpisodeTiming", "HAUSDORFF_SAMPLES", "PATH_METRICS",
+    "SHARP_TURN", "TURN_EPS",
     "arrival_time", "clearance_metrics", "collision_steps", "collisions", "converged_iteration",
     "count_sharp_turns", "count_sharp_turns_padded", "count_turns", "count_turns_padded", "diversity", "energy",
     "geometry_metrics", "hausdorff", "hausdorff_bounds", "heading_changes", "max_curvature",
-    "max_curvature_padded", "path_length", "path_length_padded", "path_metrics", "point_polyline_distance",
-    "rmse", "smoothness", "smoothness_padded", "success", "vertex_clearance", "vertex_turns",
+    "max_curvature_padded", "optimum_iteration", "path_length", "path_length_padded", "path_metrics",
+    "point_polyline_distance", "rmse", "smoothness", "smoothness_padded", "success", "turning_point",
+    "vertex_clearance", "vertex_turns",
 ]
