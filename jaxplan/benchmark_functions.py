@@ -156,7 +156,7 @@ def write_study(results: str | os.PathLike, figures: str | os.PathLike, spec: St
     """Runs the study and writes its page (``results/li2026/fig7[-quick].md``) and figure; returns the page."""
     from jaxplan.core.io import atomic_write
     from jaxplan.experiments.report import fmt
-    from jaxplan.experiments.results import VERDICTS, verdict
+    from jaxplan.experiments.results import VERDICTS
     from jaxplan.experiments.stats import confidence_interval, hedges_g
 
     t0 = time.perf_counter()
@@ -176,7 +176,7 @@ def write_study(results: str | os.PathLike, figures: str | os.PathLike, spec: St
             continue
         x = final[fn, s]
         ci = confidence_interval(x)
-        v, why = verdict(p, ci, float(np.mean(x)), "cost", PAPER_REASON)
+        v, why = "not comparable", PAPER_REASON
         counts[v] += 1
         paper_rows.append(f"| {fn} | {s} | best fitness | {fmt(p)} | {fmt(float(np.mean(x)))} ± "
                           f"{fmt(float(np.std(x, ddof=1)))} | [{fmt(ci[0])}, {fmt(ci[1])}] | {x.size} | "

@@ -350,11 +350,14 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     if studies:
         done.append(_reproduce_study(args, results))
     if results is not None and any(r.page is not None for r in done):
+        from jaxplan.experiments.claims import load_claims
         from jaxplan.experiments.results import load_notes, write_index_page
 
         # Once more, last: the study's page is in it and the wall time is the whole command's.
-        write_index_page(results, load_notes(Path(args.configs) / "results" / "notes.toml"), quick=args.quick,
-                         wall_s=time.perf_counter() - t0, cache=not args.no_cache)
+        here = Path(args.configs) / "results"
+        write_index_page(results, load_notes(here / "notes.toml"), load_claims(here / "claims.toml"),
+                         quick=args.quick, wall_s=time.perf_counter() - t0, cache=not args.no_cache,
+                         figures_dir=args.figures)
     rows = [(r.config.name, "FAILED" if r.error else r.run_dir.name if r.run_dir else "-", f"{r.run_s:.1f}",
              f"{r.figures_s:.1f}", str(r.figures)) for r in done]
     heads = ("config", "run folder", "run (s)", "figures (s)", "figures")

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from jaxplan.cli import main
@@ -61,6 +62,11 @@ kind = "bar"
 metric = "turns"
 
 [[figures]]
+kind = "bar"
+name = "success_bar"
+metric = "success"
+
+[[figures]]
 kind = "sweep"
 metric = "turns"
 x = "obstacle_ratio"
@@ -83,6 +89,7 @@ source = "made-up numbers for the test"
 planner = "AS"
 map = "r20"
 turns = [7.0, 1.0]
+success = [0.9, 0.05]
 """
 
 MAPS = "\n".join(f"""
@@ -167,8 +174,13 @@ def test_plan_figures(plan_run, tmp_path):
     drawn, problems = draw_figures(plan_run, tmp_path)
     _check(tmp_path, "figplan", drawn, problems,
            {"convergence", "diversity", "box", "bar", "sweep", "paths", "pheromone"})
-    bar = next(d for d in drawn if d.kind == "bar")
-    assert "paper's reported values (made-up numbers for the test), not ours" in bar.caption
+    bars = {d.name: d for d in drawn if d.kind == "bar"}
+    # turns on a generated map: the paper's 7 turns are withheld (not comparable), and the caption says so.
+    assert "paper's reported values" not in bars["bar"].caption
+    assert "for AS are not drawn: an absolute number on a stand-in map is not comparable" in bars["bar"].caption
+    # a success rate is comparable on any map: the paper's bar (± its sd) stands beside ours.
+    assert "paper's reported values ± its sd (made-up numbers for the test), not ours" in bars["success_bar"].caption
+    assert "Wilson 95 % interval" in bars["success_bar"].caption
 
 
 def test_paths_figure_with_a_smoother(plan_run, tmp_path):
@@ -277,8 +289,9 @@ params = {{ width = 12, height = 12, obstacle_ratio = 0.1 }}
         plt.close(fig)
 
 
-def test_convergence_of_planners_with_different_costs_is_drawn_relative_to_each_runs_final_best(plan_run):
-    """A* is left out; one planner (AS: cost = length) keeps its own cost in metres; mixed costs would not."""
+def test_convergence_is_drawn_in_absolute_cost_one_panel_per_cost_definition(plan_run):
+    """A* is left out; one planner (AS: cost = length) keeps its own cost in metres, one panel per map; the
+    paper gives no iteration for AS here, so no vertical line is drawn."""
     from jaxplan.experiments.figure_kinds import DRAW
     from jaxplan.experiments.plots import plt
     from jaxplan.experiments.run_data import load_run
@@ -287,7 +300,164 @@ def test_convergence_of_planners_with_different_costs_is_drawn_relative_to_each_
     spec = next(f for f in run.config.figures if f.kind == "convergence")
     fig, caption = DRAW["convergence"](run, spec)
     try:
-        assert fig.axes[0].get_ylabel() == "best path length L (m)"
-        assert "relative" not in caption
+        assert [ax.get_ylabel() for ax in fig.axes] == ["best path length L (m)"] * 3
+        assert "relative" not in caption and "own cost" in caption and "paper" not in caption
+        assert all(len(ax.lines) == 1 for ax in fig.axes)  # the median line, no marker
+        # Absolute cost: the curve ends at the run's final best length (m), not at 0 %.
+        got = run.arrays(0, 1, 0)
+        final = np.median(np.asarray(got[0]["history"][got[1]], np.float64)[:, -1])
+        assert fig.axes[0].lines[0].get_ydata()[-1] == pytest.approx(final)
+    finally:
+        plt.close(fig)
+
+
+def _with_paper(run, values, paper_map: bool):
+    """``run`` with extra paper values and every map flagged as the paper's own (or not)."""
+    import dataclasses
+
+    cfg = run.config.replace(paper=tuple(run.config.paper) + tuple(values))
+    maps = tuple(dataclasses.replace(mw, spec=dataclasses.replace(mw.spec, paper_map=paper_map))
+                 for mw in run.prep.maps)
+    return dataclasses.replace(run, config=cfg, prep=dataclasses.replace(run.prep, maps=maps))
+
+
+@pytest.mark.parametrize("paper_map", [True, False])
+def test_the_papers_convergence_iteration_is_marked_only_where_comparable(plan_run, paper_map):
+    """yu2020's optimum iteration 3 for AS on r10: a dashed line at x = 3 on the paper's own map; on a stand-in
+    map the caption names the number and says why it is not drawn."""
+    from jaxplan.experiments.config import PaperValue
+    from jaxplan.experiments.figure_kinds import DRAW
+    from jaxplan.experiments.plots import plt
+    from jaxplan.experiments.run_data import load_run
+
+    run = _with_paper(load_run(plan_run), [PaperValue(planner="AS", map="r10", metric="optimum_iteration",
+                                                      mean=3.0)], paper_map)
+    spec = next(f for f in run.config.figures if f.kind == "convergence")
+    fig, caption = DRAW["convergence"](run, spec)
+    try:
+        r10 = next(ax for ax in fig.axes if ax.get_title().startswith("r10"))
+        marks = [ln for ln in r10.lines if ln.get_label().startswith("paper: iteration")]
+        if paper_map:
+            assert len(marks) == 1 and list(marks[0].get_xdata()) == [3.0, 3.0]
+            assert marks[0].get_label() == "paper: iteration 3 (AS)" and marks[0].get_linestyle() == "--"
+            assert "paper: iteration 3 (AS)" in [t.get_text() for t in r10.get_legend().get_texts()]
+            assert "AS: 3 (optimum_iteration)" in caption
+        else:
+            assert not marks
+            assert "(AS: 3 (optimum_iteration)) are not marked" in caption and "stand-in" in caption
+    finally:
+        plt.close(fig)
+
+
+def _error_bar_ys(ax) -> list[tuple[float, float]]:
+    """(low, high) of every vertical error bar drawn on ``ax`` (bar charts and errorbar lines)."""
+    from matplotlib.collections import LineCollection
+
+    out = []
+    for c in ax.collections:
+        if isinstance(c, LineCollection):
+            out += [(float(min(s[:, 1])), float(max(s[:, 1]))) for s in c.get_segments() if len(s) == 2]
+    return out
+
+
+def _wilson_by_hand(k: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
+    """The Wilson score interval's closed form: (p + z²/2n ± z·sqrt(p(1 − p)/n + z²/4n²)) / (1 + z²/n)."""
+    p = k / n
+    centre, half = p + z * z / (2 * n), z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    return (centre - half) / (1 + z * z / n), (centre + half) / (1 + z * z / n)
+
+
+def test_proportions_get_wilson_intervals_inside_0_100_and_the_papers_sd(plan_run):
+    """Each bar is the share of the 4 trials (2 seeds x 2 scenarios) of its map and planner, its error bar the
+    Wilson interval of k of 4 (closed form), never past 100 %; the paper's 90 ± 5 % is drawn with its sd on r20
+    only."""
+    from jaxplan.experiments.figure_kinds import DRAW
+    from jaxplan.experiments.plots import plt
+    from jaxplan.experiments.run_data import load_run
+
+    run = load_run(plan_run)
+    t = run.trials
+    spec = next(f for f in run.config.figures if f.name == "success_bar")
+    fig, _ = DRAW["bar"](run, spec)
+    try:
+        for ax in fig.axes[:3]:
+            assert ax.get_ylim()[1] <= 105.0 + 1e-9
+            ys = _error_bar_ys(ax)
+            for planner in ("A*", "AS"):
+                rows = (t["map"] == ax.get_title()) & (t["planner"] == planner)
+                k, n = int(np.sum(t["success"][rows])), int(np.sum(rows))
+                assert n == 4
+                lo, hi = _wilson_by_hand(k, n)
+                assert (100 * lo, 100 * hi) in [(pytest.approx(a), pytest.approx(b)) for a, b in ys]
+            assert all(0.0 <= lo and hi <= 100.0 + 1e-9 for lo, hi in ys[:2])
+            if ax.get_title() == "r20":
+                assert len(ys) == 3 and (pytest.approx(85.0), pytest.approx(95.0)) == ys[2]
+            else:
+                assert len(ys) == 2
+    finally:
+        plt.close(fig)
+
+
+def test_wilson_interval_hand_computed():
+    """k = n: [1 / (1 + z²/n), 1]; k = 0: [0, (z²/n) / (1 + z²/n)] (the Wilson score formula at p = 1 and 0)."""
+    from jaxplan.experiments.figure_kinds import _wilson
+
+    z2 = 1.959963984540054 ** 2
+    assert _wilson(2, 2) == pytest.approx((1.0 / (1.0 + z2 / 2.0), 1.0))
+    assert _wilson(0, 10) == pytest.approx((0.0, (z2 / 10.0) / (1.0 + z2 / 10.0)), abs=1e-12)
+    lo, hi = _wilson(5, 10)  # symmetric about 1/2: 0.5 ± z·sqrt(0.25/10 + z²/400) / (1 + z²/10)
+    half = z2 ** 0.5 * (0.25 / 10 + z2 / 400) ** 0.5 / (1 + z2 / 10)
+    assert (lo, hi) == pytest.approx((0.5 - half, 0.5 + half))
+    assert all(np.isnan(_wilson(0, 0)))
+
+
+def test_the_comparability_rule():
+    from jaxplan.experiments.comparability import ABSOLUTE_METRICS, comparable
+    from jaxplan.experiments.config import METRICS
+
+    assert ABSOLUTE_METRICS <= set(METRICS)
+    for metric in ("length", "turns", "converged_iteration", "turning_point", "optimum_iteration", "collisions",
+                   "time_s", "energy", "tour_length"):
+        assert not comparable(metric, paper_map=False) and comparable(metric, paper_map=True)
+    for metric in ("success", "accuracy", "arrived", "optimality_gap", "smoothness", "max_curvature",
+                   "los_length_reduction"):
+        assert comparable(metric, paper_map=False)
+    assert all(not comparable(m, False) for m in METRICS if METRICS[m].timing)  # wall times: never
+
+
+def test_li2026s_curvature_names_the_ackermann_limit():
+    """li2026_table3's robots: wheelbase 0.5 m, steering limit 0.6 rad -> tan(0.6)/0.5 = 1.3683 1/m."""
+    from jaxplan.experiments.config import load_config
+    from jaxplan.experiments.figure_kinds import _draw_steering_limits, _steering_limits
+    from jaxplan.experiments.plots import plt
+
+    cfg = load_config(Path(__file__).parents[1] / "configs" / "li2026_table3.toml")
+    limits = _steering_limits(cfg, range(len(cfg.planners)))
+    assert limits == [pytest.approx((0.6, 0.5, 1.368274))]
+    fig, ax = plt.subplots()
+    try:
+        _draw_steering_limits(ax, limits)
+        (line,) = ax.lines
+        assert list(line.get_ydata()) == pytest.approx([1.368274] * 2)
+        assert line.get_label() == "Ackermann limit tan(δmax)/L = tan(0.6 rad)/0.5 m = 1.37 1/m"
+    finally:
+        plt.close(fig)
+
+
+def test_map_legends_sit_outside_the_map(plan_run):
+    """The paths figure's legend (every path, start and goal) is drawn below the map axes, not over it."""
+    from jaxplan.experiments.figure_kinds import DRAW
+    from jaxplan.experiments.plots import plt
+    from jaxplan.experiments.run_data import load_run
+
+    run = load_run(plan_run)
+    spec = next(f for f in run.config.figures if f.kind == "paths")
+    fig, _ = DRAW["paths"](run, spec)
+    try:
+        fig.canvas.draw()
+        ax = fig.axes[0]
+        legend = ax.get_legend()
+        assert [t.get_text() for t in legend.get_texts()] == ["A*", "AS", "start", "goal"]
+        assert legend.get_window_extent().y1 < ax.get_window_extent().y0
     finally:
         plt.close(fig)

@@ -12,7 +12,9 @@ from matplotlib.colors import LogNorm
 
 import jaxplan as jp
 from jaxplan.experiments.plots import (
+    TURN_RULE_LABEL,
     convergence_bands,
+    legend_outside,
     pheromone_per_cell,
     plot_convergence,
     plot_map,
@@ -108,10 +110,41 @@ def test_map_rejects_unknown_layer(grid):
 
 def test_turn_rule_markers_at_free_rule_cells(grid):
     ax = plot_map(_ax(), grid, show_turn_rule=True)
-    (line,) = [ln for ln in ax.lines if ln.get_label() == "right-turn rule"]
+    (line,) = [ln for ln in ax.lines if ln.get_label() == TURN_RULE_LABEL]
     got = sorted(zip(line.get_xdata().tolist(), line.get_ydata().tolist(), strict=True))
     assert got == sorted([((0 + 0.5) * RES, (0 + 0.5) * RES), ((2 + 0.5) * RES, (7 + 0.5) * RES)])
     assert not plot_map(_ax(), grid).lines  # off by default
+    # The markers leave the colour cycle alone: a path drawn next takes the first colour, as on a plain map.
+    plot_paths(ax, grid, [np.array([[0, 0], [1, 1]])], labels=["p"])
+    from matplotlib.colors import to_hex
+
+    assert to_hex(ax.lines[-1].get_color()) == "#1f77b4"  # C0
+
+
+def test_tunnel_cells_are_outlined_with_their_headroom(grid):
+    """The free cells with a finite clearance_height, (1..3, 1) at 0.4 m and (6, 3) at 1.2 m, each a hatched
+    square of one cell; the blocked (4, 2) is not drawn. One legend entry names the headroom range."""
+    ax = plot_map(_ax(), grid, show_tunnels=True)
+    rects = [pt for pt in ax.patches if pt.get_hatch()]
+    corners = sorted((round(r.get_x() / RES), round(r.get_y() / RES)) for r in rects)
+    assert corners == [(1, 1), (2, 1), (3, 1), (6, 3)]
+    assert all(r.get_width() == pytest.approx(RES) and r.get_height() == pytest.approx(RES) for r in rects)
+    assert [r.get_label() for r in rects if r.get_label() and not r.get_label().startswith("_")] == [
+        "tunnel (headroom 0.40-1.20 m)"]
+    assert not [pt for pt in plot_map(_ax(), grid).patches if pt.get_hatch()]  # off by default
+
+
+def test_legend_outside_puts_every_labelled_artist_below_the_map(grid):
+    fig, ax = plt.subplots()
+    plot_map(ax, grid, show_turn_rule=True, show_tunnels=True)
+    plot_paths(ax, grid, [np.array([[0, 0], [3, 3]])], labels=["p"], start=[0, 0], goal=[3, 3])
+    fig.canvas.draw()
+    legend = ax.get_legend()
+    assert [t.get_text() for t in legend.get_texts()] == [TURN_RULE_LABEL, "tunnel (headroom 0.40-1.20 m)", "p",
+                                                          "start", "goal"]
+    assert legend.get_window_extent().y1 < ax.get_window_extent().y0
+    assert legend_outside(plt.subplots()[1]) is None  # nothing labelled: no legend
+    plt.close(fig)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -140,7 +140,7 @@ class RunOutput(NamedTuple):
     success, history ``f32[I]`` best cost after each iteration (inf before the first
     success), diversity ``f32[I]`` std of successful ants' costs per iteration,
     successes ``i32[I]`` ants reaching the goal per iteration, converged ``i32`` first
-    iteration within 0.1 % of the final best (−1 without success), tau ``f32[S, C, K]``
+    iteration within 1 % of the final best (−1 without success), tau ``f32[S, C, K]``
     final pheromone (None unless ``keep_pheromone``); ant_steps ``i32[I]`` moves made by
     the run's walking ants, loop_steps ``i32[I]`` iterations of the (batch-wide) step
     loop and slots ``i32[I]`` ant slots it processed (all runs of the batch), per iteration.

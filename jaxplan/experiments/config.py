@@ -97,6 +97,9 @@ KINDS = ("plan", "navigate", "tsp")
 """Planner kinds: a grid planner (`jaxplan.plan_batch`), a navigation pipeline (`jaxplan.navigate_batch`),
 a TSP ant colony on a TSPLIB instance (`jaxplan.solve_tsp`'s program, batched over seeds)."""
 
+DRAW_SEP = "~"
+"""Separates a generated map's name from its draw index in the name of draw d > 0 (``warehouse20m~3``)."""
+
 ACCURACY_GAP = 0.10
 """cui2025's "accuracy" (DESIGN §6): the share of trials that succeed with an optimality gap <= this."""
 
@@ -122,14 +125,22 @@ METRICS: Mapping[str, Metric] = MappingProxyType({m.name: m for m in (
     Metric("los_turns", _P, "", "turns after line-of-sight smoothing", default=False),
     Metric("los_length_reduction", _P, "", "1 - los_length / length (yu2020 Table 4)", default=False),
     Metric("los_turns_reduction", _P, "", "1 - los_turns / turns (nan for a straight path)", default=False),
-    Metric("smoothness", _P, "", "1 - mean |heading change| / pi"),
+    Metric("smoothness", _B, "", "1 - mean |heading change| / pi over the path's vertices (navigate: the executed "
+           "path resampled every cell length)"),
     Metric("min_clearance", _P, "m", "smallest vertex clearance"),
-    Metric("mean_clearance", _P, "m", "mean vertex clearance"),
+    Metric("mean_clearance", _B, "m", "mean vertex clearance (navigate: of the executed path resampled every cell "
+           "length; cui2025 Table 1's average obstacle distance)"),
     Metric("max_curvature", _B, "1/m", "plan: Menger curvature at path vertices; navigate: executed |omega|/v"),
     Metric("hausdorff", _B, "m", "Hausdorff distance of the global path to the exact A* path (cui2025 Fig. 9)"),
     Metric("cost", _P, "", "the planner's own objective"),
-    Metric("converged_iteration", _PT, "", "plan: first iteration within 0.1 % of the final best cost; tsp: first "
-                                           "iteration whose best tour is the final best (0-based)"),
+    Metric("converged_iteration", _PT, "", "first iteration (0-based) whose best cost (tsp: tour length) is within "
+                                           "1 % of the run's final best: the general definition"),
+    Metric("converged_iteration_strict", _PT, "", "as converged_iteration within 0.1 % of the final best: the "
+                                                  "sensitivity row of the convergence iteration", default=False),
+    Metric("turning_point", _PT, "", "chu2024's iterative stabilization: the iteration (counted from 1) from which "
+                                     "the best cost stays at its final value", default=False),
+    Metric("optimum_iteration", _PT, "", "yu2020's number of iterations: the generation (counted from 1) in which "
+                                         "the run's final best is first found", default=False),
     Metric("collisions", _N, "", "contacts with the map or moving discs (a team: with other robots too, summed "
                                  "over its robots)"),
     Metric("arrived", _N, "", "share of the robots at their goals without collision in time (one robot: success; "
@@ -401,6 +412,9 @@ class MapSpec:
       key: where it was configured (``maps[i]`` or ``instances[j]``), for error messages.
       ros: a ROS map's `jaxplan.grid.load_ros_map` options (``keepout``, ``speed`` as absolute paths,
         ``speed_filter``, ``top_speed``, ``unknown``); empty for any other map.
+      family: the configured map's name when this site is one of its ``draws`` (draw 0 keeps the name, draw
+        ``d`` is ``NAME~d`` with generator key ``seed + d``); draw: that draw's index.
+      paper_map: the paper's own published map or instance (absolute numbers are comparable there).
     """
 
     name: str
@@ -416,10 +430,18 @@ class MapSpec:
     optimum: float | None = None
     key: str = ""
     ros: Mapping[str, Any] = dataclasses.field(default_factory=lambda: frozen({}))
+    family: str = ""
+    draw: int = 0
+    paper_map: bool = False
 
     @property
     def is_tsp(self) -> bool:
         return self.tsplib is not None
+
+    @property
+    def map_family(self) -> str:
+        """The configured map this site is a draw of (its own name for a map with one draw)."""
+        return self.family or self.name
 
 
 @dataclass(frozen=True)
@@ -434,7 +456,7 @@ class FigureSpec:
 @dataclass(frozen=True)
 class PaperValue:
     """A number the paper reports: ``mean`` (and ``sd``, ``min``, ``max``) of ``metric`` for a planner (on
-    ``map``, or every map)."""
+    ``map``, or every map), over ``n`` runs as the paper states them (None: not stated)."""
 
     planner: str
     map: str | None
@@ -443,6 +465,7 @@ class PaperValue:
     sd: float | None = None
     min: float | None = None
     max: float | None = None
+    n: int | None = None
 
 
 @dataclass(frozen=True)
@@ -518,6 +541,13 @@ class MapTable:
                                         "warehouse_yu2020: size (30 or 35); warehouse_chen2023_risk: lam (chen2023's "
                                         "Poisson risk rate)")
     seed: int = setting("int", 0, "the generator's key (generated maps only)", ge=0)
+    draws: int = setting("int", 1, "generated maps: independent draws with keys seed, seed + 1, ...; draw d > 0 "
+                         "runs as its own map NAME~d, and the report treats the draws as the unit of replication "
+                         "(intervals over per-draw means), so a difference that belongs to one map draw is not "
+                         "taken for the planner's", ge=1)
+    paper_map: bool = setting("bool", False, "the paper's own map, as published: only on such a map (or instance) "
+                              "are absolute numbers (lengths, turns, iterations, collisions) compared with the "
+                              "paper's; a generated map is never one")
     resolution: float = setting("float", None, "metres per cell; a ROS map is resampled to it (a coarse cell is "
                                 "blocked if any fine cell it overlaps is)", gt=0,
                                 default_text="1.0 for a MovingAI or generated map; a ROS map's own")
@@ -605,6 +635,8 @@ class PaperValueTable:
 
     planner: str = setting("str", None, "a planner label", required=True)
     map: str = setting("str", None, "a map name", default_text="every map")
+    n: int = setting("int", None, "the runs behind this value's mean and sd, as the paper states them (1: a "
+                     "single run)", ge=1, default_text="`[paper] n`")
     schema_extra = Setting(
         "custom", name="metric", doc="a configured metric's value: mean, [mean, sd] or { mean, sd, min, max } (sd, "
         "min and max optional: a paper's Max/Min columns, stored as printed)", type_text="number, [mean, sd] or table",
@@ -619,6 +651,9 @@ class PaperTable:
     """The paper's numbers, shown beside ours and labelled "paper"."""
 
     source: str = setting("str", "", "where they come from (e.g. \"cui2025, Table 2\"); required with values")
+    n: int = setting("int", None, "the runs behind each mean and sd, as the paper states them (1: each value is "
+                     "a single run); decides the verdict rule of its cells", ge=1,
+                     default_text="not stated: a value with an sd is judged by a prediction interval")
     values: Any = setting("tables", None, "the numbers", section=PaperValueTable)
 
 
@@ -754,8 +789,21 @@ def read_maps(r: Reader, raw: Mapping[str, Any], data_dir: Path, required: bool 
             r.bad(join(p, "scen"), f"no scenario file for {map_path.name} (looked for {map_path.name}.scen and "
                                    f"{map_path.stem}-random-1.scen); give 'scen' or use source = 'random'")
         ros = _read_ros_options(r, m, p, t, data_dir, has_path and map_path is not None and is_ros_map(map_path))
-        out.append(MapSpec(name, map_path, scen_path, gen, frozen(params), seed, resolution, spec, key=p,
-                           ros=frozen(ros)))
+        draws, paper_map = t["draws"], bool(t["paper_map"])
+        if draws and draws > 1 and not has_gen:
+            r.bad(join(p, "draws"), "only a generated map has draws (a file is one map)")
+            draws = 1
+        if paper_map and has_gen:
+            r.bad(join(p, "paper_map"), "a generated map is never the paper's own map (it stands in for one)")
+        for d in range(draws or 1):
+            site = name if d == 0 else f"{name}{DRAW_SEP}{d}"
+            if d and site in names:
+                r.bad(join(p, "name"), f"draw {d} of map {name!r} would be named {site!r}, which is taken")
+            if d:
+                names.setdefault(site, i)
+            out.append(MapSpec(site, map_path, scen_path, gen, frozen(params), seed + d, resolution, spec, key=p,
+                               ros=frozen(ros), family=name if (draws or 1) > 1 else "", draw=d,
+                               paper_map=paper_map))
     return tuple(out)
 
 
@@ -868,7 +916,7 @@ def _check_generator(r: Reader, path: str, name: str, entry: tuple, params: dict
 
 
 _NAVIGATE_ONLY = ("nav", "dwa", "robot", "params", "obstacles", "team")
-_TEAM_REFUSED = ("hausdorff", "accuracy")
+_TEAM_REFUSED = ("hausdorff", "accuracy", "smoothness", "mean_clearance")
 """Metrics of one robot's global path against the scenario's exact path: a team trial has N paths, so none."""
 
 
@@ -1199,7 +1247,9 @@ def _read_paper(r: Reader, raw: dict, metrics: tuple, maps: set, labels: set) ->
         planner_map = r.section(v, p, PaperValueTable)
         if not isinstance(v, dict):
             continue
-        planner, mp = planner_map["planner"], planner_map["map"]
+        planner, mp, n_runs = planner_map["planner"], planner_map["map"], planner_map["n"]
+        if n_runs is None:
+            n_runs = t["n"]
         if planner is not None and planner not in labels:
             r.bad(join(p, "planner"), f"unknown planner label {planner!r} (configured: {', '.join(sorted(labels))})"
                   + did_you_mean(planner, list(labels)))
@@ -1238,7 +1288,7 @@ def _read_paper(r: Reader, raw: dict, metrics: tuple, maps: set, labels: set) ->
             if key in seen:
                 r.bad(kp, f"a second paper value for planner {planner!r}, map {mp!r}, metric {k!r}")
             seen.add(key)
-            out.append(PaperValue(planner, mp, k, mean, sd, lo, hi))
+            out.append(PaperValue(planner, mp, k, mean, sd, lo, hi, n_runs))
     return source, tuple(out)
 
 
@@ -1426,5 +1476,6 @@ def apply_quick(cfg: ExperimentConfig) -> ExperimentConfig:
         planners = [pc for pc in planners if pc.label in q.planners]
     if q.maps:
         maps = tuple(m for m in maps if m.name in q.maps)
+    maps = tuple(m for m in maps if m.draw == 0)  # a smoke run checks the pipeline, not the map-to-map variance
     return cfg.replace(seeds=q.seeds or cfg.seeds, chunk=q.chunk or cfg.chunk, maps=maps, planners=tuple(planners),
                        is_quick=True)

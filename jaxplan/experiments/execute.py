@@ -31,7 +31,9 @@ from jaxplan.experiments.trial_metrics import (
     LOS_KEYS,
     PATH_KEYS,
     accuracy,
+    convergence_metrics,
     executed_optimum,
+    executed_shape,
     grid_path_lengths,
     hausdorff,
     los_metrics,
@@ -100,8 +102,10 @@ def _run_plan(mw: MapWork, pc: PlannerConfig, idx: np.ndarray, seeds: tuple[int,
     if "objective_gap" in metrics:
         out["objective_gap"] = objective_gaps(mw.grid, mw.starts[idx], mw.goals[idx], pc.name, overrides,
                                               br.paths[:n], br.n_cells[:n], ok)
-    if "converged_iteration" in metrics:
+    if "converged_iteration" in metrics:  # the colony kernel's (`jaxplan.metrics.converged_iteration`)
         out["converged_iteration"] = np.where(ok, br.converged[:n].astype(np.float64), np.nan)
+    # The other definitions (strict, chu2024's, yu2020's) from the same history, on the host.
+    out.update(convergence_metrics(br.history[:n], ok, [m for m in metrics if m != "converged_iteration"]))
     keep = {"history": br.history[:n].astype(np.float32), "diversity": br.diversity[:n].astype(np.float32),
             "successes": br.successes[:n].astype(np.int32), "paths": br.paths[:n].astype(np.int32),
             "n_cells": br.n_cells[:n].astype(np.int32), "success": ok}
@@ -163,6 +167,10 @@ def _run_navigate(mw: MapWork, m: int, pc: PlannerConfig, idx: np.ndarray, seeds
         out["accuracy"] = accuracy(eb.success[:n, :, 0], gap)
     out["reason"] = eb.reason[:n, :, 0]
     T = int(eb.steps[:n].max()) + 1
+    shape = [k for k in ("smoothness", "mean_clearance") if k in metrics]
+    if shape:
+        got = executed_shape(mw.grid, eb.states[:n, :, 0, :T, :2], eb.steps[:n, :, 0])
+        out.update({k: got[k] for k in shape})
     # states (x, y, theta, v, omega) feed the velocity traces and the DWA fans of `jaxplan figures`.
     keep = {"positions": eb.states[:n, :, 0, :T, :2].astype(np.float32),
             "states": eb.states[:n, :, 0, :T].astype(np.float32), "steps": eb.steps[:n, :, 0].astype(np.int32),
@@ -251,8 +259,8 @@ def _run_tsp(mw: MapWork, pc: PlannerConfig, seeds: tuple[int, ...], metrics: Se
     R = len(seeds)
     values = {"success": np.ones((1, R), np.int64), "tour_length": lengths[None],
               "optimality_gap": (lengths / mw.optimal[0] - 1.0)[None],
-              # The iteration the final best tour was found: Table 1's "number of iterations" (yu2020).
-              "converged_iteration": np.argmax(history <= history[:, -1:], axis=1).astype(np.float64)[None]}
+              # yu2020 Table 1's "number of iterations" is optimum_iteration; converged_iteration the general one.
+              **convergence_metrics(history[None], np.ones((1, R), bool), metrics)}
     keep = {"history": history[None].astype(np.float32), "tours": tours[None].astype(np.int32),
             "success": np.ones((1, R), bool)}
     timing = {"compile_s": float(compile_s), "time_s": float(time_s), "plan_time_s": float(time_s) / R}

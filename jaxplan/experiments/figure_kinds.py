@@ -14,6 +14,7 @@ from typing import Any, Callable
 import numpy as np
 
 from jaxplan.experiments import plots
+from jaxplan.experiments.comparability import comparable
 from jaxplan.experiments.config import METRICS, ExperimentConfig, FigureSpec, applies, nav_config
 from jaxplan.experiments.run_data import (
     RunData,
@@ -56,12 +57,34 @@ def _cost_of(pc) -> tuple:
     return (pc.name,) + tuple((k, str(pc.overrides.get(k))) for k in keys)
 
 
-def _curves(run: RunData, spec: FigureSpec, key: str, what: str):
-    """Convergence (``history``) or diversity curves of the selected iterative planners, one panel per map.
+ITERATION_METRICS = ("turning_point", "optimum_iteration", "converged_iteration", "converged_iteration_strict")
+"""The convergence iterations a paper may report, the paper-specific definitions first: the one a convergence
+figure marks for a planner is the first of these the config's [paper] values give."""
 
-    Planners are drawn on one quantity only: their own best cost (with its unit) when they all share one
-    cost definition (`COSTS`); otherwise each seed's curve relative to that seed's final best cost, in %
-    (best cost: the excess over the final best; diversity: the sd of the ants' costs over the final best)."""
+
+def _cost_label(pc, key: str) -> str:
+    """The y-axis label of a planner's convergence (``history``) or diversity curve: its own cost, with unit."""
+    qty, unit = ("best tour length", "TSPLIB distance") if pc.kind == "tsp" else \
+        (f"best {COSTS.get(pc.name, ('cost', 'cost units'))[0]}", COSTS.get(pc.name, ('', 'cost units'))[1])
+    return f"{qty} ({unit})" if key == "history" else f"sd of the ants' {qty[5:]} ({unit})"
+
+
+def _paper_iteration(run: RunData, m: int, label: str):
+    """``(metric, value)`` of the paper's convergence iteration for a planner on map ``m``, or None; and whether
+    it may be marked (`comparable`: an iteration count only on the paper's own map or instance)."""
+    ms = run.prep.maps[m].spec
+    for metric in ITERATION_METRICS:
+        pv = _paper_value(run.config, ms.name, label, metric)
+        if pv is not None:
+            return (metric, pv), comparable(metric, _is_paper_map(ms))
+    return None, False
+
+
+def _curves(run: RunData, spec: FigureSpec, key: str, what: str):
+    """Convergence (``history``) or diversity curves of the selected iterative planners in absolute cost: one
+    panel per map and cost definition (`COSTS`; planners share a panel only when they share a cost and its
+    weights). On a convergence panel, a planner's convergence iteration as the paper reports it is a dashed
+    vertical line, where the paper's number is comparable (`jaxplan.experiments.comparability`)."""
     mi, pi = selected(run, spec, ("plan", "tsp"))
     cfg = run.config
     pi = [p for p in pi if cfg.planners[p].name not in ("astar", "dijkstra")]
@@ -69,40 +92,59 @@ def _curves(run: RunData, spec: FigureSpec, key: str, what: str):
         raise ValueError(f"figure {spec.name!r}: no iterative plan planner selected")
     sc = scenario_of(run, spec, mi)
     band = spec.params.get("band", "iqr") or None
-    shared = len({_cost_of(cfg.planners[p]) for p in pi}) == 1
-    first = cfg.planners[pi[0]]
-    if shared:
-        qty, unit = ("best tour length", "TSPLIB distance") if first.kind == "tsp" else \
-            (f"best {COSTS.get(first.name, ('cost', 'cost units'))[0]}", COSTS.get(first.name, ('', 'cost units'))[1])
-        ylabel = f"{qty} ({unit})" if key == "history" else f"sd of the ants' {qty[5:]} ({unit})"
-    else:
-        ylabel = ("best cost above the run's final best (%)" if key == "history"
-                  else "sd of the ants' costs / the run's final best (%)")
-    fig, axes = panel_grid(len(mi))
-    for ax, m in zip(axes[0], mi, strict=True):
-        curves = {}
-        for p in pi:
+    groups: dict[tuple, list[int]] = {}
+    for p in pi:
+        groups.setdefault(_cost_of(cfg.planners[p]), []).append(p)
+    panels = [(m, g) for m in mi for g in groups.values()]
+    fig, axes = panel_grid(len(panels))
+    marked, hidden = [], []
+    for ax, (m, group) in zip(axes[0], panels, strict=True):
+        curves, colours = {}, []
+        for p in group:
             got = run.arrays(m, p, sc)
             if got is None or key not in got[0]:
                 continue
-            h = np.asarray(got[0][key][got[1]], np.float64)
-            if not shared:
-                final = np.asarray(got[0]["history"][got[1]], np.float64)[:, -1:]
-                with np.errstate(invalid="ignore", divide="ignore"):
-                    h = np.where(np.isfinite(final) & (final > 0),
-                                 100.0 * (h / final - (1.0 if key == "history" else 0.0)), np.nan)
-            curves[cfg.planners[p].label] = h
+            curves[cfg.planners[p].label] = np.asarray(got[0][key][got[1]], np.float64)
+            colours.append(f"C{pi.index(p) % 10}")  # a planner keeps its colour across panels
+        ylabel = _cost_label(cfg.planners[group[0]], key)
         if curves:
-            plots.plot_convergence(ax, curves, band=band, ylabel=ylabel)
+            plots.plot_convergence(ax, curves, band=band, ylabel=ylabel, colors=colours)
+        if key == "history":
+            colours = {ln.get_label(): ln.get_color() for ln in ax.lines}
+            for p in group:
+                label = cfg.planners[p].label
+                got, show = _paper_iteration(run, m, label)
+                if got is None:
+                    continue
+                metric, pv = got
+                note = f"{label}: {pv.mean:g} ({metric})"
+                if not show:
+                    hidden.append(note)
+                    continue
+                marked.append(note)
+                ax.axvline(pv.mean, ls="--", lw=1.2, color=colours.get(label, "0.3"),
+                           label=f"paper: iteration {pv.mean:g} ({label})")
+            if ax.get_legend_handles_labels()[1]:
+                ax.legend(fontsize=8)
         if spec.params.get("log"):
             ax.set_yscale("log")
-        ax.set_title(f"{run.prep.maps[m].spec.name}, scenario {sc}")
+        ax.set_ylabel(ylabel)
+        title = f"{run.prep.maps[m].spec.name}, scenario {sc}"
+        ax.set_title(title if len(groups) == 1 else f"{title}\n{', '.join(cfg.planners[p].label for p in group)}",
+                     fontsize=10)
     fig.suptitle(figure_title(spec, what))
     bands = {"iqr": "median and 25-75 % band", "sd": "mean ± 1 sd", "minmax": "median and min-max band",
              None: "median"}[band]
-    how = ("" if shared else " The planners' costs are defined differently, so each seed's curve is drawn "
-           "relative to that seed's final best cost (in %), one quantity for every planner.")
-    return fig, f"{what} over {len(cfg.seeds)} seeds at scenario {sc} ({bands}).{how}"
+    cap = f"{what} over {len(cfg.seeds)} seeds at scenario {sc} ({bands}), in each planner's own cost"
+    if len(groups) > 1:
+        cap += "; planners whose costs are defined differently are drawn in panels of their own"
+    if marked:
+        cap += ("; dashed vertical lines: the iteration the paper reports for the planner (its count from 1, on "
+                f"the x axis's count): {'; '.join(marked)}")
+    if hidden:
+        cap += (f". The paper's iteration counts ({'; '.join(hidden)}) are not marked: an iteration count on a "
+                "stand-in map or instance is not comparable with the paper's")
+    return fig, cap + "."
 
 
 def _convergence(run, spec):
@@ -147,43 +189,152 @@ def _paper_value(cfg: ExperimentConfig, map_: str, label: str, metric: str):
     return _paper(cfg, map_, label, metric)
 
 
-def _bar(run, spec):
+def _is_paper_map(ms) -> bool:
+    """The map (or instance) is the paper's own, as published (`MapSpec.paper_map`)."""
+    return bool(getattr(ms, "paper_map", False))
+
+
+def _shown_paper(run: RunData, m: int, label: str, metric: str):
+    """``(value, hidden)``: the paper's value to draw beside ours on map ``m`` (None: none given, or not
+    comparable there), and whether a value exists but is withheld (`jaxplan.experiments.comparability`)."""
+    ms = run.prep.maps[m].spec
+    pv = _paper_value(run.config, ms.name, label, metric)
+    if pv is None:
+        return None, False
+    if not comparable(metric, _is_paper_map(ms)):
+        return None, True
+    return pv, False
+
+
+def _wilson(k: int, n: int, level: float = 0.95) -> tuple[float, float]:
+    """Wilson score interval of the proportion ``k / n`` (`scipy.stats.binomtest`): ``(low, high)`` inside
+    [0, 1], nan without trials."""
+    from scipy.stats import binomtest
+
+    if n <= 0:
+        return math.nan, math.nan
+    ci = binomtest(int(k), int(n)).proportion_ci(confidence_level=level, method="wilson")
+    return float(ci.low), float(ci.high)
+
+
+def _rate_counts(run: RunData, name: str, p: int, metric: str) -> tuple[int, int]:
+    """``(k, n)``: a proportion's successes and outcomes pooled over every trial (seeds and scenarios) of
+    planner ``p`` on map ``name``. A trial's value is 0 or 1, except a team's ``arrived``, the share of its
+    robots that arrived: there the team's robots are the outcomes (k = share x robots)."""
+    from jaxplan.experiments.stats import trial_mask
+
+    t = run.trials
+    label = run.config.planners[p].label
+    v = np.asarray(t[metric][trial_mask(t, name, label, metric)], np.float64)
+    v = v[np.isfinite(v)]
+    team = run.config.planners[p].team
+    units = int(team.robots) if team is not None and metric == "arrived" else 1
+    return int(round(float(v.sum()) * units)), int(v.size) * units
+
+
+def _ours(run: RunData, name: str, p: int, metric: str, scale: float) -> tuple[float, float, float]:
+    """``(centre, low, high)`` of our value on map ``name`` (times ``scale``): a proportion (`Metric.rate`) as the
+    pooled share of trials with its Wilson 95 % interval, any other metric as the mean ± sd of the per-seed
+    means. nan where the planner has no defined value."""
     from jaxplan.experiments.stats import per_seed_means
 
-    t = need_trials(run)
+    if METRICS[metric].rate:
+        k, n = _rate_counts(run, name, p, metric)
+        lo, hi = _wilson(k, n)
+        return (k / n * scale if n else math.nan), lo * scale, hi * scale
+    v, _ = per_seed_means(run.trials, name, run.config.planners[p].label, metric, run.config.seeds)
+    v = v[np.isfinite(v)] * scale
+    if not v.size:
+        return math.nan, math.nan, math.nan
+    sd = float(v.std(ddof=1)) if v.size > 1 else 0.0
+    return float(v.mean()), float(v.mean()) - sd, float(v.mean()) + sd
+
+
+def _steering_limits(cfg: ExperimentConfig, pi) -> list[tuple[float, float, float]]:
+    """``(δmax rad, L m, κ 1/m)`` of each distinct Ackermann robot among planners ``pi``: the curvature
+    ``κ = tan(δmax) / L`` its steering cannot exceed (`jaxplan.dwa.Ackermann`)."""
+    from jaxplan.dwa import Ackermann
+
+    out = []
+    for p in pi:
+        pc = cfg.planners[p]
+        if pc.kind != "navigate":
+            continue
+        robot = nav_config(pc)[0].dwa.robot
+        if isinstance(robot, Ackermann):
+            lim = (float(robot.steer_max), float(robot.wheelbase),
+                   math.tan(float(robot.steer_max)) / float(robot.wheelbase))
+            if lim not in out:
+                out.append(lim)
+    return out
+
+
+def _draw_steering_limits(ax, limits) -> None:
+    """A dotted horizontal line per Ackermann steering limit, named in the legend with its arithmetic."""
+    for j, (steer, wheelbase, kappa) in enumerate(limits):
+        ax.axhline(kappa, ls=":", lw=1.5, color=("k", "0.4", "0.6")[j % 3],
+                   label=f"Ackermann limit tan(δmax)/L = tan({steer:g} rad)/{wheelbase:g} m = {kappa:.2f} 1/m")
+
+
+def _ours_text(metric: str) -> str:
+    return ("pooled share of trials, Wilson 95 % interval" if METRICS[metric].rate
+            else "mean ± sd of per-seed means")
+
+
+def _hidden_text(metric: str, hidden: list[str]) -> str:
+    """The caption sentence naming paper values withheld as not comparable (empty when none is)."""
+    if not hidden:
+        return ""
+    return (f" The paper's values of {metric_label(metric)} for {', '.join(sorted(set(hidden)))} are not drawn: an "
+            "absolute number on a stand-in map is not comparable with ours (jaxplan.experiments.comparability).")
+
+
+def _bar(run, spec):
+    need_trials(run)
     metric = figure_metric(run, spec)
     mi, pi = selected(run, spec)
     cfg = run.config
+    scale = metric_scale(metric)
+    rate = METRICS[metric].rate
     fig, axes = panel_grid(len(mi), w=max(4.0, 1.2 * len(pi) + 1.5))
-    any_paper = False
+    any_paper, hidden = False, []
+    limits = _steering_limits(cfg, pi) if metric == "max_curvature" else []
     for ax, m in zip(axes[0], mi, strict=True):
         name = run.prep.maps[m].spec.name
         here = [p for p in pi if applies(cfg.planners[p], run.prep.maps[m].spec)]
-        xs, labels = np.arange(len(here)), []
-        for j, p in enumerate(here):
-            label = cfg.planners[p].label
-            labels.append(label)
-            v, _ = per_seed_means(t, name, label, metric, cfg.seeds)
-            v = v[np.isfinite(v)] * metric_scale(metric)
-            if v.size:
-                ax.bar(j - 0.2, v.mean(), 0.4, yerr=v.std(ddof=1) if v.size > 1 else 0, color="C0", capsize=3,
-                       label="ours" if j == 0 else None)
-            pv = _paper_value(cfg, name, label, metric)
+        labels = [cfg.planners[p].label for p in here]
+        papers = [_shown_paper(run, m, label, metric) for label in labels]
+        hidden += [label for label, (_, withheld) in zip(labels, papers, strict=True) if withheld]
+        pair = any(pv is not None for pv, _ in papers)  # ours and the paper's side by side, else ours centred
+        any_paper |= pair
+        for j, (p, (pv, _)) in enumerate(zip(here, papers, strict=True)):
+            centre, lo, hi = _ours(run, name, p, metric, scale)
+            if np.isfinite(centre):
+                ax.bar(j - 0.2 if pair else j, centre, 0.4 if pair else 0.6, yerr=[[centre - lo], [hi - centre]],
+                       color="C0", capsize=3, label=f"ours ({_ours_text(metric)})" if j == 0 else None)
             if pv is not None:
-                any_paper = True
-                ax.bar(j + 0.2, pv.mean * metric_scale(metric), 0.4, yerr=(pv.sd or 0) * metric_scale(metric),
-                       color="white", edgecolor="C1", hatch="//",
-                       capsize=3, label="paper" if not ax.get_legend_handles_labels()[1].count("paper") else None)
-        ax.set_xticks(xs, labels, rotation=30)
+                sd = (pv.sd or 0.0) * scale
+                ax.bar(j + 0.2, pv.mean * scale, 0.4, yerr=sd, color="white", edgecolor="C1", hatch="//",
+                       capsize=3, label=None if "paper" in " ".join(ax.get_legend_handles_labels()[1])
+                       else ("paper (mean ± sd)" if pv.sd else "paper"))
+        if limits:
+            _draw_steering_limits(ax, limits)
+        if rate:
+            ax.set_ylim(0.0, 1.05 * scale)
+        ax.set_xticks(np.arange(len(here)), labels, rotation=30, ha="right", rotation_mode="anchor")
         ax.set_ylabel(metric_label(metric))
         ax.set_title(name)
-        if ax.get_legend_handles_labels()[1]:
-            ax.legend(fontsize=8)
-    fig.suptitle(figure_title(spec, f"{metric_label(metric)}: mean ± sd over seeds"))
-    cap = f"Mean ± sd over seeds of the per-seed means of {metric_label(metric)}"
+    plots.figure_legend(fig)
+    fig.suptitle(figure_title(spec, f"{metric_label(metric)}: ours" + (" and the paper's" if any_paper else "")))
+    cap = (f"{metric_label(metric)}: " + ("the share of all trials (pooled over seeds and scenarios) with its "
+                                           "Wilson 95 % interval" if rate else
+                                           "mean ± sd over seeds of the per-seed means"))
     if any_paper:
-        cap += f"; hatched bars: the paper's reported values ({cfg.paper_source}), not ours"
-    return fig, cap + "."
+        cap += f"; hatched bars: the paper's reported values ± its sd ({cfg.paper_source}), not ours"
+    if limits:
+        cap += ("; dotted: the largest curvature the Ackermann steering allows, tan(δmax)/L of the configured "
+                "robot (every executed path is bounded by it)")
+    return fig, cap + "." + _hidden_text(metric, hidden)
 
 
 def _log_x(xs: np.ndarray) -> bool:
@@ -195,14 +346,13 @@ def _log_x(xs: np.ndarray) -> bool:
 def _sweep(run, spec):
     """``metric`` against ``x``: a generator parameter (one line per planner, a point per map), one number per
     map, or a planner parameter (one line per map, a point per planner: e.g. IACO's elite weight)."""
-    from jaxplan.experiments.stats import per_seed_means
-
-    t = need_trials(run)
+    need_trials(run)
     metric = figure_metric(run, spec)
     mi, pi = selected(run, spec)
     cfg = run.config
     x = spec.params["x"]
     scale = metric_scale(metric)
+    rate = METRICS[metric].rate
     xlabel = spec.params.get("xlabel", x if isinstance(x, str) else "x")
     by_planner = isinstance(x, str) and all(x not in run.prep.maps[m].spec.params for m in mi) and all(
         x in cfg.planners[p].overrides for p in pi)
@@ -224,36 +374,51 @@ def _sweep(run, spec):
     lines = ([(run.prep.maps[m].spec.name, [(m, p) for p in pi]) for m in mi] if by_planner
              else [(cfg.planners[p].label, [(m, p) for m in mi]) for p in pi])
     fig, ax = plt.subplots(figsize=(6, 4.2), constrained_layout=True)
-    any_paper = False
+    any_paper, hidden = False, []
     for name, cells in lines:
-        mean, sd, pap = [], [], []
+        ours, pap, pap_sd = [], [], []
         for m, p in cells:
             mname, label = run.prep.maps[m].spec.name, cfg.planners[p].label
-            v, _ = per_seed_means(t, mname, label, metric, cfg.seeds)
-            v = v[np.isfinite(v)] * scale
-            mean.append(v.mean() if v.size else math.nan)
-            sd.append(v.std(ddof=1) if v.size > 1 else 0.0)
-            pv = _paper_value(cfg, mname, label, metric)
+            ours.append(_ours(run, mname, p, metric, scale))
+            pv, withheld = _shown_paper(run, m, label, metric)
+            if withheld:
+                hidden.append(label)
             pap.append(pv.mean * scale if pv is not None else math.nan)
-        mean, sd, pap = (np.asarray(a)[order] for a in (mean, sd, pap))
-        (line,) = ax.plot(xs[order], mean, marker="o", label=f"{name} (ours, mean ± sd)")
-        ax.fill_between(xs[order], mean - sd, mean + sd, color=line.get_color(), alpha=0.2, lw=0)
+            pap_sd.append((pv.sd or 0.0) * scale if pv is not None else math.nan)
+        centre, lo, hi = (np.asarray(a)[order] for a in zip(*ours, strict=True))
+        pap, pap_sd = np.asarray(pap)[order], np.asarray(pap_sd)[order]
+        (line,) = ax.plot(xs[order], centre, marker="o", label=f"{name} (ours, {_ours_text(metric)})")
+        ax.fill_between(xs[order], lo, hi, color=line.get_color(), alpha=0.2, lw=0)
         if np.isfinite(pap).any():
             any_paper = True
-            ax.plot(xs[order], pap, ls="--", marker="s", mfc="none", color=line.get_color(), label=f"{name} (paper)")
+            ok = np.isfinite(pap)
+            ax.errorbar(xs[order][ok], pap[ok], yerr=pap_sd[ok], ls="--", marker="s", mfc="none", capsize=3,
+                        color=line.get_color(), label=f"{name} (paper, mean ± sd)")
     log = _log_x(xs)
     if log:
         ax.set_xscale("log")
+    if rate:
+        ax.set_ylim(0.0, 1.05 * scale)
     ax.set_xlabel(xlabel + ("" if "(" in xlabel else " (dimensionless)"))
     ax.set_ylabel(metric_label(metric))
-    if ax.get_legend_handles_labels()[1]:
-        ax.legend(fontsize=8)
+    plots.figure_legend(fig)
     ax.set_title(figure_title(spec, f"{metric_label(metric)} against {xlabel}"))
-    cap = (f"{metric_label(metric)} against {xlabel}{' (log axis)' if log else ''}: mean ± sd over seeds of the "
-           "per-seed means" + (", one line per map" if by_planner else ", one line per planner"))
+    cap = (f"{metric_label(metric)} against {xlabel}{' (log axis)' if log else ''}: "
+           + ("the share of all trials (pooled over seeds and scenarios), band: its Wilson 95 % interval" if rate
+              else "mean ± sd over seeds of the per-seed means")
+           + (", one line per map" if by_planner else ", one line per planner"))
     if any_paper:
-        cap += f"; dashed open markers: the paper's values ({cfg.paper_source}), not ours"
-    return fig, cap + "."
+        cap += f"; dashed open markers: the paper's values ± its sd ({cfg.paper_source}), not ours"
+    return fig, cap + "." + _hidden_text(metric, hidden)
+
+
+def _map_features(grid) -> tuple[bool, bool]:
+    """``(right-turn cells, tunnels)``: whether the map has free cells with chu2024's right-hand rule
+    (``turn_rule == 1``) or a finite headroom (``clearance_height``), which a paths figure then marks."""
+    free = np.asarray(grid.free)
+    rules = bool(np.any((np.asarray(grid.turn_rule) == 1) & free))
+    tunnels = bool(np.any(np.isfinite(np.asarray(grid.clearance_height)) & free))
+    return rules, tunnels
 
 
 def _paths(run, spec):
@@ -262,7 +427,8 @@ def _paths(run, spec):
     mi, pi = selected(run, spec, ("plan", "navigate"))
     sc, seed, r = scenario_seed(run, spec, mi)
     smoother = spec.params.get("smoothing")
-    fig, axes = panel_grid(len(mi), w=6.0, h=4.8)
+    fig, axes = panel_grid(len(mi), w=6.0, h=5.6)
+    marks: set[str] = set()
     for ax, m in zip(axes[0], mi, strict=True):
         mw = run.prep.maps[m]
         paths, labels, smoothed, smoothed_labels = [], [], [], []
@@ -283,7 +449,10 @@ def _paths(run, spec):
                 sm = smooth(np.asarray(pts[:n], np.float64), mw.grid, smoother)
                 smoothed.append(cell_path_m(np.asarray(sm.points), int(sm.n), mw.grid))
                 smoothed_labels.append(f"{labels[-1]} ({smoother})")
-        plots.plot_map(ax, mw.grid, layer=map_layer(mw.grid), title=f"{mw.spec.name}, scenario {sc}, seed {seed}")
+        rules, tunnels = _map_features(mw.grid)
+        marks |= {k for k, on in (("turn", rules), ("tunnel", tunnels)) if on}
+        plots.plot_map(ax, mw.grid, layer=map_layer(mw.grid), title=f"{mw.spec.name}, scenario {sc}, seed {seed}",
+                       show_turn_rule=rules, show_tunnels=tunnels)
         plots.plot_paths(ax, mw.grid, paths, labels=labels, start=cell_path_m(mw.starts[sc][None], 1, mw.grid)[0],
                          goal=cell_path_m(mw.goals[sc][None], 1, mw.grid)[0], coords="m")
         if smoothed:
@@ -291,11 +460,17 @@ def _paths(run, spec):
             plots.plot_paths(ax, mw.grid, smoothed, labels=smoothed_labels, coords="m", lw=1.4)
             for line in ax.lines[lines_before:]:
                 line.set_linestyle("--")
-            ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)  # with the dashes
+            plots.legend_outside(ax)  # with the dashes
     fig.suptitle(figure_title(spec, "Planned paths"))
     cap = f"Global paths of each planner at scenario {sc}, seed {seed} (cell centres; start circle, goal star)"
     if smoother:
         cap += f"; dashed: the same path after the {smoother!r} smoother (jaxplan.smooth)"
+    if "turn" in marks:
+        cap += ("; purple squares: right-turn cells (chu2024's right-hand rule: opt_ant's ants entering one must "
+                "turn right; the other planners ignore it)")
+    if "tunnel" in marks:
+        cap += ("; hatched cells: tunnels, passable only by a vehicle lower than the headroom (opt_ant's "
+                "vehicle_height)")
     return fig, cap + "."
 
 
@@ -308,7 +483,7 @@ def _pheromone(run, spec):
     todo = [(m, p) for m in mi for p in pi if run.config.planners[p].name in COLONIES]
     if not todo:
         raise ValueError(f"figure {spec.name!r}: no ant colony planner selected")
-    fig, axes = panel_grid(len(todo), w=5.5, h=4.4)
+    fig, axes = panel_grid(len(todo), w=5.5, h=4.8)
     for ax, (m, p) in zip(axes[0], todo, strict=True):
         mw, pc = run.prep.maps[m], run.config.planners[p]
         overrides = {k: tuple(v) if isinstance(v, list) else v for k, v in pc.overrides.items()}
@@ -316,10 +491,8 @@ def _pheromone(run, spec):
                    **overrides)
         plots.plot_pheromone(ax, mw.grid, res.info["tau"], log=spec.params.get("log", True),
                              title=f"{pc.label} on {mw.spec.name}")
-        if res.success:
+        if res.success:  # its legend goes below the map, clear of the colour bar
             plots.plot_paths(ax, mw.grid, [np.asarray(res.path)], labels=[f"{pc.label} path"], lw=1.2)
-            if ax.get_legend() is not None:  # one line, named in the caption: no legend beside the heat map
-                ax.get_legend().remove()
     fig.suptitle(figure_title(spec, "Final pheromone per cell"))
     return fig, (f"Final pheromone per cell (max over its allowed outgoing edges) at scenario {sc}, seed {seed}, "
                  "with that trial's path (blue line); recomputed by re-planning the trial with keep_pheromone=True.")
@@ -359,7 +532,7 @@ def _trajectories(run, spec):
     if not pi:
         raise ValueError(f"figure {spec.name!r}: no navigate planner selected")
     sc, seed, r = scenario_seed(run, spec, mi)
-    fig, axes = panel_grid(len(mi) * len(pi), w=6.0, h=4.8)
+    fig, axes = panel_grid(len(mi) * len(pi), w=6.0, h=5.8)
     k = team = 0
     for m in mi:
         mw = run.prep.maps[m]
@@ -379,18 +552,22 @@ def _trajectories(run, spec):
                 d = disc_positions(obs, times)
                 radii = np.asarray(obs.radii, np.float64)
                 for j in range(d.shape[1]):
-                    ax.plot(d[:, j, 0], d[:, j, 1], color="0.45", lw=0.8, ls=":")
+                    first = j == 0  # one legend entry per kind of mark
+                    ax.plot(d[:, j, 0], d[:, j, 1], color="0.45", lw=0.8, ls=":",
+                            label="moving disc tracks" if first else None)
                     # where each disc was when the robot came closest to it
                     t_close = int(np.argmin(np.hypot(*(d[:, j] - pos[:len(d)]).T)))
-                    ax.add_patch(plt.Circle(tuple(d[t_close, j]), radii[j], color="tab:red", alpha=0.5))
-                    ax.plot(*pos[t_close], "x", color="tab:red", ms=5)
+                    ax.add_patch(plt.Circle(tuple(d[t_close, j]), radii[j], color="tab:red", alpha=0.5,
+                                            label="disc at the robot's closest approach" if first else None))
+                    ax.plot(*pos[t_close], "x", color="tab:red", ms=5,
+                            label="robot at its closest approach" if first else None)
             mates = _teammates(run, m, p, sc, r)
             team = max(team, len(mates) + 1)
             for j, (tp, ts, tg) in enumerate(mates):
                 ax.plot(tp[:, 0], tp[:, 1], color="tab:purple", lw=1.0, alpha=0.8,
                         label="teammates (executed)" if j == 0 else None)
-                ax.plot(*ts, "o", color="tab:purple", ms=4)
-                ax.plot(*tg, "*", color="tab:purple", ms=7)
+                ax.plot(*ts, "o", color="tab:purple", ms=4, label="teammates' starts" if j == 0 else None)
+                ax.plot(*tg, "*", color="tab:purple", ms=7, label="teammates' goals" if j == 0 else None)
             plots.plot_paths(ax, mw.grid, [plan, pos], labels=["global path", "executed"],
                              start=pos[0], goal=cell_path_m(mw.goals[sc][None], 1, mw.grid)[0], coords="m", lw=1.5)
     fig.suptitle(figure_title(spec, f"Executed trajectories, scenario {sc}, seed {seed}"))
@@ -437,7 +614,7 @@ def _fan(run, spec):
         raise ValueError(f"figure {spec.name!r}: no navigate planner selected")
     sc, seed, r = scenario_seed(run, spec, mi)
     panels = [(m, p) for m in mi for p in pi]
-    fig, axes = panel_grid(len(panels), w=6.0, h=4.8)
+    fig, axes = panel_grid(len(panels), w=6.0, h=5.8)
     for ax, (m, p) in zip(axes[0], panels, strict=True):
         mw, pc = run.prep.maps[m], run.config.planners[p]
         navcfg, weights = nav_config(pc)
@@ -455,8 +632,9 @@ def _fan(run, spec):
         obs = trial_obstacles(run, m, p, sc, seed)
         ax.plot(pos[:, 0], pos[:, 1], color="0.3", lw=1.0, label="executed")
         ax.plot(plan[:, 0], plan[:, 1], color="C2", lw=1.0, ls="--", label="global path")
-        for s in wanted:
+        for w, s in enumerate(wanted):
             s = min(int(s), steps)
+            once = w == 0  # one legend entry per kind of mark
             state = states[s]
             # sub-goal: the global path's point `lookahead` metres past the point nearest the robot
             near = int(np.argmin(np.hypot(*(plan - state[:2]).T))) if len(plan) else 0
@@ -468,19 +646,22 @@ def _fan(run, spec):
                 from jaxplan.nav import discs_at
 
                 discs = discs_at(obs, s * dwa.period)
-                for c, rad in zip(np.asarray(discs.positions), np.asarray(discs.radii), strict=True):
-                    ax.add_patch(plt.Circle(tuple(c), float(rad), color="tab:red", alpha=0.5))
+                for i, (c, rad) in enumerate(zip(np.asarray(discs.positions), np.asarray(discs.radii), strict=True)):
+                    ax.add_patch(plt.Circle(tuple(c), float(rad), color="tab:red", alpha=0.5,
+                                            label="moving discs" if once and i == 0 else None))
             _, info = dwa_step(state, subgoal, mw.grid, obstacles=discs, params=weights or None, config=dwa,
                                path=plan if len(plan) > 1 else None)
             ro, ok = np.asarray(info.rollouts), np.asarray(info.feasible)
-            for j in np.flatnonzero(~ok)[::2]:
-                ax.plot(ro[j, :, 0], ro[j, :, 1], color="tab:red", lw=0.3, alpha=0.4)
-            for j in np.flatnonzero(ok):
-                ax.plot(ro[j, :, 0], ro[j, :, 1], color="tab:blue", lw=0.3, alpha=0.5)
+            for i, j in enumerate(np.flatnonzero(~ok)[::2]):
+                ax.plot(ro[j, :, 0], ro[j, :, 1], color="tab:red", lw=0.3, alpha=0.4,
+                        label="infeasible rollouts (every 2nd)" if once and i == 0 else None)
+            for i, j in enumerate(np.flatnonzero(ok)):
+                ax.plot(ro[j, :, 0], ro[j, :, 1], color="tab:blue", lw=0.3, alpha=0.5,
+                        label="feasible rollouts" if once and i == 0 else None)
             ch = int(info.chosen)
-            ax.plot(ro[ch, :, 0], ro[ch, :, 1], color="k", lw=2.0)
-            ax.plot(*subgoal, "*", color="C1", ms=9)
-        ax.legend(fontsize=7, loc="best")
+            ax.plot(ro[ch, :, 0], ro[ch, :, 1], color="k", lw=2.0, label="chosen rollout" if once else None)
+            ax.plot(*subgoal, "*", color="C1", ms=9, label="sub-goal" if once else None)
+        plots.legend_outside(ax)
         if len(wanted) == 1:  # zoom on the fan
             c = states[min(int(wanted[0]), steps), :2]
             span = max(2.5, dwa.horizon * float(dwa.robot.v_max) * 1.3)
@@ -517,10 +698,10 @@ def _tours(run, spec):
             c = xy[np.append(t, t[0])]
             label = f"{run.config.planners[p].label} ({tour_length(mw.problem, t):g})"
             ax.plot(c[:, 0], c[:, 1], lw=1.2, label=label)
-        ax.plot(xy[:, 0], xy[:, 1], "k.", ms=5)
+        ax.plot(xy[:, 0], xy[:, 1], "k.", ms=5, label="cities")
         ax.set_aspect("equal")
         ax.set_title(f"{mw.spec.name}, seed {seed}")
-        ax.legend(fontsize=8)
+        plots.legend_outside(ax)
     fig.suptitle(figure_title(spec, "Best tours"))
     return fig, (f"Best tour of each TSP planner at seed {seed} (length in the instance's metric); dashed grey: "
                  "the optimal tour of the instance's .opt.tour file.")

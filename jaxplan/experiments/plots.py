@@ -39,8 +39,8 @@ from jaxplan.core.io import atomic_path
 from jaxplan.grid import GridMap, Neighbours, neighbour_table
 
 __all__ = [
-    "LAYERS", "plot_map", "plot_paths", "plot_pheromone", "pheromone_per_cell", "plot_convergence",
-    "convergence_bands", "plot_run", "save_figure",
+    "LAYERS", "TURN_RULE_LABEL", "figure_legend", "legend_outside", "plot_map", "plot_paths", "plot_pheromone",
+    "pheromone_per_cell", "plot_convergence", "convergence_bands", "plot_run", "save_figure",
 ]
 
 #: Map layers `plot_map` can draw, with their colour maps.
@@ -105,14 +105,36 @@ def _layer_data(grid: GridMap, layer: str) -> tuple[np.ndarray, str]:
     return np.ma.masked_where(hide, values), "height (m)" if layer == "height" else "risk"
 
 
+TURN_RULE_LABEL = "right-turn cell (opt_ant must turn right on entering)"
+"""Legend text of the cells with chu2024's right-hand rule (`plot_map` with ``show_turn_rule``)."""
+
+
 def _draw_turn_rule(ax: plt.Axes, grid: GridMap) -> None:
-    """Small markers at the centres of free cells with ``turn_rule == 1`` (right turn required)."""
+    """Hollow purple squares on the free cells with ``turn_rule == 1``: chu2024's right-hand rule, which opt_ant
+    applies to an ant entering such a cell (it must take the move a quarter turn right of its heading)."""
     ys, xs = np.nonzero((np.asarray(grid.turn_rule) == 1) & np.asarray(grid.free))
     if len(xs) == 0:
         return
     c = grid.centre(np.stack([xs, ys], axis=-1))
-    ax.plot(c[:, 0], c[:, 1], ls="none", marker="o", ms=3, mfc="none", mec="tab:purple",
-            mew=0.8, label="right-turn rule")
+    # An explicit colour leaves the colour cycle alone: the paths drawn next keep their usual colours.
+    ax.plot(c[:, 0], c[:, 1], ls="none", marker="s", ms=6, color="tab:purple", mfc="none", mew=1.2,
+            label=TURN_RULE_LABEL)
+
+
+def _draw_tunnels(ax: plt.Axes, grid: GridMap) -> None:
+    """Hatched outlines on the free cells with a finite ``clearance_height`` (chu2024's tunnels: a vehicle passes
+    only when it is lower than the headroom), labelled with the headroom range in metres."""
+    ch = np.asarray(grid.clearance_height, np.float64)
+    ys, xs = np.nonzero(np.isfinite(ch) & np.asarray(grid.free))
+    if len(xs) == 0:
+        return
+    res = float(grid.resolution)
+    x0, y0 = (float(v) for v in grid.origin)
+    lo, hi = float(ch[ys, xs].min()), float(ch[ys, xs].max())
+    label = f"tunnel (headroom {lo:.2f} m)" if lo == hi else f"tunnel (headroom {lo:.2f}-{hi:.2f} m)"
+    for j, (x, y) in enumerate(zip(xs, ys, strict=True)):
+        ax.add_patch(plt.Rectangle((x0 + x * res, y0 + y * res), res, res, fill=False, hatch="xxx",
+                                   edgecolor="tab:cyan", lw=1.0, label=label if j == 0 else None))
 
 
 def plot_map(
@@ -122,6 +144,7 @@ def plot_map(
     title: str | None = None,
     *,
     show_turn_rule: bool = False,
+    show_tunnels: bool = False,
     colorbar: bool = True,
 ) -> plt.Axes:
     """Draws the map in world coordinates (m): blocked cells dark, optionally a layer underneath.
@@ -134,7 +157,9 @@ def plot_map(
         without a roof, ``+inf``, are left blank), drawn as a colour field over free cells.
       title: axes title.
       show_turn_rule: mark the free cells with ``turn_rule == 1`` (chu2024's right-hand rule)
-        with small hollow circles at their centres (legend label ``"right-turn rule"``).
+        with hollow purple squares at their centres (legend label `TURN_RULE_LABEL`).
+      show_tunnels: outline, hatched, the free cells with a finite ``clearance_height`` (chu2024's
+        tunnels; legend label ``"tunnel (headroom ... m)"``).
       colorbar: add a colour bar for ``layer`` (not when it has no cell to show).
 
     Returns:
@@ -150,8 +175,33 @@ def plot_map(
     _draw_blocked(ax, grid)
     if show_turn_rule:
         _draw_turn_rule(ax, grid)
+    if show_tunnels:
+        _draw_tunnels(ax, grid)
     _frame(ax, grid, title)
     return ax
+
+
+def legend_outside(ax: plt.Axes, ncol: int = 2, fontsize: float = 8):
+    """Puts ``ax``'s legend (every labelled line, marker and patch) below the axes, clear of a map and of its
+    colour bar; returns the legend, or None when nothing is labelled."""
+    handles, labels = ax.get_legend_handles_labels()
+    if not labels:
+        return None
+    return ax.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=ncol,
+                     fontsize=fontsize, borderaxespad=0.0, frameon=False)
+
+
+def figure_legend(fig: plt.Figure, ncol: int = 1, fontsize: float = 8):
+    """One legend for every labelled artist of ``fig``'s axes (each label once), below all panels — clear of
+    rotated tick labels. Needs a constrained-layout figure (it makes room for it); returns the legend or None."""
+    seen: dict[str, object] = {}
+    for ax in fig.axes:
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            seen.setdefault(lab, h)
+    if not seen:
+        return None
+    return fig.legend(list(seen.values()), list(seen), loc="outside lower center", ncol=ncol, fontsize=fontsize,
+                      frameon=False)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -258,7 +308,7 @@ def plot_paths(
             c = _to_metres(c, grid, coords)
             ax.plot(c[0], c[1], marker, ms=12, mec="k", label=name)
     if labels is not None or start is not None:
-        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
+        legend_outside(ax)
     return ax
 
 
@@ -456,6 +506,7 @@ def plot_convergence(
     *,
     ylabel: str = "best cost",
     alpha: float = 0.25,
+    colors: Sequence[str] | None = None,
 ) -> plt.Axes:
     """Convergence curves (best cost per iteration) with a band over seeds.
 
@@ -471,6 +522,8 @@ def plot_convergence(
         cost after iteration t + 1).
       ylabel: y axis label.
       alpha: band opacity.
+      colors: one matplotlib colour per planner (default: the axes' colour cycle), so that a planner
+        keeps its colour across panels.
 
     Returns:
       ``ax``. Per planner, one line (label as given) and, unless ``band is None``, one
@@ -479,19 +532,21 @@ def plot_convergence(
       which no run has a path are not drawn (gaps in line and band).
 
     Raises:
-      ValueError: a history that is not ``[R, I]``, ``x`` of the wrong length, label count
-        mismatch, unknown ``band``.
+      ValueError: a history that is not ``[R, I]``, ``x`` of the wrong length, label or colour
+        count mismatch, unknown ``band``.
     """
     if band is not None and band not in BANDS:
         raise ValueError(f"band must be one of {BANDS} or None, got {band!r}")
     arrays, names = _histories(history, labels)
-    for h, name in zip(arrays, names, strict=True):
+    if colors is not None and len(colors) != len(arrays):
+        raise ValueError(f"got {len(colors)} colors for {len(arrays)} histories")
+    for i, (h, name) in enumerate(zip(arrays, names, strict=True)):
         centre, low, high, _ = convergence_bands(h, band or "iqr")
         I = len(centre)
         xs = np.arange(1, I + 1) if x is None else np.asarray(x, dtype=np.float64)
         if xs.shape != (I,):
             raise ValueError(f"x must have one value per iteration ({I}), got shape {xs.shape}")
-        (line,) = ax.plot(xs, centre, lw=1.8, label=name)
+        (line,) = ax.plot(xs, centre, lw=1.8, label=name, **({} if colors is None else {"color": colors[i]}))
         if band is not None:
             draw = np.isfinite(low) & np.isfinite(high)
             ax.fill_between(xs, low, high, where=draw, color=line.get_color(), alpha=alpha, lw=0, interpolate=False)

@@ -310,9 +310,9 @@ def _plain(x: Any) -> Any:
 
 
 def _spec_doc(spec: MapSpec) -> dict:
-    """A map's part of the fingerprint. The instance fields and ROS mask options are left out while unset (and
-    ``key`` always: it names the config entry, it does not shape trials), so a map's fingerprint is the one
-    written before instances and masks."""
+    """A map's part of the fingerprint. The instance fields, ROS mask options and draw fields are left out while
+    unset (and ``key`` always: it names the config entry, it does not shape trials), so a map's fingerprint is the
+    one written before instances, masks and draws."""
     doc = _plain(spec)
     doc.pop("key", None)
     for k in ("tsplib", "tour", "optimum"):
@@ -320,6 +320,10 @@ def _spec_doc(spec: MapSpec) -> dict:
             doc.pop(k, None)
     if not doc.get("ros"):
         doc.pop("ros", None)
+    # A map's draw is in its name and key; paper_map decides only how the report compares numbers.
+    for k, default in (("family", ""), ("draw", 0), ("paper_map", False)):
+        if doc.get(k) == default:
+            doc.pop(k, None)
     return doc
 
 

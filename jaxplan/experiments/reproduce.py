@@ -62,7 +62,8 @@ def reproduce(configs: Sequence[str | os.PathLike], out: str | os.PathLike = "ru
     """Runs each config (resuming finished chunks) and draws its figures; one failing config does not stop the rest.
 
     With ``results``, also writes each config's results page and the index (`jaxplan.experiments.results`;
-    ``notes``: the hand-written notes file, default ``<config folder>/results/notes.toml``). Studies that are
+    ``notes``: the hand-written notes file, default ``<config folder>/results/notes.toml``; the claims and
+    margins are read from ``claims.toml`` beside it, `jaxplan.experiments.claims`). Studies that are
     not experiment configs (li2026's optimiser comparison, `jaxplan.benchmark_functions`) are run by
     ``jaxplan reproduce``, which then rewrites the index (`jaxplan.experiments.results.write_index_page`).
 
@@ -70,6 +71,7 @@ def reproduce(configs: Sequence[str | os.PathLike], out: str | os.PathLike = "ru
       One `Reproduced` per config, in order (``error`` set when the run, or drawing its figures at all,
       failed; ``problems`` lists single figures not drawn).
     """
+    from jaxplan.experiments.claims import load_claims
     from jaxplan.experiments.figures import draw_figures
     from jaxplan.experiments.results import load_notes, write_index_page, write_table_page
     from jaxplan.experiments.runner import run_experiment
@@ -79,6 +81,7 @@ def reproduce(configs: Sequence[str | os.PathLike], out: str | os.PathLike = "ru
     if results is not None and notes is None and configs:
         notes = configs[0].parent / "results" / "notes.toml"
     the_notes = load_notes(notes) if results is not None else None
+    the_claims = load_claims(Path(notes).with_name("claims.toml") if notes is not None else None)
     done = []
     for cfg in configs:
         t0 = time.perf_counter()
@@ -97,7 +100,7 @@ def reproduce(configs: Sequence[str | os.PathLike], out: str | os.PathLike = "ru
         page = None
         if results is not None:
             try:
-                page = write_table_page(run_dir, results, the_notes, figures_dir=figures, drawn=drawn,
+                page = write_table_page(run_dir, results, the_notes, the_claims, figures_dir=figures, drawn=drawn,
                                         data_dir=data_dir)
             except Exception as e:  # noqa: BLE001 - as above: the run and its figures stand
                 done.append(Reproduced(cfg, run_dir, t1 - t0, time.perf_counter() - t1, len(drawn), tuple(problems),
@@ -106,7 +109,8 @@ def reproduce(configs: Sequence[str | os.PathLike], out: str | os.PathLike = "ru
         done.append(Reproduced(cfg, run_dir, t1 - t0, time.perf_counter() - t1, len(drawn), tuple(problems),
                                page=page))
     if results is not None and any(r.page is not None for r in done):
-        write_index_page(results, the_notes, quick=quick, wall_s=time.perf_counter() - t_start)
+        write_index_page(results, the_notes, the_claims, quick=quick, wall_s=time.perf_counter() - t_start,
+                         figures_dir=figures)
     return done
 
 

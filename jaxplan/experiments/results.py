@@ -31,68 +31,78 @@ import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
-from jaxplan.experiments.config import METRICS, ExperimentConfig, applies
+import numpy as np
+
+from jaxplan.experiments.claims import (
+    CLAIM_VERDICTS,
+    Claim,
+    ClaimResult,
+    Claims,
+    absolute_verdict,
+    evaluate_claim,
+)
+from jaxplan.experiments.comparability import comparable
+from jaxplan.experiments.config import METRICS, ExperimentConfig, PaperValue
+from jaxplan.experiments.evidence import (
+    Evidence,
+    family_sites,
+    load_evidence,
+    rate_counts,
+    runs,
+    unit_name,
+    units,
+)
 from jaxplan.experiments.report import fmt
-from jaxplan.experiments.stats import Analysis, confidence_interval, hedges_g
+from jaxplan.experiments.stats import Analysis, hedges_g
+from jaxplan.experiments.verdicts import Margin, judge_number, mean_interval, wilson_interval
 
-__all__ = ["Cell", "Notes", "VERDICTS", "HIGHER_BETTER", "FEW_SEEDS", "load_notes", "verdict", "paper_cells",
-           "table_page", "index_page", "write_table_page", "write_index_page", "page_path", "page_summary"]
+__all__ = ["Cell", "Notes", "VERDICTS", "HIGHER_BETTER", "FEW_SEEDS", "load_notes", "comparability_reason",
+           "paper_cells", "evaluate_claims", "claim_results", "table_page", "index_page", "write_table_page",
+           "write_index_page", "page_path", "page_summary"]
 
-VERDICTS = ("consistent", "ours better", "ours worse", "not comparable")
-"""The four verdicts, in the order the index counts them."""
+VERDICTS = ("consistent", "ours better", "ours worse", "inconclusive", "not comparable")
+"""The number verdicts, in the order the index counts them (`jaxplan.experiments.verdicts.judge_number`)."""
 
 HIGHER_BETTER = frozenset({"success", "accuracy", "smoothness", "min_clearance", "mean_clearance",
-                           "los_length_reduction", "los_turns_reduction"})
+                           "los_length_reduction", "los_turns_reduction", "arrived"})
 """Metrics where a larger value is better; for every other metric, smaller is better."""
 
 FEW_SEEDS = 5
-"""A cell with fewer seeds than this gets a visible warning on its page."""
+"""A cell with fewer units (seeds or map draws) than this gets a visible warning on its page."""
 
 _TIMING = "a wall-clock time: hardware-specific"
-_PERCENT = frozenset({"success", "accuracy", "optimality_gap", "los_length_reduction", "los_turns_reduction"})
-
-
-@dataclass(frozen=True)
-class Rule:
-    """A not-comparable rule of the notes: cells matching every given field (None: any) get ``reason``."""
-
-    reason: str
-    planner: str | None = None
-    metric: str | None = None
-    map: str | None = None
-
-    def matches(self, map_: str, planner: str, metric: str) -> bool:
-        return ((self.planner is None or self.planner == planner) and (self.metric is None or self.metric == metric)
-                and (self.map is None or self.map == map_))
+_PERCENT = frozenset({"success", "accuracy", "optimality_gap", "los_length_reduction", "los_turns_reduction",
+                      "arrived"})
 
 
 @dataclass(frozen=True)
 class Notes:
-    """The hand-written parts of the pages: per paper a paragraph (what we confirm and what we do not); per
-    table (config name) a one-sentence conclusion, not-comparable rules and baselines not reproduced."""
+    """The hand-written parts of the pages: per table (config name) the baselines not reproduced and highlight
+    tables; per paper the metrics it uses without defining them (``undefined``: metric -> what we measure
+    instead), whose numbers are therefore not comparable; and the comparability ``principle`` (index page)."""
 
-    papers: Mapping[str, str] = field(default_factory=dict)
-    conclusions: Mapping[str, str] = field(default_factory=dict)
-    rules: Mapping[str, tuple[Rule, ...]] = field(default_factory=dict)
     not_reproduced: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     principle: str = ""
     highlights: Mapping[str, tuple[Mapping[str, Any], ...]] = field(default_factory=dict)
+    undefined: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
+
+
+_RETIRED = {"conclusion": "the claims table (configs/results/claims.toml) states what each table shows",
+            "not_comparable": "comparability is one rule applied by code (jaxplan.experiments.comparability); a "
+                              "metric the paper does not define goes under [undefined.<paper>]",
+            "paragraph": "the claims table (configs/results/claims.toml) states what we confirm"}
 
 
 def load_notes(path: str | os.PathLike | None) -> Notes:
     """Reads a notes TOML file (a missing file gives empty notes)::
 
         principle = "when a cell is not comparable ..."
-        [papers.cui2025]
-        paragraph = "..."
+        [undefined.cui2025]
+        accuracy = "the paper does not define accuracy; ours: success with a gap <= 10 %"
         [tables.cui2025_table2]
-        conclusion = "..."
         not_reproduced = ["IRL, DRL: no specification"]
-        [[tables.cui2025_table2.not_comparable]]
-        metric = "path_length"           # and/or planner, map; all optional
-        reason = "..."
         [[tables.chu2024_tables3_5.highlight]]   # a table of our results for some planners and metrics
         title = "..."
         text = "..."
@@ -100,24 +110,35 @@ def load_notes(path: str | os.PathLike | None) -> Notes:
         metrics = ["length", "turns"]
 
     Raises:
-      ValueError: a rule without a reason, or an unknown metric in a rule.
+      ValueError: an unknown metric, an unknown paper, a highlight without its keys, or a key of the retired
+        hand-written verdict rules (per-table ``not_comparable``, ``conclusion``, per-paper ``paragraph``).
     """
+    from jaxplan.papers import PAPERS
+
     if path is None or not Path(path).is_file():
         return Notes()
     raw = tomllib.loads(Path(path).read_text())
-    papers = {k: str(v.get("paragraph", "")).strip() for k, v in raw.get("papers", {}).items()}
-    conclusions, rules, missing, highlights = {}, {}, {}, {}
+    extra = sorted(set(raw) - {"principle", "tables", "undefined"})
+    if extra:
+        why = _RETIRED["paragraph"] if "papers" in extra else "unknown key"
+        raise ValueError(f"{path}: unknown top-level key(s) {', '.join(extra)} ({why})")
+    undefined = {}
+    for paper, ms in raw.get("undefined", {}).items():
+        if paper not in PAPERS:
+            raise ValueError(f"{path}: undefined.{paper}: unknown paper")
+        for m, why in ms.items():
+            if m not in METRICS:
+                raise ValueError(f"{path}: undefined.{paper}.{m}: unknown metric")
+            if not str(why).strip():
+                raise ValueError(f"{path}: undefined.{paper}.{m}: say what we measure instead")
+        undefined[paper] = {m: str(why).strip() for m, why in ms.items()}
+    missing, highlights = {}, {}
     for name, t in raw.get("tables", {}).items():
-        if "conclusion" in t:
-            conclusions[name] = str(t["conclusion"]).strip()
-        rs = []
-        for r in t.get("not_comparable", []):
-            if not r.get("reason"):
-                raise ValueError(f"{path}: tables.{name}.not_comparable: every rule needs a reason")
-            if r.get("metric") is not None and r["metric"] not in METRICS:
-                raise ValueError(f"{path}: tables.{name}.not_comparable: unknown metric {r['metric']!r}")
-            rs.append(Rule(str(r["reason"]), r.get("planner"), r.get("metric"), r.get("map")))
-        rules[name] = tuple(rs)
+        for k in sorted(set(t) & set(_RETIRED)):
+            raise ValueError(f"{path}: tables.{name}.{k} is retired: {_RETIRED[k]}")
+        unknown = sorted(set(t) - {"not_reproduced", "highlight"})
+        if unknown:
+            raise ValueError(f"{path}: tables.{name}: unknown key(s) {', '.join(unknown)}")
         missing[name] = tuple(str(x) for x in t.get("not_reproduced", []))
         hs = []
         for h in t.get("highlight", []):
@@ -131,13 +152,15 @@ def load_notes(path: str | os.PathLike | None) -> Notes:
             hs.append({"title": str(h["title"]), "text": str(h.get("text", "")).strip(),
                        "planners": tuple(h["planners"]), "metrics": tuple(h["metrics"])})
         highlights[name] = tuple(hs)
-    return Notes(papers, conclusions, rules, missing, str(raw.get("principle", "")).strip(), highlights)
+    return Notes(missing, str(raw.get("principle", "")).strip(), highlights, undefined)
 
 
 @dataclass(frozen=True)
 class Cell:
-    """One number the paper prints, beside ours: ``ours_*`` over ``n`` seeds (``ci`` the 95 % interval of the
-    mean), the ``verdict`` (one of `VERDICTS`) and, if not comparable, the ``reason``."""
+    """One number the paper prints, beside ours, judged once: on map ``map`` (a drawn map's draws together),
+    ``ours_mean`` ± ``ours_sd`` over ``n`` units of kind ``unit`` (seeds, map draws, or trials for a rate),
+    ``ci`` the interval the rule compares with, ``verdict`` (one of `VERDICTS`) by ``rule``, ``p`` the test's p
+    where one ran; if not comparable, the ``reason``. ``paper_n``: the runs behind the paper's value."""
 
     map: str
     planner: str
@@ -150,52 +173,96 @@ class Cell:
     n: int
     verdict: str
     reason: str = ""
+    rule: str = ""
+    unit: str = "seeds"
+    p: float = math.nan
+    paper_n: int | None = None
 
 
-def verdict(paper: float, ci: tuple[float, float], mean: float, metric: str, reason: str = "") -> tuple[str, str]:
-    """(verdict, reason) of one cell: ``reason`` given -> not comparable; no value of ours -> not comparable;
-    the paper's value inside the interval ``ci`` -> consistent; else ours better or worse (`HIGHER_BETTER`)."""
-    if reason:
-        return "not comparable", reason
-    if not math.isfinite(mean):
-        return "not comparable", "no value of ours (no run defined it)"
-    lo, hi = ci
-    if not (math.isfinite(lo) and math.isfinite(hi)):
-        return "not comparable", "one seed: no interval"
-    if lo <= paper <= hi:
-        return "consistent", ""
-    higher = mean > paper
-    return ("ours better" if higher == (metric in HIGHER_BETTER) else "ours worse"), ""
-
-
-def _reason(notes: Notes, cfg: ExperimentConfig, map_: str, planner: str, metric: str) -> str:
+def comparability_reason(cfg: ExperimentConfig, notes: Notes, family: str | Sequence[str], metric: str) -> str:
+    """Why a paper's number of ``metric`` on map ``family`` (or pooled over several) cannot be set beside ours
+    ("" if it can): a wall-clock time; a metric the paper does not define (the notes' ``[undefined.<paper>]``);
+    an absolute number on a map or instance that stands in for the paper's (`jaxplan.experiments.comparability`)."""
     if METRICS[metric].timing:
         return _TIMING
-    for r in notes.rules.get(cfg.name, ()):
-        if r.matches(map_, planner, metric):
-            return r.reason
+    paper = cfg.name.split("_")[0]
+    why = notes.undefined.get(paper, {}).get(metric)
+    if why:
+        return f"the paper does not define {metric} ({why})"
+    for fam in ([family] if isinstance(family, str) else family):
+        site = next(m for m in cfg.maps if m.map_family == fam)
+        if not comparable(metric, site.paper_map):
+            what = "instance" if site.is_tsp else "map"
+            return f"an absolute number on a stand-in {what} ({fam} is not the paper's {what})"
     return ""
 
 
-def _interval(ps, metric: str) -> tuple[float, float]:
-    """The 95 % interval of the mean of per-seed means ``ps``; a rate's is clipped to [0, 1]."""
-    if ps is None:
-        return math.nan, math.nan
-    lo, hi = confidence_interval(ps)
-    if METRICS[metric].rate and math.isfinite(lo):
-        lo, hi = max(lo, 0.0), min(hi, 1.0)
-    return lo, hi
+def _units(ev: Evidence, fams: Sequence[str], planner: str, metric: str) -> np.ndarray:
+    return np.concatenate([units(ev, f, planner, metric) for f in fams])
 
 
-def paper_cells(a: Analysis, cfg: ExperimentConfig, notes: Notes) -> list[Cell]:
-    """Every (map, planner, metric) with a paper value, in the summary's order, with its verdict."""
+def _unit_name(ev: Evidence, fams: Sequence[str]) -> str:
+    return " + ".join(dict.fromkeys(unit_name(ev, f) for f in fams))
+
+
+def _judge(ev: Evidence, fams: Sequence[str], planner: str, pv: PaperValue, margins: Mapping[str, Margin],
+           alpha: float) -> tuple[str, str, tuple[float, float], float, int, str, float, float]:
+    """(verdict, rule, interval, p, n, unit, ours mean, ours sd) of one comparable paper number."""
+    metric = pv.metric
+    margin = margins.get(metric)
+    if margin is None:
+        raise ValueError(f"{ev.config.name}: no equivalence margin for metric {metric!r} (claims.toml [margins])")
+    hb = metric in HIGHER_BETTER
+    u = _units(ev, fams, planner, metric)
+    fin = u[np.isfinite(u)]
+    mean = float(np.mean(fin)) if fin.size else math.nan
+    sd = float(np.std(fin, ddof=1)) if fin.size > 1 else math.nan
+    if not fin.size:
+        return "not comparable", "", (math.nan, math.nan), math.nan, 0, _unit_name(ev, fams), mean, sd
+    if METRICS[metric].rate:
+        k = n = 0
+        for f in fams:
+            kf, nf = rate_counts(ev, f, planner, metric)
+            k, n = k + kf, n + nf
+        v = judge_number(u, pv.mean, pv.sd, pv.n, higher_better=hb, margin=margin, alpha=alpha, rate_counts=(k, n))
+        return v.verdict, v.rule, v.interval, v.p, n, "trials", k / n if n else math.nan, sd
+    welch = pv.sd is not None and pv.n is not None and pv.n >= 2
+    ours = u if welch else np.concatenate([runs(ev, f, planner, metric) for f in fams])
+    v = judge_number(ours, pv.mean, pv.sd, pv.n, higher_better=hb, margin=margin, alpha=alpha)
+    n_used = int(np.isfinite(ours).sum())
+    return v.verdict, v.rule, v.interval, v.p, n_used, _unit_name(ev, fams) if welch else "runs", mean, sd
+
+
+POOLED = "all maps (pooled)"
+"""The map column of a paper number given for every map of a config with several: it is judged once, pooled."""
+
+
+def paper_cells(ev: Evidence, notes: Notes, margins: Mapping[str, Margin], *, alpha: float = 0.05) -> list[Cell]:
+    """Every number the paper gives, in config order, judged once by the rule its reporting allows
+    (`jaxplan.experiments.verdicts.judge_number`): a number for one map on that map (a drawn map's draws
+    together), a number for every map pooled over the maps its planner runs on (the paper's mean over its maps)."""
+    cfg = ev.config
     out = []
-    for r in a.summary:
-        if r.paper_mean is None:
+    for pv in cfg.paper:
+        pc = next((p for p in cfg.planners if p.label == pv.planner), None)
+        if pc is None:  # a quick run leaves some planners out
             continue
-        ci = _interval(a.per_seed.get((r.map, r.planner, r.metric)), r.metric)
-        v, why = verdict(r.paper_mean, ci, r.mean, r.metric, _reason(notes, cfg, r.map, r.planner, r.metric))
-        out.append(Cell(r.map, r.planner, r.metric, r.paper_mean, r.paper_sd, r.mean, r.sd, ci, r.n, v, why))
+        fams = [f for f in ([pv.map] if pv.map is not None else ev.families()) if ev.has(f, pc.label)]
+        if not fams or pc.kind not in METRICS[pv.metric].kinds or pv.metric not in cfg.metrics:
+            continue
+        where = fams[0] if len(fams) == 1 else POOLED
+        why = comparability_reason(cfg, notes, fams, pv.metric)
+        u = _units(ev, fams, pc.label, pv.metric) if not METRICS[pv.metric].timing else np.asarray([])
+        fin = u[np.isfinite(u)]
+        mean = float(np.mean(fin)) if fin.size else math.nan
+        sd = float(np.std(fin, ddof=1)) if fin.size > 1 else math.nan
+        if why:
+            out.append(Cell(where, pc.label, pv.metric, pv.mean, pv.sd, mean, sd, mean_interval(fin), int(fin.size),
+                            "not comparable", why, "", _unit_name(ev, fams), paper_n=pv.n))
+            continue
+        v, rule, ci, p, n, unit, mean, sd = _judge(ev, fams, pc.label, pv, margins, alpha)
+        reason = "" if v != "not comparable" else "no value of ours (no run defined it)"
+        out.append(Cell(where, pc.label, pv.metric, pv.mean, pv.sd, mean, sd, ci, n, v, reason, rule, unit, p, pv.n))
     return out
 
 
@@ -254,27 +321,33 @@ def _table(head: Sequence[str], rows: Sequence[Sequence[str]], text: int = 1, la
 
 PAPER_HEAD = "paper"
 """The header of the column holding the paper's numbers (the only one that may)."""
-OURS_HEADS = ("ours: mean ± sd", "ours: 95 % CI")
+OURS_HEADS = ("ours: mean ± sd", "ours: 95 % interval")
 """The headers of the columns holding our numbers."""
 
 
+def _paper_text(c: Cell) -> str:
+    return _pm(c.paper_mean, c.paper_sd, c.metric) + (f" (n = {c.paper_n})" if c.paper_n else "")
+
+
 def _comparison(cells: Sequence[Cell], few: int) -> str:
-    head = ["map", "planner", "metric", PAPER_HEAD, *OURS_HEADS, "seeds", "verdict"]
+    head = ["map", "planner", "metric", PAPER_HEAD, *OURS_HEADS, "n", "rule", "verdict"]
     rows = []
     for c in cells:
-        paper = _pm(c.paper_mean, c.paper_sd, c.metric)
-        seeds = f"{c.n}" + (" ⚠" if c.n < few else "")
+        n = f"{c.n} {c.unit}" + (" ⚠" if c.n < few and c.unit != "trials" else "")
         ver = c.verdict + (f": {c.reason}" if c.reason else "")
-        rows.append([c.map, c.planner, _metric_head(c.metric), paper, _pm(c.ours_mean, c.ours_sd, c.metric),
-                     _ci(c.ci, c.metric), seeds, ver])
+        ours = _pm(c.ours_mean, None if c.unit == "trials" else c.ours_sd, c.metric)
+        rows.append([c.map, c.planner, _metric_head(c.metric), _paper_text(c), ours, _ci(c.ci, c.metric), n,
+                     c.rule or "–", ver])
     return _table(head, rows, text=3, last_text=True)
 
 
-def _ours_table(a: Analysis, cfg: ExperimentConfig, map_: str, few: int, planners: Sequence[str] | None = None,
+def _ours_table(a: Analysis, ev: Evidence, family: str, few: int, planners: Sequence[str] | None = None,
                 metrics: Sequence[str] | None = None) -> str:
-    rows_by = {(r.planner, r.metric): r for r in a.summary if r.map == map_}
-    site = next(m for m in cfg.maps if m.name == map_)
-    planners = [pc.label for pc in cfg.planners if applies(pc, site) and (planners is None or pc.label in planners)]
+    cfg = ev.config
+    first = family_sites(cfg, family)[0].name
+    rows_by = {(r.planner, r.metric): r for r in a.summary if r.map == first}
+    planners = [pc.label for pc in cfg.planners if ev.has(family, pc.label) and (planners is None or pc.label in
+                                                                                  planners)]
     metrics = [m for m in (metrics or cfg.metrics) if any((p, m) in rows_by for p in planners)]
     head = ["planner"] + [f"ours: {_metric_head(m)}" for m in metrics]
     body = []
@@ -285,12 +358,81 @@ def _ours_table(a: Analysis, cfg: ExperimentConfig, map_: str, few: int, planner
             if r is None:
                 row.append("n/a")
                 continue
-            ps = a.per_seed.get((map_, p, m))
-            ci = _interval(ps, m)
-            warn = " ⚠" if r.n < few and not METRICS[m].timing else ""
-            row.append(_pm(r.mean, r.sd, m) + (f" {_ci(ci, m)}" if ps is not None else "") + warn)
+            if METRICS[m].timing:
+                row.append(_pm(r.mean, r.sd, m))
+                continue
+            u = units(ev, family, p, m)
+            fin = u[np.isfinite(u)]
+            mean = float(np.mean(fin)) if fin.size else math.nan
+            sd = float(np.std(fin, ddof=1)) if fin.size > 1 else math.nan
+            if METRICS[m].rate:
+                k, n = rate_counts(ev, family, p, m)
+                ci = wilson_interval(k, n) if n else (math.nan, math.nan)
+            else:
+                ci = mean_interval(fin)
+            warn = " ⚠" if fin.size < few else ""
+            row.append(_pm(mean, sd, m) + (f" {_ci(ci, m)}" if fin.size else "") + warn)
         body.append(row)
     return _table(head, body)
+
+
+def _claims_rows(results: Sequence[ClaimResult], link: Callable[[ClaimResult], str] | None = None) -> str:
+    head = ["claim", "where", "test we ran", "effect [95 % interval]", "verdict"]
+    rows = []
+    for r in results:
+        c = r.claim
+        text = c.claim if link is None else link(r)
+        rule = f" — {r.rule}" if r.rule else ""
+        rows.append([text + (f" <br>*{c.note}*" if c.note else ""), c.where, r.test, _effect(r),
+                     f"**{r.verdict}**{rule}"])
+    return _table(head, rows, text=3, last_text=True)
+
+
+def _effect(r: ClaimResult) -> str:
+    if not math.isfinite(r.effect):
+        return "–"
+    m = r.claim.metric or ""
+    if r.claim.test == "absolute":  # ours with our interval: the difference's interval is not computed here
+        unit = _unit(m)
+        return (f"ours − paper: {'+' if r.effect > 0 else ''}{_num(r.effect, m)}{' ' + unit if unit else ''}; "
+                f"ours in {_ci(r.interval, m)}, {r.n} {r.unit}")
+    lo, hi = r.interval
+    iv = f" [{_num(lo, m)}, {_num(hi, m)}]" if math.isfinite(lo) and math.isfinite(hi) else ""
+    rel = f" ({r.relative * 100:+.1f} %)" if math.isfinite(r.relative) else ""
+    unit = _unit(m)
+    sign = "+" if r.effect > 0 else ""
+    return f"{sign}{_num(r.effect, m)}{' ' + unit if unit else ''}{iv}{rel}; {r.n} {r.unit}".strip()
+
+
+def _claim_doc(r: ClaimResult) -> dict:
+    """A claim's result as stored in its page's summary (read back by the index)."""
+    num = lambda x: x if math.isfinite(x) else None  # noqa: E731
+    return {"id": r.claim.id, "verdict": r.verdict, "rule": r.rule, "test": r.test, "effect": num(r.effect),
+            "lo": num(r.interval[0]), "hi": num(r.interval[1]), "relative": num(r.relative), "n": r.n,
+            "unit": r.unit}
+
+
+def _claim_from_doc(c: Claim, d: Mapping[str, Any]) -> ClaimResult:
+    nan = lambda x: math.nan if x is None else float(x)  # noqa: E731
+    return ClaimResult(c, d["verdict"], d["rule"], d["test"], nan(d["effect"]), (nan(d["lo"]), nan(d["hi"])),
+                       nan(d["relative"]), int(d["n"]), d["unit"])
+
+
+def evaluate_claims(ev: Evidence, claims: Claims, cells: Sequence[Cell], *, alpha: float = 0.05
+                    ) -> list[ClaimResult]:
+    """The results of the claims whose evidence is this run (``claims`` naming ``ev``'s config), in file order;
+    an absolute claim takes its cell from ``cells`` (the page's)."""
+    out = []
+    for c in claims.claims:
+        if c.config != ev.config.name or c.test == "not_testable":
+            continue
+        if c.test == "absolute":
+            cell = next((x for x in cells if x.planner == c.proposed and x.metric == c.metric
+                         and (c.map is None or x.map == c.map)), None)
+            out.append(absolute_verdict(c, cell))
+        else:
+            out.append(evaluate_claim(c, ev, claims, alpha=alpha))
+    return out
 
 
 def _tests(a: Analysis, cfg: ExperimentConfig) -> str:
@@ -353,38 +495,58 @@ class Figure:
     caption: str
 
 
-def table_page(a: Analysis, cfg: ExperimentConfig, notes: Notes, *, config_text: str = "", meta: Mapping | None = None,
-               setup: Sequence[str] = (), figures: Sequence[Figure] = (), compute_s: float | None = None,
-               quick: bool = False) -> str:
-    """The Markdown page of one paper table (see the module docstring); pure."""
+_RULES_TEXT = (
+    "Each number the paper prints is judged here once, by the rule its reporting allows (the *rule* column): "
+    "with the paper's mean, sd and n, a Welch test between its numbers and ours, and *consistent* only by an "
+    "equivalence test (TOST) within the metric's margin (stated in configs/results/claims.toml); a number from one "
+    "run against our 95 % prediction interval of one run; a rate against our Wilson interval (consistent when our "
+    "90 % interval lies within the margin). *Ours better* / *ours worse*: a difference detected; *inconclusive*: "
+    "neither a difference nor equivalence. An absolute number (length, turns, iterations, collisions, times) on a "
+    "map or instance that stands in for the paper's is *not comparable*: what the paper claims about it is judged "
+    "as a contrast in the claims table instead. Fractions in %.")
+
+
+def table_page(a: Analysis, ev: Evidence, notes: Notes, claims: Claims | None = None, *, config_text: str = "",
+               meta: Mapping | None = None, setup: Sequence[str] = (), figures: Sequence[Figure] = (),
+               compute_s: float | None = None, quick: bool = False, alpha: float = 0.05) -> str:
+    """The Markdown page of one paper table (see the module docstring); pure given its inputs."""
+    cfg = ev.config
+    claims = claims or Claims({}, ())
     meta = meta or {}
-    cells = paper_cells(a, cfg, notes)
+    cells = paper_cells(ev, notes, claims.margins, alpha=alpha)
     counts = _counts(cells)
+    tested = evaluate_claims(ev, claims, cells, alpha=alpha)
     R = len(a.seeds)
     ns = [r.n for r in a.summary if not METRICS[r.metric].timing and r.n > 0]
-    few = [r for r in a.summary if not METRICS[r.metric].timing and 0 < r.n < FEW_SEEDS]
+    few = [c for c in cells if c.unit != "trials" and 0 < c.n < FEW_SEEDS]
     title = f"# {cfg.name}" + (" — QUICK smoke run, not a result" if quick else "")
     out = [title, ""]
-    summary = {"config": cfg.name, "quick": quick, "seeds": R, "counts": counts, "compute_s": compute_s}
+    summary = {"config": cfg.name, "quick": quick, "seeds": R, "counts": counts, "compute_s": compute_s,
+               "claims": [_claim_doc(r) for r in tested]}
     out += [f"<!-- summary: {json.dumps(summary)} -->", ""]
     if quick:
         out += ["> **QUICK RUN.** This page comes from `jaxplan reproduce --quick`: tiny colonies, two seeds, few "
                 "scenarios. It checks that the pipeline works; its numbers are not the reproduction.", ""]
     if few:
-        out += [f"> ⚠ **Few seeds.** {len(few)} cell{'s' if len(few) != 1 else ''} of this page rest"
-                f"{'s' if len(few) == 1 else ''} on fewer than {FEW_SEEDS} seeds (marked ⚠): their interval is "
-                "wide or undefined.", ""]
+        out += [f"> ⚠ **Few units.** {len(few)} cell{'s' if len(few) != 1 else ''} of this page rest"
+                f"{'s' if len(few) == 1 else ''} on fewer than {FEW_SEEDS} seeds or map draws (marked ⚠): their "
+                "interval is wide or undefined.", ""]
     if cfg.description:
         out += [cfg.description, ""]
-    conclusion = notes.conclusions.get(cfg.name)
-    if conclusion and not quick:
-        out += [f"**Conclusion.** {conclusion}", ""]
     out += ["Regenerate: `jaxplan reproduce" + (" --quick" if quick else "") + f" --pattern '{cfg.name}.toml'` "
             "(resumes a finished run; every paper: `jaxplan reproduce`).", ""]
+    if tested:
+        out += ["## The paper's claims tested here", "", _claims_rows(tested), ""]
     out += ["## Setup", ""]
     out += [f"- {R} seed{'s' if R != 1 else ''} per cell ({min(ns) if ns else 0}–{max(ns) if ns else 0} with a "
             "defined value)" + ("" if R >= 30 else "; fewer than 30 to keep the full reproduction near an hour "
                                  "on two cores") + "."]
+    drawn = [f for f in ev.families() if ev.drawn(f)]
+    if drawn:
+        out.append(f"- Map draws: {', '.join(f'{f} ({len(family_sites(cfg, f))})' for f in drawn)}. Each draw is "
+                   "a new map from the generator (key seed + d, named NAME~d); the unit of every interval on these "
+                   "maps is the draw (its mean over seeds and pairs), so the intervals hold the map-to-map "
+                   "variance; figures show draw 0.")
     out += [f"- {ln}" for ln in setup]
     if meta:
         out.append(f"- jaxplan {meta.get('jaxplan_version')} (git {meta.get('git_revision') or 'unknown'}), jax "
@@ -397,23 +559,21 @@ def table_page(a: Analysis, cfg: ExperimentConfig, notes: Notes, *, config_text:
                 "```", "", "</details>"]
     out += ["", "## The paper's numbers beside ours", ""]
     if cells:
-        out += [f"Source: {cfg.paper_source}. Verdict: *consistent* when the paper's value lies inside our 95 % "
-                "interval of the mean over seeds; otherwise *ours better* or *ours worse*; *not comparable* with "
-                "its reason. Fractions in %.", "",
-                _comparison(cells, FEW_SEEDS), "",
+        out += [f"Source: {cfg.paper_source}. {_RULES_TEXT}", "", _comparison(cells, FEW_SEEDS), "",
                 "Verdicts: " + ", ".join(f"{v} {counts[v]}" for v in VERDICTS) + ".", ""]
     else:
-        out += ["The paper prints no number for this table's cells (its claims are qualitative; see the figures and "
-                "the conclusion).", ""]
+        out += ["The paper prints no number for this table's cells (its claims are qualitative; see the claims "
+                "above and the figures).", ""]
     for h in notes.highlights.get(cfg.name, ()):
         out += [f"## {h['title']}", ""] + ([h["text"], ""] if h["text"] else [])
-        for mp in cfg.maps:
-            out += [f"{mp.name}:", "", _ours_table(a, cfg, mp.name, FEW_SEEDS, h["planners"], h["metrics"]), ""]
+        for fam in ev.families():
+            out += [f"{fam}:", "", _ours_table(a, ev, fam, FEW_SEEDS, h["planners"], h["metrics"]), ""]
     out += ["## All our results", "",
-            "Mean ± sd over seeds of the per-seed means, then the 95 % interval of the mean; wall-clock times: "
-            "over chunks. Fractions in %.", ""]
-    for mp in cfg.maps:
-        out += [f"### {mp.name}", "", _ours_table(a, cfg, mp.name, FEW_SEEDS), ""]
+            "Mean ± sd over units (seeds, or map draws for a drawn map) of the per-unit means, then the 95 % "
+            "interval of the mean (a rate's: Wilson, over trials); wall-clock times: over chunks. Fractions in %.",
+            ""]
+    for fam in ev.families():
+        out += [f"### {fam}", "", _ours_table(a, ev, fam, FEW_SEEDS), ""]
     tests = _tests(a, cfg)
     if tests:
         out += ["## Significance tests", "", "<details><summary>ANOVA and pairwise tests</summary>", "", tests,
@@ -437,45 +597,94 @@ def page_summary(text: str) -> dict | None:
     return json.loads(m.group(1)) if m else None
 
 
-def index_page(pages: Sequence[tuple[str, dict]], notes: Notes, *, quick: bool = False,
-               wall_s: float | None = None, command: str = "jaxplan reproduce", cache: bool | None = None) -> str:
-    """``index.md``: one row per page (its relative path and `page_summary`), the papers' paragraphs.
+def claim_results(pages: Sequence[tuple[str, dict]], claims: Claims) -> list[tuple[ClaimResult, str | None]]:
+    """Every claim of the file, in file order, with its result as its page stored it and that page's relative
+    path: a claim whose config has no page is not testable ("no run"); a not_testable claim has no page."""
+    by_config = {s["config"]: (rel, {d["id"]: d for d in s.get("claims", [])}) for rel, s in pages}
+    out = []
+    for c in claims.claims:
+        if c.test == "not_testable":
+            out.append((ClaimResult(c, "not testable", c.reason, "—"), None))
+            continue
+        rel, docs = by_config.get(c.config, (None, {}))
+        if c.id in docs:
+            out.append((_claim_from_doc(c, docs[c.id]), rel))
+        else:
+            out.append((ClaimResult(c, "not testable", f"no run of {c.config}", "—"), rel))
+    return out
+
+
+def index_page(pages: Sequence[tuple[str, dict]], notes: Notes, claims: Claims | None = None, *,
+               quick: bool = False, wall_s: float | None = None, command: str = "jaxplan reproduce",
+               cache: bool | None = None, figures_rel: str | None = None) -> str:
+    """``index.md``: the claims table (every claim of ``claims`` with its verdict, linked to its page and figure),
+    then one row per page (its relative path and `page_summary`) with its number verdicts.
 
     ``wall_s``: the wall time of the call that wrote the index; ``cache``: whether that call used JAX's
-    persistent compilation cache (a warm cache skips most compilation, so the time depends on it)."""
+    persistent compilation cache (a warm cache skips most compilation, so the time depends on it);
+    ``figures_rel``: the figure root relative to the index's folder (None: claims link no figure)."""
     from jaxplan.papers import PAPERS
 
+    claims = claims or Claims({}, ())
     title = "# Reproduction results" + (" — QUICK smoke runs, not results" if quick else "")
     out = [title, ""]
     if quick:
         out += ["> **QUICK RUNS.** These pages come from `jaxplan reproduce --quick`; their numbers are not the "
                 "reproduction.", ""]
+    results = claim_results(pages, claims)
+    ccount = {v: sum(r.verdict == v for r, _ in results) for v in CLAIM_VERDICTS}
+    tot = {v: sum(s["counts"].get(v, 0) for _, s in pages) for v in VERDICTS}
+    if results:
+        out += [f"**The papers' claims: {len(results)} tested** — " + ", ".join(f"{ccount[v]} {v}"
+                                                                             for v in CLAIM_VERDICTS) + ". "
+                "**The papers' numbers** — " + ", ".join(f"{tot[v]} {v}" for v in VERDICTS) + ".", ""]
     compute = sum(s.get("compute_s") or 0.0 for _, s in pages)
     out += [f"Every table below is regenerated by `{command}` (runs resume: a finished run is only re-read). "
             f"Compute of the runs: {compute / 60:.0f} min (sum over chunks of compile and run time)"
             + (f"; wall time of the call that wrote this index: {wall_s / 60:.1f} min" if wall_s is not None else "")
             + ({True: " (JAX's persistent compilation cache on)", False: " (no compilation cache)"}.get(cache, "")
-               if wall_s is not None else "")
-            + ". Each page puts the paper's numbers beside ours with a verdict: *consistent* (the paper's value "
-            "inside our 95 % interval), *ours better*, *ours worse*, *not comparable* (with the reason).", ""]
+               if wall_s is not None else "") + ".", ""]
+    if results:
+        out += ["## The papers' claims", "",
+                "Each headline claim of the five papers (abstract, conclusion, and what each table or figure is said "
+                "to show), with the test we ran on our runs. Where our map stands in for the paper's, the claim is "
+                "tested as the paper's *contrast* — the proposed method against its baseline on the same maps, "
+                "start-goal pairs and seeds (paired) — not by its absolute number. The effect is proposed − baseline "
+                "(or a trend's fitted change over the tested range) with its 95 % interval over the units named; "
+                "*reproduced*: the interval lies on the claimed side of zero; *opposite*: on the other side; *not "
+                "reproduced*: no effect — the 90 % interval lies within the metric's equivalence margin "
+                "(configs/results/claims.toml); *inconclusive*: neither; *not testable*: why. Declared in "
+                "configs/results/claims.toml.", ""]
+        for key in PAPERS:
+            mine = [(r, rel) for r, rel in results if r.claim.paper == key]
+            if not mine:
+                continue
+            page_of = dict(mine)
+
+            def link(r: ClaimResult, page_of=page_of) -> str:
+                rel = page_of.get(r)
+                text = f"[{r.claim.claim}]({rel})" if rel else r.claim.claim
+                if rel and r.claim.figure and figures_rel:
+                    run = r.claim.config + ("-quick" if quick else "")
+                    text += f" ([figure]({figures_rel}/{run}/{r.claim.figure}.png))"
+                return text
+
+            counts = {v: sum(r.verdict == v for r, _ in mine) for v in CLAIM_VERDICTS}
+            out += [f"### {PAPERS[key].short}", "",
+                    ", ".join(f"{counts[v]} {v}" for v in CLAIM_VERDICTS if counts[v]) + ".", "",
+                    _claims_rows([r for r, _ in mine], link), ""]
+    out += ["## The papers' numbers, table by table", ""]
     if notes.principle:
         out += [notes.principle, ""]
-    head = ["paper", "table", "seeds", *VERDICTS, "conclusion"]
+    head = ["paper", "table", "seeds", *VERDICTS]
     rows = []
     for rel, s in pages:
         c = s["counts"]
         rows.append([s["config"].split("_")[0], f"[{s['config']}]({rel})", str(s["seeds"]),
-                     *[str(c.get(v, 0)) for v in VERDICTS],
-                     notes.conclusions.get(s["config"], "") if not quick else "(quick run)"])
-    out += [_table(head, rows, text=2, last_text=True), ""]
-    tot = {v: sum(s["counts"].get(v, 0) for _, s in pages) for v in VERDICTS}
+                     *[str(c.get(v, 0)) for v in VERDICTS]])
+    out += [_table(head, rows, text=2), ""]
     out += ["All tables: " + ", ".join(f"{v} {tot[v]}" for v in VERDICTS) + ".", ""]
     if not quick:
-        papers = [k for k in PAPERS if notes.papers.get(k)]
-        if papers:
-            out += ["## What we confirm and what we do not", ""]
-            for k in papers:
-                out += [f"### {k}", "", notes.papers[k], ""]
         missing = [(name, m) for name, ms in notes.not_reproduced.items() for m in ms]
         if missing:
             out += ["## Not reproduced", ""] + [f"- {name}: {m}" for name, m in missing] + [""]
@@ -523,15 +732,16 @@ def _captions(index: Path) -> dict[str, str]:
     return out
 
 
-def write_table_page(run_dir: str | os.PathLike, results: str | os.PathLike, notes: Notes, *,
-                     figures_dir: str | os.PathLike | None = None, drawn: Sequence[Any] = (),
-                     data_dir: str | os.PathLike | None = None) -> Path:
+def write_table_page(run_dir: str | os.PathLike, results: str | os.PathLike, notes: Notes,
+                     claims: Claims | None = None, *, figures_dir: str | os.PathLike | None = None,
+                     drawn: Sequence[Any] = (), data_dir: str | os.PathLike | None = None) -> Path:
     """Writes the page of one finished run folder under ``results`` and returns its path.
 
     Args:
       run_dir: a finished run folder (`run_experiment`).
       results: the results root (``docs/results``).
       notes: `load_notes`.
+      claims: `jaxplan.experiments.claims.load_claims` (the margins and the claims this run tests).
       figures_dir: the figure root the run's figures were drawn into (``figures``); its PNGs are linked.
       drawn: the `jaxplan.experiments.figures.Drawn` of those figures (their captions), in config order.
       data_dir: as for `run_experiment`.
@@ -556,16 +766,20 @@ def write_table_page(run_dir: str | os.PathLike, results: str | os.PathLike, not
         names = [d.name for d in drawn] or sorted(p.stem for p in fdir.glob("*.png"))
         figs = [Figure(n, (rel / f"{n}.png").as_posix(), caps.get(n, "")) for n in names
                 if (fdir / f"{n}.png").is_file()]
-    text = table_page(a, cfg, notes, config_text=(run_dir / "config.toml").read_text(), meta=meta,
+    ev = load_evidence(run_dir, cfg)
+    text = table_page(a, ev, notes, claims, config_text=(run_dir / "config.toml").read_text(), meta=meta,
                       setup=_setup_lines(run.prep), figures=figs, compute_s=_compute_s(run_dir), quick=quick)
     page.parent.mkdir(parents=True, exist_ok=True)
     atomic_write(page, text)
     return page
 
 
-def write_index_page(results: str | os.PathLike, notes: Notes, *, quick: bool = False,
-                     wall_s: float | None = None, cache: bool | None = None) -> Path:
-    """Writes ``results/index.md`` (``index-quick.md`` for quick pages) from every page found under ``results``."""
+def write_index_page(results: str | os.PathLike, notes: Notes, claims: Claims | None = None, *,
+                     quick: bool = False, wall_s: float | None = None, cache: bool | None = None,
+                     figures_dir: str | os.PathLike | None = None) -> Path:
+    """Writes ``results/index.md`` (``index-quick.md`` for quick pages) from every page found under ``results``
+    (their stored claim results and verdict counts) and the claims file ``claims``; ``figures_dir``: the figure
+    root the claims' figures are linked in."""
     from jaxplan.core.io import atomic_write
 
     root = Path(results)
@@ -580,6 +794,7 @@ def write_index_page(results: str | os.PathLike, notes: Notes, *, quick: bool = 
     order = {k: i for i, k in enumerate(PAPERS)}
     pages.sort(key=lambda x: (order.get(x[1]["config"].split("_")[0], 99), x[1]["config"]))
     out = root / ("index-quick.md" if quick else "index.md")
-    atomic_write(out, index_page(pages, notes, quick=quick, wall_s=wall_s, cache=cache,
+    rel = Path(os.path.relpath(Path(figures_dir), root)).as_posix() if figures_dir is not None else None
+    atomic_write(out, index_page(pages, notes, claims, quick=quick, wall_s=wall_s, cache=cache, figures_rel=rel,
                                  command="jaxplan reproduce --quick" if quick else "jaxplan reproduce"))
     return out

@@ -139,7 +139,8 @@ def selected(run: RunData, spec: FigureSpec, kind: str | tuple[str, ...] | None 
     are those at least one selected planner runs on)."""
     cfg = run.config
     kinds = (kind,) if isinstance(kind, str) else kind
-    maps = spec.params.get("maps") or [m.spec.name for m in run.prep.maps]
+    # A drawn map's figures show its first draw unless the figure names the others.
+    maps = spec.params.get("maps") or [m.spec.name for m in run.prep.maps if m.spec.draw == 0]
     labels = spec.params.get("planners") or [p.label for p in cfg.planners]
     pi = [i for i, p in enumerate(cfg.planners) if p.label in labels and (kinds is None or p.kind in kinds)]
     mi = [i for i, m in enumerate(run.prep.maps) if m.spec.name in maps
@@ -194,6 +195,9 @@ QUANTITIES: dict[str, tuple[str, str, float]] = {
     "hausdorff": ("Hausdorff distance to the A* path", "m", 1.0),
     "cost": ("the planner's own cost", "its cost units", 1.0),
     "converged_iteration": ("iteration of convergence", "count", 1.0),
+    "converged_iteration_strict": ("iteration within 0.1 % of the final best", "count", 1.0),
+    "turning_point": ("turning point, counted from 1", "count", 1.0),
+    "optimum_iteration": ("iteration of the optimum, counted from 1", "count", 1.0),
     "collisions": ("collisions per episode", "count", 1.0),
     "active_contacts": ("active contacts per episode", "count", 1.0),
     "passive_contacts": ("passive contacts per episode", "count", 1.0),

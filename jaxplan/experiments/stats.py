@@ -36,8 +36,8 @@ import numpy as np
 
 from jaxplan.experiments.config import METRICS, ExperimentConfig, PaperValue, applies
 
-__all__ = ["SummaryRow", "TestRow", "Analysis", "read_trials", "per_seed_means", "trial_range", "analyse", "holm",
-           "confidence_interval", "hedges_g", "write_summary", "write_significance", "write_timings",
+__all__ = ["SummaryRow", "TestRow", "Analysis", "read_trials", "trial_mask", "per_seed_means", "trial_range",
+           "analyse", "holm", "confidence_interval", "hedges_g", "write_summary", "write_significance", "write_timings",
            "SUMMARY_COLUMNS", "SIGNIFICANCE_COLUMNS", "TIMING_COLUMNS"]
 
 SUMMARY_COLUMNS = ("map", "planner", "metric", "unit", "statistic", "n", "trials", "mean", "sd", "min", "max",
@@ -121,7 +121,9 @@ def read_trials(path: str | os.PathLike) -> dict[str, np.ndarray]:
     return out
 
 
-def _trial_mask(t: Mapping[str, np.ndarray], map_: str, planner: str, metric: str) -> np.ndarray:
+def trial_mask(t: Mapping[str, np.ndarray], map_: str, planner: str, metric: str) -> np.ndarray:
+    """``bool[T]`` the trials of ``map_`` and ``planner`` that count for ``metric``: an infeasible navigation trial
+    never counts, and a ``given_success`` metric counts successful trials only."""
     m = (t["map"] == map_) & (t["planner"] == planner)
     if "reason" in t:
         m &= ~np.array([str(x).startswith("infeasible") for x in t["reason"]], bool)
@@ -132,7 +134,7 @@ def _trial_mask(t: Mapping[str, np.ndarray], map_: str, planner: str, metric: st
 
 def trial_range(t: Mapping[str, np.ndarray], map_: str, planner: str, metric: str) -> tuple[float, float]:
     """(smallest, largest) defined single-trial value of ``metric`` (nan, nan when none is defined)."""
-    x = t[metric][_trial_mask(t, map_, planner, metric)]
+    x = t[metric][trial_mask(t, map_, planner, metric)]
     x = x[np.isfinite(x)]
     return (float(np.min(x)), float(np.max(x))) if x.size else (math.nan, math.nan)
 
@@ -140,7 +142,7 @@ def trial_range(t: Mapping[str, np.ndarray], map_: str, planner: str, metric: st
 def per_seed_means(t: Mapping[str, np.ndarray], map_: str, planner: str, metric: str,
                    seeds: Sequence[int]) -> tuple[np.ndarray, int]:
     """``f64[R]`` per-seed means of ``metric`` (nan for a seed with no defined value) and the values used."""
-    base = _trial_mask(t, map_, planner, metric)
+    base = trial_mask(t, map_, planner, metric)
     v = t[metric]
     out, used = np.full(len(seeds), math.nan), 0
     for i, s in enumerate(seeds):
@@ -160,22 +162,14 @@ def _mean_sd(x: np.ndarray) -> tuple[float, float, int]:
 
 
 def confidence_interval(x: np.ndarray, level: float = 0.95) -> tuple[float, float]:
-    """Student-t interval of the mean of the finite values of ``x`` (``scipy.stats.t``; ddof=1): (lo, hi).
+    """Student-t interval of the mean of the finite values of ``x`` (ddof=1): (lo, hi).
 
     A sample of one value has no interval (nan, nan); a constant sample (an exact planner) has a
-    zero-width one at its value.
+    zero-width one at its value. The one t interval of the package: `jaxplan.experiments.verdicts.mean_interval`.
     """
-    from scipy import stats as sps
+    from jaxplan.experiments.verdicts import mean_interval
 
-    x = np.asarray(x, np.float64)
-    x = x[np.isfinite(x)]
-    if x.size < 2:
-        return math.nan, math.nan
-    m, se = float(np.mean(x)), float(np.std(x, ddof=1)) / math.sqrt(x.size)
-    if se == 0.0:
-        return m, m
-    half = float(sps.t.ppf(0.5 + level / 2.0, x.size - 1)) * se
-    return m - half, m + half
+    return mean_interval(x, level)
 
 
 def hedges_g(x: np.ndarray, y: np.ndarray) -> float:
@@ -208,7 +202,9 @@ def holm(p: Sequence[float]) -> np.ndarray:
 
 
 def _paper(cfg: ExperimentConfig, map_: str, planner: str, metric: str) -> PaperValue | None:
-    exact = [v for v in cfg.paper if v.planner == planner and v.metric == metric and v.map == map_]
+    """The paper's value for a site: given for its map (a drawn map's every draw) or for every map."""
+    family = next((m.map_family for m in cfg.maps if m.name == map_), map_)
+    exact = [v for v in cfg.paper if v.planner == planner and v.metric == metric and v.map in (map_, family)]
     anymap = [v for v in cfg.paper if v.planner == planner and v.metric == metric and v.map is None]
     return (exact or anymap or [None])[0]
 

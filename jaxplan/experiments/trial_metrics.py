@@ -5,7 +5,8 @@ metrics here turn them into trials.csv values that depend on each trial's own ce
 the batch's layout or padding, so a ``--chunk`` change leaves every number as it was): grid path
 lengths as left-to-right float64 sums, optimality gaps, cui2025's accuracy, yu2020's
 line-of-sight reductions, the Hausdorff distance to the exact path, the smoothed exact
-optimum an executed path is measured against (DESIGN §6), and the gap to each planner's own optimum.
+optimum an executed path is measured against (DESIGN §6), the gap to each planner's own optimum, and the
+convergence iterations of an iterative planner's best-so-far history (`convergence_metrics`).
 """
 
 from __future__ import annotations
@@ -15,13 +16,15 @@ import numpy as np
 from jaxplan.experiments.config import ACCURACY_GAP, PlannerConfig, nav_config
 from jaxplan.experiments.prepare import MapWork
 
-__all__ = ["PATH_KEYS", "LOS_KEYS", "INT_METRICS", "accuracy", "reductions", "los_metrics", "grid_path_lengths",
-           "optimality_gaps", "objective_gaps", "hausdorff", "executed_optimum"]
+__all__ = ["PATH_KEYS", "LOS_KEYS", "CONVERGENCE_KEYS", "INT_METRICS", "accuracy", "reductions", "los_metrics",
+           "grid_path_lengths", "optimality_gaps", "objective_gaps", "hausdorff", "executed_optimum",
+           "convergence_metrics", "executed_shape"]
 
 PATH_KEYS = ("length", "optimality_gap", "turns", "sharp_turns", "smoothness", "min_clearance", "mean_clearance",
               "max_curvature")
 LOS_KEYS = ("los_length", "los_turns", "los_length_reduction", "los_turns_reduction")
-INT_METRICS = ("turns", "sharp_turns", "los_turns", "converged_iteration", "collisions", "active_contacts",
+CONVERGENCE_KEYS = ("converged_iteration", "converged_iteration_strict", "turning_point", "optimum_iteration")
+INT_METRICS = ("turns", "sharp_turns", "los_turns", *CONVERGENCE_KEYS, "collisions", "active_contacts",
                "passive_contacts", "recoveries", "replans")
 _GAP_TOL = 1e-9  # a gap of exactly 10 % computes as 0.10000000000000009: count it as within
 
@@ -168,3 +171,83 @@ def executed_optimum(mw: MapWork, pc: PlannerConfig, idx: np.ndarray) -> np.ndar
         out[ok] = np.asarray(path_metrics(np.asarray(sm.points, np.float64), mw.grid, n=np.asarray(sm.n))["length"],
                              np.float64)
     return out
+
+
+def convergence_metrics(history: np.ndarray, ok: np.ndarray, metrics) -> dict[str, np.ndarray]:
+    """The convergence iterations of `CONVERGENCE_KEYS` named in ``metrics``, each as its paper defines it
+    (`jaxplan.metrics.converged_iteration` and siblings), from the best-so-far history the run returns.
+
+    Computed on the host from the history, so the compiled colony kernels stay as they are.
+
+    Args:
+      history: ``[n, R, I]`` best-so-far cost after each iteration (``inf`` before the first success).
+      ok: ``bool[n, R]`` runs that found a path.
+      metrics: metric names; only those in `CONVERGENCE_KEYS` are computed.
+
+    Returns:
+      ``{name: f64[n, R]}``: ``converged_iteration`` (0-based, within 1 % of the final best),
+      ``converged_iteration_strict`` (0-based, within 0.1 %), ``turning_point`` (chu2024) and
+      ``optimum_iteration`` (yu2020), both counted from 1; nan where the run found no path.
+    """
+    from jaxplan.metrics import CONVERGED_RTOL_STRICT, converged_iteration, optimum_iteration, turning_point
+
+    fns = {"converged_iteration": converged_iteration,
+           "converged_iteration_strict": lambda h: converged_iteration(h, rtol=CONVERGED_RTOL_STRICT),
+           "turning_point": turning_point, "optimum_iteration": optimum_iteration}
+    out = {}
+    for k in CONVERGENCE_KEYS:
+        if k in metrics:
+            v = np.asarray(fns[k](np.asarray(history)), np.float64)
+            out[k] = np.where(np.asarray(ok, bool) & (v >= 0), v, np.nan)
+    return out
+
+
+def _resample(points: np.ndarray, steps: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    """Polylines ``[N, T, 2]`` (valid up to index ``steps[N]``) resampled every ``spacing`` of arc length, the end
+    point kept: ``(f64[N, K, 2], int[N])`` points (padded with the end point) and their counts."""
+    P = np.asarray(points, np.float64)
+    N, T, _ = P.shape
+    steps = np.clip(np.asarray(steps, np.int64), 0, T - 1)
+    last = P[np.arange(N), steps]
+    P = np.where((np.arange(T)[None, :] <= steps[:, None])[..., None], P, last[:, None, :])
+    if T < 2:
+        return P, np.ones(N, np.int64)
+    seg = np.linalg.norm(np.diff(P, axis=1), axis=-1)  # [N, T-1]
+    s = np.concatenate([np.zeros((N, 1)), np.cumsum(seg, axis=1)], axis=1)  # [N, T] arc length at each point
+    total = s[:, -1]
+    n = np.floor(total / spacing + 1e-9).astype(np.int64) + 1  # samples at 0, h, 2h, ... <= total
+    end = total > (n - 1) * spacing + 1e-9  # the end point is a sample of its own
+    K = int((n + end).max()) if N else 1
+    q = np.minimum(np.arange(K)[None, :] * spacing, total[:, None])  # [N, K]
+    j = np.clip((s[:, None, :] <= q[:, :, None]).sum(-1) - 1, 0, T - 2)  # the segment each sample falls on
+    s0, ds = np.take_along_axis(s, j, 1), np.take_along_axis(seg, j, 1)
+    frac = np.where(ds > 0, (q - s0) / np.where(ds > 0, ds, 1.0), 0.0)
+    p0 = np.take_along_axis(P, j[..., None], 1)
+    p1 = np.take_along_axis(P, (j + 1)[..., None], 1)
+    return p0 + frac[..., None] * (p1 - p0), n + end
+
+
+def executed_shape(grid, positions: np.ndarray, steps: np.ndarray) -> dict[str, np.ndarray]:
+    """``smoothness`` and ``mean_clearance`` (m) of executed paths, ``f64[...]`` per trial.
+
+    A control period moves the robot a few centimetres, so the raw trajectory has hundreds of vertices whose
+    heading changes are tiny; it is resampled every cell length (the map's resolution) first, so that its
+    smoothness and clearance are measured at the scale of a planned grid path (the same definitions as
+    `jaxplan.path_metrics`'s, on these points). cui2025 Table 1 reports both for its executed paths.
+
+    Args:
+      grid: the map (world frame: its origin and resolution).
+      positions: ``[..., T, 2]`` executed positions (m, world), valid up to index ``steps``.
+      steps: ``int[...]`` the last valid index of each trajectory.
+    """
+    from jaxplan.metrics import path_metrics
+
+    pos = np.asarray(positions, np.float64)
+    lead = pos.shape[:-2]
+    flat = pos.reshape(-1, *pos.shape[-2:])
+    res = float(grid.resolution)
+    pts, count = _resample(flat, np.asarray(steps).reshape(-1), res)
+    cells = np.asarray(grid.to_local(pts), np.float64) / res - 0.5  # cell coordinates: centres at integers
+    pm = path_metrics(cells, grid, n=count)
+    return {k: np.where(count >= 3 if k == "smoothness" else count >= 1, np.asarray(pm[k], np.float64),
+                        np.nan).reshape(lead) for k in ("smoothness", "mean_clearance")}

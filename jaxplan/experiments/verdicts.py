@@ -157,9 +157,9 @@ def wilson_interval(k: int, n: int, confidence: float = 0.95) -> tuple[float, fl
     return lo, hi
 
 
-def _prediction_interval(values, confidence: float, runs: int) -> tuple[float, float]:
+def _prediction_interval(values, confidence: float, runs: float) -> tuple[float, float]:
     """Interval that a mean of ``runs`` new runs falls in with probability ``confidence``, from the sample
-    ``values``: mean ± t_{(1+c)/2, n−1} · sd · sqrt(1/runs + 1/n)."""
+    ``values``: mean ± t_{(1+c)/2, n−1} · sd · sqrt(1/runs + 1/n); ``runs = inf`` gives the interval of the mean."""
     _check_confidence(confidence)
     v = _finite(values)
     if v.size < 2:
@@ -182,15 +182,7 @@ def prediction_interval(values, confidence: float = 0.95) -> tuple[float, float]
 def mean_interval(values, confidence: float = 0.95) -> tuple[float, float]:
     """Student-t interval of the mean of ``values``: mean ± t_{(1+c)/2, n−1} · sd / sqrt(n) (ddof=1).
     Non-finite values are dropped; fewer than 2 left -> (nan, nan); no spread -> (mean, mean)."""
-    _check_confidence(confidence)
-    v = _finite(values)
-    if v.size < 2:
-        return _NAN2
-    m, sd = _mean_sd(v)
-    if sd == 0.0:
-        return m, m
-    half = float(sps.t.ppf(0.5 + confidence / 2.0, v.size - 1)) * sd / math.sqrt(v.size)
-    return m - half, m + half
+    return _prediction_interval(values, confidence, math.inf)
 
 
 # ------------------------------------------------------------------------------------------- tests from summaries
@@ -442,7 +434,7 @@ def _finish(effect: float, se: float, df: float, p: float, base: float, n: int, 
     ci = _interval_from_se(effect, se, df, 1 - alpha)
     ci_eq = _interval_from_se(effect, se, df, 1 - 2 * alpha)
     verdict = _claim_verdict(effect, ci, ci_eq, direction, margin)
-    rule = f"{rule}; margin ±{margin:g}"
+    rule = f"{rule}; margin ±{_g(margin)}"
     if se == 0.0:
         rule += "; no spread: effect against margin"
         p = math.nan
