@@ -34,3 +34,25 @@ def test_describing_a_process_imports_neither_jax_nor_numba():
         """)
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
     assert json.loads(out.stdout.strip().splitlines()[-1]) == []
+
+
+def test_outputs_the_commands_write_do_not_make_a_checkout_dirty(tmp_path):
+    """`jaxplan reproduce` rewrites docs/results and figures config by config: a page written after the first
+    one must still record the clean revision it ran, and a changed source must not."""
+    from jaxplan.core.provenance import GENERATED
+
+    def git(*args):
+        subprocess.run(["git", "-C", str(tmp_path), *args], check=True, capture_output=True)
+
+    git("init", "-q")
+    for rel in ("jaxplan/x.py", *(f"{g}/page.md" for g in GENERATED)):
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / rel).write_text("one\n")
+    git("add", ".")
+    git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-q", "-m", "c")
+    for g in GENERATED:
+        (tmp_path / g / "page.md").write_text("two\n")
+    rev, dirty = git_revision(tmp_path)
+    assert len(rev) == 40 and dirty is False
+    (tmp_path / "jaxplan" / "x.py").write_text("two\n")
+    assert git_revision(tmp_path) == (rev, True)

@@ -20,7 +20,7 @@ import subprocess
 from pathlib import Path
 from typing import Any
 
-__all__ = ["PACKAGES", "provenance", "git_revision", "cpu_info", "machine_line", "package_versions", "ram_gb",
+__all__ = ["GENERATED", "PACKAGES", "provenance", "git_revision", "cpu_info", "machine_line", "package_versions", "ram_gb",
            "usable_cores"]
 
 PACKAGES = ("jaxplan", "jax", "jaxlib", "numpy", "scipy", "numba")
@@ -29,16 +29,24 @@ PACKAGES = ("jaxplan", "jax", "jaxlib", "numpy", "scipy", "numba")
 _ROOT = Path(__file__).resolve().parents[2]  # the checkout holding jaxplan/ (not a repository when installed)
 
 
+GENERATED = ("docs/results", "figures", "benchmarks/results")
+"""Tracked folders the project's own commands write (`jaxplan reproduce` rewrites pages and figures config by
+config): a change there is an output of the commit, not a change to its sources, so it does not make it dirty."""
+
+
 def git_revision(root: str | os.PathLike | None = None) -> tuple[str | None, bool | None]:
     """``(full commit hash, dirty)`` of the checkout at ``root`` (default: jaxplan's own); ``(None, None)`` when
-    it is not a git work tree or git is missing. ``dirty``: tracked files differ from the commit."""
+    it is not a git work tree or git is missing. ``dirty``: tracked files other than the `GENERATED` outputs differ
+    from the commit (so the second config of a reproduction, written after the first one's pages, still records
+    the clean revision it ran)."""
     where = str(_ROOT if root is None else root)
     try:
         rev = subprocess.run(["git", "-C", where, "rev-parse", "HEAD"], capture_output=True, text=True,
                              timeout=10).stdout.strip()
         if not rev:
             return None, None
-        dirty = subprocess.run(["git", "-C", where, "status", "--porcelain", "--untracked-files=no"],
+        dirty = subprocess.run(["git", "-C", where, "status", "--porcelain", "--untracked-files=no", "--", ".",
+                                *(f":(exclude){g}" for g in GENERATED)],
                                capture_output=True, text=True, timeout=10).stdout.strip()
     except (OSError, subprocess.SubprocessError):
         return None, None
