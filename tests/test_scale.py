@@ -298,9 +298,10 @@ def test_host_shares_cover_the_batch_and_shards_merge(tmp_path):
 
 
 def test_importing_jaxplan_leaves_jax_as_the_user_had_it():
-    """``import jaxplan`` and a small `jp.plan` (an ant colony: JAX runs) change no ``jax.config`` value and leave
-    the device count at JAX's own default; the opt-in is explicit, and too late is a clear error."""
-    out = _child("""
+    """``import jaxplan`` and a small `jp.plan` (an ant colony: JAX runs) change no ``jax.config`` value but the
+    persistent compilation cache's (on by default at first use; ``JAXPLAN_CACHE=off`` leaves even those) and
+    leave the device count at JAX's own default; the opt-in is explicit, and too late is a clear error."""
+    code = """
         import json
         import jax
         before = dict(jax.config.values)
@@ -315,12 +316,22 @@ def test_importing_jaxplan_leaves_jax_as_the_user_had_it():
             late = str(e)
         print(json.dumps({"changed": changed, "devices": jax.device_count(), "success": bool(res.success),
                           "late": late, "same": jp.use_host_devices(jax.device_count())}))
-        """, devices=None)
+        """
+    out = _child(code, devices=None)
+    os.environ["JAXPLAN_CACHE"], saved = "off", os.environ.get("JAXPLAN_CACHE")
+    try:
+        off = _child(code, devices=None)
+    finally:
+        if saved is None:
+            del os.environ["JAXPLAN_CACHE"]
+        else:
+            os.environ["JAXPLAN_CACHE"] = saved
     plain = _child("""
         import json, jax
         print(json.dumps({"devices": jax.device_count()}))
         """, devices=None)
-    assert out["changed"] == [] and out["success"]
+    assert set(out["changed"]) <= {"jax_compilation_cache_dir", "jax_persistent_cache_min_compile_time_secs"}
+    assert off["changed"] == [] and out["success"] and off["success"]
     assert out["devices"] == plain["devices"]
     assert "too late" in out["late"] and "before any JAX computation" in out["late"]
     assert out["same"] == out["devices"]  # asking for the count in effect is no error
