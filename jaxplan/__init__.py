@@ -12,7 +12,8 @@ Importing jaxplan has no side effect: it changes no JAX setting and loads no sub
 public name is imported from its subpackage when first used (PEP 562 ``__getattr__``), so
 ``import jaxplan`` and the command line's ``--help`` start without JAX or numba. To shard batches
 over one CPU host device per core, opt in with `use_host_devices` before the first JAX
-computation (the command line does).
+computation (the command line does). The on-disk compilation caches turn on when compiled code is
+first loaded (`enable_compilation_cache` chooses their folder; ``JAXPLAN_CACHE=off`` turns them off).
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
             "moving_obstacles", "navigate", "navigate_batch", "navigate_multi", "pipelines", "random_obstacles"),
     "search": ("SearchGraph", "astar", "dijkstra", "distance_from", "search_graph", "shortest_lengths"),
     "scale": ("use_host_devices",),
+    "core.compile_cache": ("enable_compilation_cache",),
 }
 """Subpackage (or module) of jaxplan -> the public names re-exported from it."""
 

@@ -4,7 +4,9 @@
 module imports only the standard library at the top, and each command imports what it needs.
 Before a command runs, the process opts in to one JAX CPU host device per core
 (`jaxplan.use_host_devices`; ``$JAXPLAN_HOST_DEVICES`` overrides the count, ``off`` leaves JAX's
-default, and an ``XLA_FLAGS`` device count stands), so batched calls shard over the cores.
+default, and an ``XLA_FLAGS`` device count stands), so batched calls shard over the cores. Compiled programs
+are kept on disk and loaded by the next command (`jaxplan.core.compile_cache`: ``$JAXPLAN_CACHE`` or
+``~/.cache/jaxplan``); every command's ``--no-cache``, or ``JAXPLAN_CACHE=off``, turns that off.
 
 Long commands (``run``, ``reproduce``, ``tune``, ``figures``, ``demo``, ``bench``, ``plan``, ``navigate``) draw a
 progress bar with the time left (or a spinner for a stage such as compiling) on stderr when it is a terminal;
@@ -26,16 +28,15 @@ __all__ = ["main"]
 
 
 def _compilation_cache() -> None:
-    """JAX's persistent compilation cache in ``$JAXPLAN_CACHE`` or ``~/.cache/jaxplan/jax`` (compiled programs are
-    most of the demo's time; a second run loads them)."""
-    import os
+    """The on-disk compilation caches (`jaxplan.core.compile_cache`: ``$JAXPLAN_CACHE`` or ``~/.cache/jaxplan``),
+    turned on now rather than at the first compiled module (compiled programs are most of the demo's time)."""
+    from jaxplan.core.compile_cache import on_first_use
 
-    import jax
+    on_first_use()
 
-    path = Path(os.environ.get("JAXPLAN_CACHE", Path.home() / ".cache" / "jaxplan" / "jax"))
-    path.mkdir(parents=True, exist_ok=True)
-    jax.config.update("jax_compilation_cache_dir", str(path))
-    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
+
+_NO_CACHE = ("do not use the on-disk compilation caches (JAX's and numba's in $JAXPLAN_CACHE or ~/.cache/jaxplan; "
+             "JAXPLAN_CACHE=off does the same for every command)")
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
@@ -91,24 +92,23 @@ def _planner_params(planner: str, overrides: dict, options: dict | None = None) 
     """Every parameter of ``planner`` with ``overrides`` applied, checked against its registered parameters and
     values; the ``ValueError`` names the bad ``--set`` key or value (or the option ``options[key]`` that gave it,
     e.g. ``--connectivity``) and what the planner takes."""
-    import difflib
-
+    from jaxplan.core.names import closest
     from jaxplan.planning import planners
     from jaxplan.registry import resolve
 
     specs = planners()
     if planner not in specs:
-        near = difflib.get_close_matches(planner, specs, n=1)
-        raise ValueError(f"--planner {planner!r} is not a planner{f' (did you mean {near[0]!r}?)' if near else ''}; "
+        near = closest(planner, specs)
+        raise ValueError(f"--planner {planner!r} is not a planner{f' (did you mean {near!r}?)' if near else ''}; "
                          f"choose from {', '.join(sorted(specs))}")
     spec = specs[planner]
     options = options or {}
     said = lambda k: f"{options[k]} {overrides[k]!r}" if k in options else f"--set {k}={overrides[k]!r}"  # noqa: E731
     for k in overrides:
         if k not in spec.defaults:
-            near = difflib.get_close_matches(k, list(spec.defaults), n=1)
+            near = closest(k, spec.defaults)
             raise ValueError(f"{said(k)}: planner {planner!r} has no parameter {k!r}"
-                             f"{f' (did you mean {near[0]!r}?)' if near else ''}; it takes: "
+                             f"{f' (did you mean {near!r}?)' if near else ''}; it takes: "
                              f"{', '.join(sorted(spec.defaults)) or 'none'}")
     try:
         return resolve(planner, overrides)[1]
@@ -170,13 +170,68 @@ def _add_map_args(parser: argparse.ArgumentParser) -> None:
                         "(default blocked)")
 
 
+def _add_metre_args(parser: argparse.ArgumentParser) -> None:
+    """``--start-m``/``--goal-m``: the endpoints in metres of the map's world frame, instead of cells."""
+    for which in ("start", "goal"):
+        parser.add_argument(f"--{which}-m", type=float, nargs=2, default=None, metavar=("X", "Y"),
+                            help=f"{which} in metres of the map's world frame (a ROS map's origin applies), instead "
+                                 f"of --{which}")
+
+
 def _load_map_args(args: argparse.Namespace):
     """The map of ``plan``/``navigate`` and the ROS options given (for the output record)."""
     from jaxplan.grid import load_map
 
     ros = {k: v for k, v in (("keepout", args.keepout), ("speed", args.speed_mask), ("unknown", args.unknown))
            if v is not None}
+    for path in (args.map, args.keepout, args.speed_mask):
+        _check_file_arg(path)
     return load_map(args.map, resolution=args.resolution, **ros), ros
+
+
+def _check_file_arg(path: str | None) -> None:
+    """A missing map file named relative to the data folder (``ros/warehouse.yaml``, as a config writes it) fails
+    saying where it is: paths on the command line are relative to the working folder (docs/decisions.md)."""
+    if path is None or Path(path).exists() or Path(path).is_absolute():
+        return
+    from jaxplan.experiments.config import default_data_dir
+
+    there = default_data_dir() / path
+    if there.is_file():
+        raise FileNotFoundError(f"map file not found: {path} (a path on the command line is relative to the working "
+                                f"folder, not to the data folder as in a config: give {there})")
+
+
+def _endpoint(args: argparse.Namespace, grid, which: str) -> tuple[int, int]:
+    """The ``which`` (``"start"``/``"goal"``) cell of ``plan``/``navigate``: ``--start X Y`` (a cell) or
+    ``--start-m X Y`` (metres in the map's world frame, through its origin: a ROS user's coordinates); exactly one.
+    A point outside the map or on a blocked cell is refused naming the option, the point and the map's extent."""
+    import math
+
+    import numpy as np
+
+    cell, metres = getattr(args, which), getattr(args, f"{which}_m")
+    if cell is not None and metres is not None:
+        raise ValueError(f"--{which} and --{which}-m both give the {which}: use one (--{which} X Y in cells, "
+                         f"--{which}-m X Y in metres of the map's world frame)")
+    if cell is None and metres is None:
+        raise ValueError(f"the {which} is missing: give --{which} X Y (a cell) or --{which}-m X Y (metres in the "
+                         "map's world frame)")
+    if cell is not None:
+        return int(cell[0]), int(cell[1])
+    x, y = (float(v) for v in metres)
+    said = f"--{which}-m {x:g} {y:g}"
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise ValueError(f"{said}: the point must be two finite numbers (metres)")
+    (ox, oy), res, (H, W) = (float(v) for v in grid.origin), float(grid.resolution), grid.shape
+    cx, cy = (int(v) for v in grid.cell_at(np.array([x, y])))
+    if not (0 <= cx < W and 0 <= cy < H):
+        raise ValueError(f"{said}: the point is outside the map, which covers x {ox:g}..{ox + W * res:g} m and "
+                         f"y {oy:g}..{oy + H * res:g} m (world frame, origin ({ox:g}, {oy:g}), {res:g} m cells)")
+    if not bool(np.asarray(grid.free)[cy, cx]):
+        raise ValueError(f"{said}: the point is on an obstacle (cell ({cx}, {cy}) is blocked)")
+    print(f"{which}: ({x:g}, {y:g}) m is cell ({cx}, {cy})", file=sys.stderr)
+    return cx, cy
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
@@ -194,7 +249,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
         check_suffix(args.out, PLAN_SUFFIXES, "jaxplan plan")  # before any work
     grid, masks = _load_map_args(args)
-    start, goal = tuple(args.start), tuple(args.goal)
+    start, goal = _endpoint(args, grid, "start"), _endpoint(args, grid, "goal")
     from jaxplan.core.progress import ProgressBar
 
     with ProgressBar(f"{args.planner}: planning (compiled on first use)", None, enabled=not args.no_progress):
@@ -230,12 +285,15 @@ def cmd_navigate(args: argparse.Namespace) -> int:
     """``jaxplan navigate MAP --start X Y --goal X Y``: one two-level episode among random walkers."""
     import numpy as np
 
+    from jaxplan.core.names import closest
     from jaxplan.nav import navigate, pipelines, random_obstacles
 
     overrides = _parse_sets(args.set)
     names = pipelines()
     if args.pipeline not in names:
-        raise ValueError(f"--pipeline {args.pipeline!r} is not a pipeline; choose from {', '.join(names)}")
+        near = closest(args.pipeline, names)
+        raise ValueError(f"--pipeline {args.pipeline!r} is not a pipeline{f' (did you mean {near!r}?)' if near else ''}"
+                         f"; choose from {', '.join(names)}")
     pipe = names[args.pipeline]
     _planner_params(pipe.global_planner, {**pipe.planner_overrides, **overrides})  # a bad --set fails before any work
     if args.out is not None:
@@ -244,19 +302,23 @@ def cmd_navigate(args: argparse.Namespace) -> int:
         check_suffix(args.out, EPISODE_SUFFIXES, "jaxplan navigate")
     if args.walkers < 0:
         raise ValueError(f"--walkers must be >= 0, got {args.walkers}")
+    if args.behavior is not None and args.walkers == 0:
+        raise ValueError(f"--behavior {args.behavior} describes walkers, but --walkers is 0: give --walkers N")
+    behavior = args.behavior or "blind"
     grid, masks = _load_map_args(args)
-    start, goal = tuple(args.start), tuple(args.goal)
+    start, goal = _endpoint(args, grid, "start"), _endpoint(args, grid, "goal")
     res = float(grid.resolution)
     avoid = grid.centre(np.array([start, goal], np.float64))  # world metres, as random_obstacles takes
     obs = None if args.walkers == 0 else random_obstacles(
         grid, n=args.walkers, speed=args.walker_speed, radius=args.walker_radius, seed=args.seed, avoid=avoid,
-        avoid_radius=1.5)
+        avoid_radius=1.5, behavior=behavior)
     ep = navigate(grid, start, goal, pipeline=args.pipeline, seed=args.seed, obstacles=obs,
                   time_limit=args.time_limit, progress=not args.no_progress, **overrides)
     m = ep.metrics
     print(f"{args.pipeline} on {args.map}: {'success' if ep.success else 'failed'} ({ep.reason}); "
           f"time {ep.time_s:.1f} s, path {m['path_length']:.2f} m, collisions {ep.collisions}, recoveries "
-          f"{int(m['recoveries'])}, re-plans {int(m['replans'])}, walkers {args.walkers}")
+          f"{int(m['recoveries'])}, re-plans {int(m['replans'])}, walkers {args.walkers}"
+          + (f" ({behavior})" if args.walkers else ""))
     if args.out is not None:
         from jaxplan.experiments.outputs import write_episode
 
@@ -264,7 +326,7 @@ def cmd_navigate(args: argparse.Namespace) -> int:
                   "origin_m": [float(v) for v in grid.origin],
                   "start": list(start), "goal": list(goal),
                   "pipeline": args.pipeline, "seed": args.seed, "overrides": overrides, "walkers":
-                  {"n": args.walkers, "speed": args.walker_speed, "radius": args.walker_radius}}
+                  {"n": args.walkers, "speed": args.walker_speed, "radius": args.walker_radius, "behavior": behavior}}
         print(f"wrote {write_episode(args.out, ep, grid, record)}")
     return 0 if ep.success else 1
 
@@ -291,12 +353,13 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 def cmd_figures(args: argparse.Namespace) -> int:
     """``jaxplan figures RUN``: every ``[[figures]]`` entry of the run's config as PNG and SVG, plus index.md."""
-    from jaxplan.experiments.figures import draw_figures
+    from jaxplan.experiments.figures import default_figures_root, draw_figures
 
-    drawn, problems = draw_figures(args.run, args.out, data_dir=args.data_dir, partial=args.partial,
+    out = Path(args.out) if args.out is not None else default_figures_root(args.run)  # never the tracked figures/
+    drawn, problems = draw_figures(args.run, out, data_dir=args.data_dir, partial=args.partial,
                                    progress=not args.no_progress)
     name = Path(args.run).resolve().name
-    print(f"wrote {len(drawn)} figures to {Path(args.out) / name}/ (index.md lists them)")
+    print(f"wrote {len(drawn)} figures to {out / name}/ (index.md lists them)")
     for d in drawn:
         if d.partial:
             print(f"  partial: {d.name}: {d.partial}", file=sys.stderr)
@@ -333,7 +396,10 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 
     from jaxplan.benchmark_functions import NAME as STUDY
 
-    # Results pages by default only for the project's own full reproduction (configs/, not --quick).
+    # Results pages by default only for the project's own full reproduction (configs/, not --quick); a smoke run's
+    # figures go beside its runs, not over the committed ones.
+    if args.figures is None:
+        args.figures = str(Path(args.out) / "figures") if args.quick else "figures"
     default = "docs/results" if not args.quick and args.configs == "configs" else None
     results = None if args.no_results else args.results or default
     studies = results is not None and (args.pattern is None or fnmatch(STUDY, args.pattern)
@@ -426,18 +492,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--debug", action="store_true", help="print the traceback of a failure (default: one line)")
     sub = p.add_subparsers(dest="command", required=True)
     d = sub.add_parser("demo", help="iaco_dwa vs aco_dwa among moving obstacles on the built-in warehouse; "
-                                    "prints a table, writes figures/demo.png and demo.gif")
-    d.add_argument("--out-dir", default="figures", help="figure folder (default: figures)")
+                                    "prints a table, writes runs/demo/demo.png and demo.gif")
+    d.add_argument("--out-dir", "--out", default="runs/demo", help="figure folder (default: runs/demo, not tracked; "
+                   "--out-dir figures regenerates the committed figures/demo.png and demo.gif on purpose)")
     d.add_argument("--seed", type=int, default=0, help="seed of the colonies and the moving discs (default 0)")
     d.add_argument("--quick", action="store_true", help="a small generated warehouse (seconds, for tests)")
     d.add_argument("--no-gif", action="store_true", help="skip the animation")
-    d.add_argument("--no-cache", action="store_true", help="do not use JAX's persistent compilation cache")
+    d.add_argument("--no-cache", action="store_true", help=_NO_CACHE)
     d.add_argument("--no-progress", action="store_true", help="no progress bar on stderr (drawn only on a terminal)")
     d.set_defaults(func=cmd_demo)
     q = sub.add_parser("plan", help="plan one path on a map; --out writes .json, .csv or .png")
     q.add_argument("map", help="map file: MovingAI .map or ROS map_server .yaml")
-    q.add_argument("--start", type=int, nargs=2, required=True, metavar=("X", "Y"), help="start cell (column, row)")
-    q.add_argument("--goal", type=int, nargs=2, required=True, metavar=("X", "Y"), help="goal cell (column, row)")
+    q.add_argument("--start", type=int, nargs=2, metavar=("X", "Y"), help="start cell (column, row)")
+    q.add_argument("--goal", type=int, nargs=2, metavar=("X", "Y"), help="goal cell (column, row)")
+    _add_metre_args(q)
     q.add_argument("--planner", default="astar", help="a planner of jaxplan.planners() (default astar)")
     q.add_argument("--seed", type=int, default=0, help="the planner's seed (default 0; exact planners ignore it)")
     q.add_argument("--set", action="append", metavar="KEY=VALUE", help="a planner parameter, repeatable: --set "
@@ -454,18 +522,24 @@ def build_parser() -> argparse.ArgumentParser:
     v = sub.add_parser("navigate", help="one two-level navigation episode among random walkers; --out writes .json, "
                                         ".gif or .png")
     v.add_argument("map", help="map file: MovingAI .map or ROS map_server .yaml")
-    v.add_argument("--start", type=int, nargs=2, required=True, metavar=("X", "Y"), help="start cell (column, row)")
-    v.add_argument("--goal", type=int, nargs=2, required=True, metavar=("X", "Y"), help="goal cell (column, row)")
+    v.add_argument("--start", type=int, nargs=2, metavar=("X", "Y"), help="start cell (column, row)")
+    v.add_argument("--goal", type=int, nargs=2, metavar=("X", "Y"), help="goal cell (column, row)")
+    _add_metre_args(v)
     v.add_argument("--pipeline", default="iaco_dwa", help="a pipeline of jaxplan.pipelines() (default iaco_dwa)")
     v.add_argument("--seed", type=int, default=0, help="seed of the global planner and of the walkers (default 0)")
     v.add_argument("--set", action="append", metavar="KEY=VALUE", help="a global planner parameter, repeatable")
     v.add_argument("--walkers", type=int, default=2, help="random walkers (moving discs; default 2, 0 for none)")
     v.add_argument("--walker-speed", type=float, default=0.5, help="walkers' speed in m/s (default 0.5)")
     v.add_argument("--walker-radius", type=float, default=0.25, help="walkers' radius in m (default 0.25)")
+    # jaxplan.nav's walker behaviours (`random_obstacles(behavior=...)`), written out: --help must not import JAX
+    v.add_argument("--behavior", default=None, choices=("blind", "social"), help="how the walkers move: blind (on "
+                   "their routes regardless of the robot; the default) or social (the same routes, but they see and "
+                   "avoid the robot, each other and the walls: the social force model)")
     v.add_argument("--time-limit", type=float, default=None, help="seconds (default: from the path length)")
     _add_map_args(v)
     v.add_argument("--out", default=None, metavar="FILE", help="write the episode: .json (trajectory, controls, "
-                   "metrics, walkers, provenance), .gif (animation; needs Pillow) or .png/.svg/.pdf")
+                   "metrics, walkers, provenance), .gif (animation; needs Pillow) or "
+                   ".png/.svg/.pdf (trajectory, start, goal, walkers' paths)")
     v.add_argument("--no-progress", action="store_true", help="no progress stages on stderr")
     v.set_defaults(func=cmd_navigate)
     r = sub.add_parser("run", help="run (or resume) the experiment of a TOML config; writes OUT/NAME/")
@@ -480,7 +554,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.set_defaults(func=cmd_run)
     f = sub.add_parser("figures", help="draw the figures a run's config names into OUT/RUN/ (PNG, SVG, index.md)")
     f.add_argument("run", help="a run folder written by `jaxplan run` (e.g. runs/NAME)")
-    f.add_argument("--out", default="figures", help="figure root (default: figures; files go to OUT/RUN/)")
+    f.add_argument("--out", default=None, help="figure root; files go to OUT/RUN/ (default: figures/ beside the run "
+                   "folder, e.g. runs/figures, not tracked)")
     f.add_argument("--data-dir", default=None, help="folder that the config's map paths are relative to")
     f.add_argument("--partial", action="store_true", help="draw a figure even if some of its chunks' arrays are "
                                                           "missing or damaged, labelled partial (default: refuse it)")
@@ -498,14 +573,15 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--configs", default="configs", help="folder of the configs (default: configs)")
     g.add_argument("--pattern", default=None, help="which configs (glob; default: every <paper>_*.toml)")
     g.add_argument("--out", default="runs", help="parent folder of the run folders (default: runs)")
-    g.add_argument("--figures", default="figures", help="figure root (default: figures)")
+    g.add_argument("--figures", default=None, help="figure root (default: figures for the full runs, which "
+                   "regenerate the committed figures; OUT/figures for --quick, so a smoke run writes no tracked file)")
     g.add_argument("--data-dir", default=None, help="folder that map paths are relative to")
     g.add_argument("--results", default=None, help="results pages root: <paper>/<table>.md and index.md, the paper's "
                                                    "numbers beside ours (default: docs/results for the full runs of "
                                                    "configs/; none with --quick or another --configs)")
     g.add_argument("--no-results", action="store_true", help="write no results pages")
     g.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
-    g.add_argument("--no-cache", action="store_true", help="do not use JAX's persistent compilation cache")
+    g.add_argument("--no-cache", action="store_true", help=_NO_CACHE)
     g.set_defaults(func=cmd_reproduce)
     t = sub.add_parser("tune", help="tune a planner's weights from a TOML config (resumable); writes OUT/NAME/")
     t.add_argument("config", help="tuning config (TOML; schema: jaxplan.tune._config)")
@@ -535,6 +611,9 @@ def build_parser() -> argparse.ArgumentParser:
                                      "options after --, e.g. jaxplan bench -- --quick)")
     b.add_argument("rest", nargs=argparse.REMAINDER, help="options of benchmarks/run_all.py")
     b.set_defaults(func=cmd_bench)
+    for name, cmd in sub.choices.items():  # every command has --no-cache (bench's benchmarks run in their own process)
+        if name not in ("demo", "reproduce", "bench"):  # declared above
+            cmd.add_argument("--no-cache", action="store_true", help=_NO_CACHE)
     return p
 
 
@@ -617,6 +696,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         with interrupts:
             if args.func is not cmd_bench:  # the benchmarks run in a process of their own, which opts in itself
                 _use_host_devices()
+            if getattr(args, "no_cache", False):  # else the caches turn on when compiled code first loads
+                from jaxplan.core.compile_cache import disable_compilation_cache
+
+                disable_compilation_cache()
             return int(args.func(args))
     except (Exception, KeyboardInterrupt) as e:  # noqa: BLE001 - every failure ends in one line and an exit code
         from jaxplan.core.failure import INTERRUPTED, describe_failure

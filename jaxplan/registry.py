@@ -17,6 +17,7 @@ from typing import Any, Callable, Mapping
 
 from numpy.typing import ArrayLike
 
+from jaxplan.core.names import did_you_mean
 from jaxplan.grid import GridMap
 from jaxplan.result import PlanResult
 
@@ -76,12 +77,15 @@ def resolve(planner: str, overrides: Mapping[str, Any]) -> tuple[PlannerSpec, di
     """The spec of ``planner`` and its parameters with ``overrides`` applied and checked."""
     spec = _REGISTRY.get(planner)
     if spec is None:
-        raise ValueError(f"unknown planner {planner!r}; registered: {', '.join(sorted(_REGISTRY))}")
+        raise ValueError(f"unknown planner {planner!r}{did_you_mean(str(planner), _REGISTRY)} "
+                         f"(registered: {', '.join(sorted(_REGISTRY))})")
     unknown = sorted(set(overrides) - set(spec.defaults))
     if unknown:
+        # Each unknown name with its own suggestion: ``iteration=10`` reads "did you mean 'iterations'?".
+        named = "; ".join(f"{k!r}{did_you_mean(str(k), spec.defaults)}" for k in unknown)
         raise ValueError(
-            f"planner {planner!r} has no parameter(s) {', '.join(map(repr, unknown))}; "
-            f"it accepts: {', '.join(sorted(spec.defaults)) or 'none'}"
+            f"planner {planner!r} has no parameter(s) {named} "
+            f"(it accepts: {', '.join(sorted(spec.defaults)) or 'none'})"
         )
     params = {**spec.defaults, **overrides}
     _check_numbers(planner, params)

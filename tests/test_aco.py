@@ -283,3 +283,38 @@ def test_praco_takes_every_dead_end_rule(dead_end):
     free[2:4, 2:5] = False
     r = jp.plan(jp.grid_from_array(free), (0, 0), (6, 5), planner="praco", dead_end=dead_end, ants=4, iterations=3)
     assert r.success
+
+
+def test_aco_retreats_by_default_where_dying_ants_fail():
+    """aco's default dead-end rule is "retreat" (issue 43): in a pocket facing the goal, a lone ant that dies
+    there fails most runs; the default reaches the goal in every run, the same runs as an explicit "retreat"."""
+    assert resolve("aco", {})[1]["dead_end"] == "retreat"
+    free = np.ones((11, 15), bool)
+    free[2:9, 9] = False  # the pocket's back wall, between the start (left) and the goal (right)
+    free[2, 5:10] = False
+    free[8, 5:10] = False
+    grid = jp.grid_from_array(free)
+    runs = {de: jp.plan_batch(grid, [(1, 5)], [(13, 5)], planner="aco", seeds=range(32), ants=1, iterations=1,
+                              **({} if de is None else {"dead_end": de})) for de in (None, "retreat", "die")}
+    assert np.asarray(runs[None].success).all()
+    np.testing.assert_array_equal(runs[None].length, runs["retreat"].length)
+    assert np.asarray(runs["die"].success).mean() < 0.6  # measured 10 of 32
+
+
+def test_every_config_names_the_dead_end_rule_of_its_ant_system():
+    """A config entry that runs `aco` (as a planner or as a pipeline's global planner) says which dead-end rule
+    it uses: the default changed once (issue 43), and a result must not change with a default."""
+    import tomllib
+    from pathlib import Path
+
+    from jaxplan.nav import pipelines
+
+    via_aco = {n for n, p in pipelines().items() if p.global_planner == "aco"}
+    unnamed = []
+    for path in sorted((Path(__file__).resolve().parents[1] / "configs").glob("*.toml")):
+        for pc in tomllib.loads(path.read_text()).get("planners", []):
+            runs_aco = (pc.get("kind") == "plan" and pc.get("name") == "aco") or (
+                pc.get("kind") == "navigate" and pc.get("name") in via_aco)
+            if runs_aco and "dead_end" not in pc.get("overrides", {}):
+                unnamed.append(f"{path.name}: {pc.get('label')}")
+    assert not unnamed, unnamed

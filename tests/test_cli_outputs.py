@@ -102,7 +102,7 @@ def test_a_failed_plan_says_why(tmp_path, capsys):
 
 def test_a_failed_colony_reports_its_iterations_ants_and_what_to_try(movingai, capsys):
     rc = main(["plan", str(movingai / "maze-32-32-2.map"), "--start", "11", "13", "--goal", "19", "31", "--planner",
-               "aco", "--set", "ants=2", "--set", "iterations=2", "--set", "max_steps=10"])
+               "aco", "--set", "ants=2", "--set", "iterations=2", "--set", "max_steps=10", "--set", "dead_end=die"])
     err = capsys.readouterr().err
     assert rc == 1
     for w in ("reachable", "exact shortest path", "no ant of 2", "2 iterations", "dead_end=retreat", "max_steps"):

@@ -8,8 +8,8 @@ hyphens, ``-1``, ``-2`` for repeats).
 Snippets: the ```python blocks of one file run in order in one namespace, with the repository root as
 the working directory, as a reader would paste them. A block preceded by ``<!-- not run: reason -->``
 on the line right before its fence is skipped. A file whose snippets read ``../shared/benchmarks``
-is skipped with a message when that folder is absent. Blocks of other languages (bash, toml) are not
-run.
+is skipped with a message when that folder is absent. Blocks of other languages (toml, yaml) are not run;
+the shell blocks' commands run in tests/test_shell_examples.py.
 """
 
 from __future__ import annotations

@@ -383,6 +383,38 @@ def test_anova_and_welch_are_scipy_on_the_per_seed_means(reference):
         assert float(welch["p_value"]) == pytest.approx(sps.ttest_ind(a, b, equal_var=False).pvalue, rel=1e-12)
 
 
+def test_zero_variance_is_named_and_never_starred(tmp_path):
+    """A smoke run whose planners give the same per-seed mean every seed: scipy says F = ∞, p = 0; the tables
+    must say the test is undefined and star nothing. A group without spread beside one with spread keeps its
+    (defined) test, with the constant group named."""
+    from jaxplan.experiments.report import summary_markdown
+    from jaxplan.experiments.stats import analyse
+
+    cfg = parse_config(TINY, data_dir=tmp_path)
+    metrics = ["success", "length", "optimality_gap", "turns", "smoothness", "converged_iteration"]
+    rows = []
+    for seed in range(3):
+        # length: A* always 10, AS always 12 (no spread anywhere); smoothness: A* constant, AS varies.
+        rows.append(["wh", "A*", "plan", seed, 1, 10.0, 0.0, 2, 0.5, 1])
+        rows.append(["wh", "AS", "plan", seed, 1, 12.0, 0.2, 3, 0.5 + 0.1 * seed, 2])
+    trials = tmp_path / "trials.csv"
+    trials.write_text("\n".join(",".join(map(str, r)) for r in [["map", "planner", "kind", "seed", *metrics], *rows]))
+    a = analyse(trials, None, cfg)
+    by = {(t.metric, t.test): t for t in a.tests}
+    for test in ("anova", "welch_t"):
+        flat = by["length", test]
+        assert flat.no_spread == ("A*", "AS")
+        assert np.isnan(flat.statistic) and np.isnan(flat.p_value) and np.isnan(flat.p_adjusted)
+        half = by["smoothness", test]
+        assert half.no_spread == ("A*",) and np.isfinite(half.p_value)
+    text = summary_markdown(a, cfg)
+    length_rows = [ln for ln in text.splitlines() if ln.startswith("| wh | length")]
+    assert len(length_rows) == 2 and all("undefined: no spread in any group" in ln for ln in length_rows)
+    assert not any("*" in ln.replace("A*", "") for ln in length_rows)  # no star beyond the planner's name
+    assert "∞" not in text
+    assert all("(no spread: A*)" in ln for ln in text.splitlines() if ln.startswith("| wh | smoothness"))
+
+
 def test_orbax_arrays_are_kept_per_chunk(reference):
     from jaxplan.experiments import load_chunk_arrays
 

@@ -342,7 +342,8 @@ def test_seeds_times_scenarios_beyond_memory_are_refused_before_any_chunk(tmp_pa
     line = _one_line(capsys.readouterr().err)
     assert "a chunk of planner 'AS' on 'wh' (2 scenarios x 1000000 seeds)" in line
     fits = int(re.search(r"at most (\d+) runs", line).group(1))
-    assert 0 < fits < 2 * 1000000 and "lower --chunk" not in line and "Use fewer seeds (now 1000000" in line
+    assert 0 < fits < 2 * 1000000 and "lower --chunk" not in line
+    assert f"Use at most {fits} seeds (now 1000000; a chunk runs every seed at once) with --chunk 1" in line
     assert not (tmp_path / "runs").exists()
     _record("seeds-memory", 2, line)
 
@@ -355,6 +356,7 @@ def test_ants_beyond_memory_are_refused_before_the_chunks_that_fit_run(tmp_path,
     assert _run(cfg, tmp_path / "runs") == 2
     line = _one_line(capsys.readouterr().err)
     assert "a chunk of planner 'AS' on 'wh'" in line and "at most 0 runs" in line
+    assert re.search(r"Use at most \d+ ants \(now 1000000000\)", line) and "Split" not in line
     assert not (tmp_path / "runs").exists()  # the A* chunks did not run first
     _record("ants-1e9", 2, line)
 

@@ -461,3 +461,103 @@ def test_map_legends_sit_outside_the_map(plan_run):
         assert legend.get_window_extent().y1 < ax.get_window_extent().y0
     finally:
         plt.close(fig)
+
+
+# ---------------------------------------------------------------------------------------------
+# One visual language (issue 43, item 4)
+
+
+def _draw(run_dir, kind):
+    from jaxplan.experiments.figure_kinds import DRAW
+    from jaxplan.experiments.run_data import load_run
+
+    run = load_run(run_dir)
+    spec = next(f for f in run.config.figures if f.kind == kind)
+    return DRAW[kind](run, spec)[0]
+
+
+def _unnamed_kinds(ax) -> list[str]:
+    """Kinds of mark (type, colour, line style, marker or hatch) on ``ax`` none of whose members is in the legend."""
+    from matplotlib.colors import to_hex
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+    from matplotlib.spines import Spine
+
+    kinds: dict[tuple, bool] = {}
+    for a in ax.get_children():
+        if isinstance(a, Line2D) and len(a.get_xdata()):
+            key = ("line", to_hex(a.get_color()), a.get_linestyle(), a.get_marker())
+        elif isinstance(a, Patch) and not isinstance(a, Spine) and a is not ax.patch and a.get_visible():
+            key = ("patch", to_hex(a.get_facecolor()), a.get_hatch())
+        else:
+            continue
+        kinds[key] = kinds.get(key, False) or not (a.get_label() or "_").startswith("_")
+    return [str(k) for k, named in kinds.items() if not named]
+
+
+def test_start_and_goal_look_the_same_in_every_figure_kind(plan_run, nav_run):
+    """A green circle and a red star in the paths figure (plan planners) and the trajectories figure
+    (navigation), as in `jaxplan.experiments.style`."""
+    from matplotlib.colors import to_rgba
+
+    from jaxplan.experiments import style
+    from jaxplan.experiments.plots import plt
+
+    seen = []
+    for run_dir, kind in ((plan_run, "paths"), (nav_run, "trajectories")):
+        fig = _draw(run_dir, kind)
+        try:
+            ax = fig.axes[0]
+            marks = {ln.get_label(): ln for ln in ax.lines if ln.get_label() in ("start", "goal")}
+            seen.append({k: (ln.get_marker(), to_rgba(ln.get_markerfacecolor())) for k, ln in marks.items()})
+        finally:
+            plt.close(fig)
+    assert seen[0] == seen[1] == {"start": ("o", to_rgba(style.START["color"])),
+                                  "goal": ("*", to_rgba(style.GOAL["color"]))}
+
+
+def test_trajectories_draw_walkers_at_their_true_radius_and_name_every_mark(nav_run):
+    from jaxplan.experiments.plots import plt
+
+    fig = _draw(nav_run, "trajectories")
+    try:
+        ax = fig.axes[0]
+        discs = [p for p in ax.patches if type(p).__name__ == "Circle" and p.get_edgecolor()[:3] == (0, 0, 0)
+                 and p.get_facecolor()[3] < 1]
+        walkers = [p for p in discs if p.get_radius() == pytest.approx(0.2)]  # the config's obstacles radius
+        assert len(walkers) == 2
+        assert not _unnamed_kinds(ax), _unnamed_kinds(ax)
+        fig.canvas.draw()
+        legend = ax.get_legend()
+        assert legend.get_window_extent().y1 < ax.get_window_extent().y0
+    finally:
+        plt.close(fig)
+
+
+def test_the_fan_figure_names_every_line_and_marker_outside_the_map(nav_run):
+    """cui2025 Fig. 4's fan: red, blue and black rollouts, the sub-goal and the robot, each in the legend; the
+    sub-goal is not a star (the goal's marker)."""
+    from jaxplan.experiments.plots import plt
+
+    fig = _draw(nav_run, "fan")
+    try:
+        ax = fig.axes[0]
+        assert not _unnamed_kinds(ax), _unnamed_kinds(ax)
+        texts = [t.get_text() for t in ax.get_legend().get_texts()]
+        for want in ("feasible rollouts", "chosen rollout", "robot (footprint to scale)", "executed", "global path"):
+            assert want in texts, texts
+        sub = next(ln for ln in ax.lines if ln.get_label().startswith("sub-goal"))
+        assert sub.get_marker() != "*"
+        fig.canvas.draw()
+        assert ax.get_legend().get_window_extent().y1 < ax.get_window_extent().y0
+    finally:
+        plt.close(fig)
+
+
+def test_the_accuracy_axis_reads_its_threshold_once():
+    """Not "gap <= 10 % (%)": the threshold as a length ratio, the unit as a share of trials."""
+    from jaxplan.experiments.run_data import metric_label
+
+    label = metric_label("accuracy")
+    assert label == "accuracy: success with length <= 1.1 x optimum (% of trials)"
+    assert "% (%)" not in label

@@ -445,3 +445,276 @@ def test_save_figure_writes_atomically(tmp_path, grid):
     assert save_figure(fig, str(out)) == [str(out)]
     assert out.read_bytes()[:4] == b"\x89PNG"
     assert [p.name for p in out.parent.iterdir()] == ["map.png"]
+
+
+# ---------------------------------------------------------------------------------------------
+# One visual language (issue 43, item 4): each rule checked on the artists
+
+
+def _episode(traj, walkers=(), radii=(), plan=None, reason="goal"):
+    """A `jaxplan.nav.Episode` from host data: poses ``[T, 3]`` (m, rad), walker centres ``[T, M, 2]``."""
+    from types import SimpleNamespace
+
+    from jaxplan.nav import Episode
+
+    tr = np.asarray(traj, np.float32)
+    T = len(tr)
+    r = np.asarray(radii, np.float32).reshape(-1)
+    pos = np.asarray(walkers, np.float32).reshape(T, r.shape[0], 2)
+    return Episode(trajectory=tr, controls=np.zeros((T - 1, 2), np.float32), times=np.arange(T) * 0.2,
+                   success=reason == "goal", reason=reason, collisions=0, time_s=(T - 1) * 0.2, metrics={},
+                   plan=np.zeros((0, 2)) if plan is None else np.asarray(plan, np.float64),
+                   waypoints=tr[[0, -1], :2], final_waypoints=tr[[0, -1], :2],
+                   obstacles=SimpleNamespace(radii=r), obstacle_positions=pos)
+
+
+def _walk(grid, T=30):
+    """A robot crossing the open map diagonally and two walkers (radii 0.3 and 0.45 m) plus a padding slot."""
+    from jaxplan.experiments import style  # noqa: F401 - the module under test is importable on its own
+
+    H, W = grid.shape
+    res = float(grid.resolution)
+    s = np.linspace(0, 1, T)
+    x = (0.5 + s * (W - 1.5)) * res
+    y = (0.5 + s * (H - 1.5)) * res
+    traj = np.stack([x, y, np.full(T, 0.6)], -1)
+    w1 = np.stack([x[::-1], np.full(T, 0.5 * res)], -1)
+    w2 = np.stack([np.full(T, (W - 0.5) * res), y], -1)
+    pad = np.full((T, 2), 1e6)
+    return _episode(traj, np.stack([w1, w2, pad], 1), [0.3, 0.45, 0.0], plan=np.array([[0, 0], [W - 1, H - 1]]))
+
+
+def _unlabelled(ax) -> list[str]:
+    """Kinds of mark (type, colour, line style or hatch) drawn on ``ax`` of which no member has a legend label:
+    every line, marker and patch must be named (one labelled member names its kind)."""
+    from matplotlib.colors import to_hex
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+    from matplotlib.spines import Spine
+
+    kinds: dict[tuple, bool] = {}
+    for a in ax.get_children():
+        if isinstance(a, Line2D) and len(a.get_xdata()):
+            key = ("line", to_hex(a.get_color()), a.get_linestyle(), a.get_marker())
+        elif isinstance(a, Patch) and not isinstance(a, Spine) and a is not ax.patch and a.get_visible():
+            key = ("patch", to_hex(a.get_facecolor()), a.get_hatch())
+        else:
+            continue
+        named = not (a.get_label() or "_").startswith("_")
+        kinds[key] = kinds.get(key, False) or named
+    return [str(k) for k, named in kinds.items() if not named]
+
+
+def _outside(legend, ax) -> bool:
+    """The legend's box and the axes' box do not overlap (in pixels, after a draw)."""
+    ax.figure.canvas.draw()
+    a, b = legend.get_window_extent(), ax.get_window_extent()
+    return a.y1 <= b.y0 or a.y0 >= b.y1 or a.x1 <= b.x0 or a.x0 >= b.x1
+
+
+def test_legend_sits_outside_even_a_tall_map_and_close_to_it():
+    from jaxplan.experiments import style
+
+    tall = jp.grid_from_array(np.ones((60, 12), bool), resolution=0.5)
+    fig, ax = plt.subplots(figsize=style.map_figsize(tall), constrained_layout=True)
+    plot_map(ax, tall)
+    plot_paths(ax, tall, [np.array([[0, 0], [5, 50]])], labels=["p"], start=[0, 0], goal=[5, 50])
+    legend = ax.get_legend()
+    assert _outside(legend, ax)
+    gap_in = (ax.get_window_extent().y0 - legend.get_window_extent().y1) / fig.dpi
+    assert 0.0 < gap_in <= style.LEGEND_GAP_IN + 0.05  # below the axis label, not a fraction of the map away
+
+
+def test_start_and_goal_markers_are_the_same_in_path_and_episode_pictures(grid):
+    """A green circle and a red star everywhere: plot_paths (plan images, experiment figures) and the episode
+    pictures (navigate --out png, the demo) draw them from one definition."""
+    from matplotlib.colors import to_rgba
+
+    from jaxplan.experiments import pictures, style
+
+    a = plot_paths(_ax(), grid, [np.array([[0, 0], [3, 3]])], start=[0, 0], goal=[3, 3])
+    b = pictures.draw_episodes(_ax(), grid, {"r": _walk(grid)}, footprint=0.25)
+    for name, want in (("start", style.START), ("goal", style.GOAL)):
+        got = [next(ln for ln in ax.lines if ln.get_label() == name) for ax in (a, b)]
+        for ln in got:
+            assert ln.get_marker() == want["marker"]
+            assert to_rgba(ln.get_markerfacecolor()) == to_rgba(want["color"])
+    assert style.START["color"] == "tab:green" and style.GOAL["color"] == "tab:red"
+    assert style.START["marker"] == "o" and style.GOAL["marker"] == "*"
+
+
+def test_walkers_are_discs_of_their_true_radius_with_dashed_paths(grid):
+    from matplotlib.colors import to_rgba
+
+    from jaxplan.experiments import pictures, style
+
+    ep = _walk(grid)
+    ax = pictures.draw_episodes(_ax(), grid, {"r": ep}, footprint=0.25)
+    discs = [p for p in ax.patches if p.get_label() == "walkers at their closest approach (to scale)"]
+    orange = to_rgba(style.WALKER["facecolor"])[:3]
+    walkers = [p for p in ax.patches if type(p).__name__ == "Circle" and p.get_facecolor()[:3] == orange]
+    assert len(discs) == 1 and sorted(p.get_radius() for p in walkers) == pytest.approx([0.3, 0.45])
+    # the padding slot (radius 0, far away) is not drawn and did not move the view
+    assert all(p.get_radius() > 0 for p in ax.patches if type(p).__name__ == "Circle")
+    assert ax.get_xlim()[1] < 100
+    paths = [ln for ln in ax.lines if ln.get_linestyle() == "--" and ln.get_color() == "tab:orange"]
+    assert len(paths) == 2 and paths[0].get_label() == "walkers' paths"
+    np.testing.assert_allclose(paths[0].get_xydata(), ep.obstacle_positions[:, 0])
+    # each disc where the walker was when the robot came closest to it
+    tr = ep.trajectory[:, :2]
+    for j, disc in zip((0, 1), sorted(walkers, key=lambda p: p.get_radius()), strict=True):
+        k = int(np.argmin(np.hypot(*(ep.obstacle_positions[:, j] - tr).T)))
+        np.testing.assert_allclose(disc.center, ep.obstacle_positions[k, j], atol=1e-6)
+    assert not _unlabelled(ax), _unlabelled(ax)
+    assert _outside(ax.get_legend(), ax)
+
+
+def test_robot_footprint_is_drawn_to_scale(grid):
+    from jaxplan.dwa import Disc, Rectangle
+    from jaxplan.experiments import style
+
+    ax = _ax()
+    disc = style.draw_footprint(ax, (1.0, 2.0, 0.3), Disc(0.35))
+    assert disc.get_radius() == pytest.approx(0.35) and tuple(disc.center) == (1.0, 2.0)
+    rect = style.draw_footprint(ax, (1.0, 2.0, np.pi / 2), Rectangle(0.8, 0.5, 3))
+    # corners in data units: 0.8 m along the heading (here +y), 0.5 m across
+    corners = (rect.get_transform() - ax.transData).transform(
+        rect.get_path().vertices[:4])
+    np.testing.assert_allclose(np.ptp(corners, axis=0), [0.5, 0.8], atol=1e-9)
+    np.testing.assert_allclose(corners.mean(axis=0), [1.0, 2.0], atol=1e-9)
+    with pytest.raises(ValueError, match="footprint must be"):
+        style.draw_footprint(ax, (0, 0), "big")
+
+
+def test_keepout_and_speed_zones_are_drawn_apart_from_walls_each_in_the_legend():
+    from jaxplan.experiments import style
+
+    free = np.ones((8, 10), bool)
+    free[0, :] = False  # a wall
+    keep = np.zeros_like(free)
+    keep[4:6, 2:5] = True  # a keep-out zone (blocked for the planners)
+    free &= ~keep
+    limit = np.ones(free.shape, np.float32)
+    limit[6:8, 6:10] = 0.5
+    limit[2, 6:8] = 0.8
+    g = jp.grid_from_array(free, resolution=0.5, speed_limit=limit)
+    fig, ax = plt.subplots()
+    plot_map(ax, g, keepout=keep)
+    legend = legend_outside(ax)
+    texts = [t.get_text() for t in legend.get_texts()]
+    assert texts == ["speed zone: 50 % of top speed", "speed zone: 80 % of top speed", "keep-out zone (Nav2 mask)",
+                     style.WALL_LABEL]
+    ko = next(p for p in ax.patches if p.get_label() == "keep-out zone (Nav2 mask)")
+    assert ko.get_hatch() and ko.get_path().contains_point((0.5 * 3.5, 0.5 * 4.5))  # cell (3, 4)'s centre
+    assert not ko.get_path().contains_point((0.5 * 0.5, 0.5 * 0.5))  # the wall is not keep-out
+    # the walls' image leaves keep-out cells to the hatch: they do not read as walls
+    walls = next(im for im in ax.images if im.get_label() == "blocked").get_array()
+    assert walls.mask[4, 3] and not walls.mask[0, 3]
+    # a map without zones keeps its plain legend (no wall entry)
+    ax2 = _ax()
+    plot_map(ax2, jp.grid_from_array(free, resolution=0.5))
+    assert ax2.get_legend_handles_labels()[1] == []
+
+
+def test_keepout_mask_of_a_ros_map_is_the_cells_the_mask_blocked(ros):
+    from jaxplan.experiments import style
+
+    opts = {"keepout": str(ros / "warehouse_keepout.yaml")}
+    masked = jp.load_map(ros / "warehouse.yaml", resolution=0.3, **opts)
+    bare = jp.load_map(ros / "warehouse.yaml", resolution=0.3)
+    keep = style.keepout_mask(ros / "warehouse.yaml", masked, opts)
+    np.testing.assert_array_equal(keep, np.asarray(bare.free) & ~np.asarray(masked.free))
+    assert keep.any() and not (keep & ~np.asarray(bare.free)).any()
+    assert style.keepout_mask(ros / "warehouse.yaml", masked, {}) is None
+
+
+def test_a_ros_map_is_drawn_in_its_world_frame_y_up():
+    g = jp.grid_from_array(np.ones((4, 6), bool), resolution=0.5, origin=(-1.0, -2.0))
+    ax = plot_map(_ax(), g, y_up=True)
+    assert ax.get_ylim() == (-2.0, 0.0) and ax.get_xlim() == (-1.0, 2.0)  # y grows upwards
+    assert ax.get_xlabel() == "x (m, map frame)" and ax.get_ylabel() == "y (m, map frame)"
+    assert plot_map(_ax(), g).get_ylim() == (0.0, -2.0)  # MovingAI convention: row 0 at the top
+
+
+def test_gif_layout_rule():
+    from jaxplan.experiments import style
+
+    # a small map: enlarged to FIT_PX on its longer side, shown whole, its aspect kept
+    lay = style.gif_layout((20.0, 10.0), 0.5)
+    assert not lay.cropped and lay.view_px == (style.FIT_PX, style.FIT_PX // 2)
+    assert lay.robot_px >= style.MIN_ROBOT_PX
+    # the demo's 48 x 32 m warehouse: the robot sets the scale, the map still fits whole
+    lay = style.gif_layout((48.0, 32.0), 0.5)
+    assert not lay.cropped and lay.robot_px == pytest.approx(style.MIN_ROBOT_PX)
+    assert lay.view_px[0] / lay.view_px[1] == pytest.approx(48 / 32, rel=0.01)
+    # MovingAI's warehouse-10-20-10-2-1 (161 x 63 m): whole, the robot would be 2 px; a window follows it
+    lay = style.gif_layout((161.0, 63.0), 0.5)
+    assert lay.cropped and lay.robot_px == pytest.approx(style.MIN_ROBOT_PX)
+    assert lay.view_px == style.WINDOW_PX
+    with pytest.raises(ValueError, match="robot size must be positive"):
+        style.gif_layout((10.0, 10.0), 0.0)
+    assert style.follow_window((1.0, 1.0), (4.0, 2.0), (0.0, 10.0, 0.0, 5.0)) == (0.0, 4.0, 0.0, 2.0)
+    assert style.follow_window((9.5, 3.0), (4.0, 2.0), (0.0, 10.0, 0.0, 5.0)) == (6.0, 10.0, 2.0, 4.0)
+
+
+@pytest.mark.parametrize("shape", [(10, 20), (63, 161)])
+def test_gif_frames_keep_the_maps_aspect_the_robots_size_and_a_time_stamp(tmp_path, shape):
+    from PIL import Image
+
+    from jaxplan.experiments import pictures, style
+
+    g = jp.grid_from_array(np.ones(shape, bool), resolution=1.0)
+    ep = _walk(g, T=12)
+    fig, draw, lay = pictures.gif_figure({"r": ep}, g, footprint=0.25)
+    ax = fig.axes[0]
+    draw(6)
+    fig.canvas.draw()
+    box = ax.get_window_extent()
+    x0, x1 = ax.get_xlim()
+    y0, y1 = sorted(ax.get_ylim())
+    assert box.width / box.height == pytest.approx((x1 - x0) / (y1 - y0), rel=0.01)  # metres are square
+    if shape == (10, 20):
+        assert not lay.cropped and (x1 - x0, y1 - y0) == (20.0, 10.0)  # the whole map, its aspect
+    else:
+        assert lay.cropped and (x1 - x0) < 161 and len(fig.axes) == 2  # a window, and the overview
+        assert x0 <= ep.trajectory[6, 0] <= x1 and y0 <= ep.trajectory[6, 1] <= y1  # around the robot
+    robot = next(p for p in ax.patches if (p.get_label() or "").startswith("robot"))
+    assert robot.get_window_extent().width >= style.MIN_ROBOT_PX - 0.5
+    assert ax.get_title(loc="left").startswith(f"t = {6 * 0.2:6.1f} s")
+    assert _outside(fig.legends[0], ax)
+    size = tuple(int(round(v)) for v in fig.get_size_inches() * style.GIF_DPI)
+    plt.close(fig)
+    out = pictures.animate_episodes({"r": ep}, g, tmp_path / "e.gif", frames=3, footprint=0.25)
+    with Image.open(out[0]) as im:
+        assert im.size == size and im.n_frames == 3
+
+
+def test_navigate_png_shows_trajectory_start_goal_and_walkers(tmp_path, grid):
+    from jaxplan.experiments import pictures
+    from jaxplan.experiments.outputs import write_episode
+
+    ep = _walk(grid)
+    out = write_episode(tmp_path / "e.png", ep, grid, {"map": "m.map", "pipeline": "iaco_dwa"}, footprint=0.25)
+    assert out.read_bytes()[:4] == b"\x89PNG"
+    fig = pictures.episode_figure(grid, {"iaco_dwa": ep}, footprint=0.25)
+    ax = fig.axes[0]
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    for want in ("global plan", "executed: iaco_dwa (goal)", "robot at the end (footprint to scale)",
+                 "walkers' paths", "walkers at their closest approach (to scale)", "start", "goal"):
+        assert want in texts, texts
+    assert _outside(ax.get_legend(), ax)
+    plt.close(fig)
+
+
+def test_several_robots_never_take_the_walkers_or_the_start_and_goal_colours(grid):
+    from matplotlib.colors import to_rgba
+
+    from jaxplan.experiments import pictures, style
+
+    eps = {f"r{k}": _walk(grid) for k in range(len(style.ROBOTS))}
+    ax = pictures.draw_episodes(_ax(), grid, eps, footprint=0.25)
+    taken = {to_rgba(c) for c in (style.WALKER["facecolor"], style.START["color"], style.GOAL["color"])}
+    robots = [ln for ln in ax.lines if ln.get_label().startswith("executed: ")]
+    assert len({to_rgba(ln.get_color()) for ln in robots}) == len(eps)  # one colour each
+    assert not {to_rgba(ln.get_color()) for ln in robots} & taken
+    assert "robot at a walker's closest approach (r0)" in ax.get_legend_handles_labels()[1]

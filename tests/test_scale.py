@@ -206,6 +206,41 @@ def test_memory_guard_refuses_with_the_largest_batch_that_fits(monkeypatch):
     check_memory(est(1), "one run", limit=2**40)  # fits: no error
 
 
+def test_a_single_run_too_large_names_the_largest_ant_count_and_a_higher_limit(monkeypatch):
+    """One run of 10^7 ants cannot be split: the refusal names the largest ant count that fits (it fits, one more
+    does not), never "split the batch", and a JAXPLAN_MEMORY_LIMIT above the current one."""
+    import re
+
+    from jaxplan.aco import plan_memory
+    from jaxplan.scale._memory import _parse_bytes
+
+    scene = jp.RandomMapGenerator(20, 20, 0.1)(0)
+    monkeypatch.setenv("JAXPLAN_MEMORY_LIMIT", "1G")
+    with pytest.raises(MemoryLimitError) as err:
+        jp.plan_batch(scene.grid, [scene.start], [scene.goal], planner="iaco", seeds=[0], ants=10_000_000)
+    msg = str(err.value)
+    assert "split" not in msg.lower().replace("cannot be split", "") and "at most 0 runs" in msg
+    ants = int(re.search(r"use at most (\d+) ants \(now 10000000\)", msg, re.I).group(1))
+    assert plan_memory(scene.grid, "iaco", 1, ants=ants).total <= 2**30 < plan_memory(scene.grid, "iaco", 1,
+                                                                                        ants=ants + 1).total
+    suggested = _parse_bytes(re.search(r"JAXPLAN_MEMORY_LIMIT=(\S+)", msg).group(1))
+    assert suggested > 2**30 and suggested >= plan_memory(scene.grid, "iaco", 1, ants=10_000_000).total
+
+
+def test_a_batch_too_large_keeps_the_batch_advice_and_adds_the_ant_count():
+    """When some runs fit, splitting the batch is advice; the ants that fit with every run are named too."""
+    from jaxplan.scale import Knob
+
+    est = lambda ants: aco_memory(400, 8, 64, 1, ants, 100, 10)  # noqa: E731
+    limit = est(32).total  # the 64 runs fit with 32 ants, not with 64
+    with pytest.raises(MemoryLimitError) as err:
+        check_memory(est(64), "x", limit=limit, advice="Plan fewer scenarios", knob=Knob("ants", 64, est))
+    msg = str(err.value)
+    fits = est(64).largest_batch(limit)
+    assert 1 <= fits < 64 and f"at most {fits} runs fit. Plan fewer scenarios; or use at most 32 ants (now 64) " \
+        "with all 64 runs." in msg
+
+
 @pytest.mark.slow  # 18-38 s each on 2 cores; the suite must stay well under CI's 20 minutes
 def test_memory_estimate_bounds_the_measured_peak():
     """The estimate is an upper bound of a run's peak RSS rise, and not wildly pessimistic (< 3x)."""
@@ -263,9 +298,10 @@ def test_host_shares_cover_the_batch_and_shards_merge(tmp_path):
 
 
 def test_importing_jaxplan_leaves_jax_as_the_user_had_it():
-    """``import jaxplan`` and a small `jp.plan` (an ant colony: JAX runs) change no ``jax.config`` value and leave
-    the device count at JAX's own default; the opt-in is explicit, and too late is a clear error."""
-    out = _child("""
+    """``import jaxplan`` and a small `jp.plan` (an ant colony: JAX runs) change no ``jax.config`` value but the
+    persistent compilation cache's (on by default at first use; ``JAXPLAN_CACHE=off`` leaves even those) and
+    leave the device count at JAX's own default; the opt-in is explicit, and too late is a clear error."""
+    code = """
         import json
         import jax
         before = dict(jax.config.values)
@@ -280,12 +316,22 @@ def test_importing_jaxplan_leaves_jax_as_the_user_had_it():
             late = str(e)
         print(json.dumps({"changed": changed, "devices": jax.device_count(), "success": bool(res.success),
                           "late": late, "same": jp.use_host_devices(jax.device_count())}))
-        """, devices=None)
+        """
+    out = _child(code, devices=None)
+    os.environ["JAXPLAN_CACHE"], saved = "off", os.environ.get("JAXPLAN_CACHE")
+    try:
+        off = _child(code, devices=None)
+    finally:
+        if saved is None:
+            del os.environ["JAXPLAN_CACHE"]
+        else:
+            os.environ["JAXPLAN_CACHE"] = saved
     plain = _child("""
         import json, jax
         print(json.dumps({"devices": jax.device_count()}))
         """, devices=None)
-    assert out["changed"] == [] and out["success"]
+    assert set(out["changed"]) <= {"jax_compilation_cache_dir", "jax_persistent_cache_min_compile_time_secs"}
+    assert off["changed"] == [] and out["success"] and off["success"]
     assert out["devices"] == plain["devices"]
     assert "too late" in out["late"] and "before any JAX computation" in out["late"]
     assert out["same"] == out["devices"]  # asking for the count in effect is no error

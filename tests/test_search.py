@@ -154,7 +154,12 @@ def test_vehicle_height_changes_the_route():
         (dict(start=(0, 0), goal=(0, 1), vehicle_height=float("nan")), "NaN"),
         (dict(start=(0, 0), goal=(0, 1), vehicle_height=-1.0), "vehicle_height must be"),
         (dict(start=(0, 0), goal=(0, 1), ants=5), "planner 'astar' has no parameter"),
-        (dict(start=(0, 0), goal=(0, 1), planner="nope"), "unknown planner 'nope'"),
+        (dict(start=(0, 0), goal=(0, 1), planner="nope"), r"unknown planner 'nope' \(registered: "),
+        # did-you-mean, as on the command line: a case slip and a missing letter find the real names
+        (dict(start=(0, 0), goal=(0, 1), planner="IACO"), r"unknown planner 'IACO'; did you mean 'iaco'\?"),
+        (dict(start=(0, 0), goal=(0, 1), planner="iaco", iteration=10),
+         r"no parameter\(s\) 'iteration'; did you mean 'iterations'\?"),
+        (dict(start=(0, 0), goal=(0, 1), connectivty=4), r"'connectivty'; did you mean 'connectivity'\?"),
     ],
 )
 def test_bad_input_names_the_problem(kwargs, error):
@@ -162,6 +167,17 @@ def test_bad_input_names_the_problem(kwargs, error):
     kwargs = dict(kwargs)
     with pytest.raises(ValueError, match=error):
         jp.plan(g, kwargs.pop("start"), kwargs.pop("goal"), **kwargs)
+
+
+def test_did_you_mean_is_one_helper_for_every_layer():
+    """The Python API, the configs and the command line share `jaxplan.core.names.did_you_mean`."""
+    from jaxplan.core.names import closest, did_you_mean
+    from jaxplan.experiments import schema
+
+    assert schema.did_you_mean is did_you_mean
+    assert closest("IACO", ["aco", "iaco"]) == "iaco" and closest("Iteration", ["ants", "iterations"]) == "iterations"
+    assert closest("zzz", ["aco", "iaco"]) is None and did_you_mean("zzz", ["aco"]) == ""
+    assert did_you_mean("iaco-dwa", ["iaco_dwa", "aco_dwa"]) == "; did you mean 'iaco_dwa'?"
 
 
 def test_shortest_lengths_bad_rows_are_named():

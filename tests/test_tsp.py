@@ -295,7 +295,7 @@ def test_construction_samples_the_pheromone_distribution():
 
 
 @pytest.mark.parametrize("overrides, match", [
-    ({"antz": 5}, r"unknown parameter\(s\) \['antz'\]; accepted: \['alpha', 'ants', 'beta'"),
+    ({"antz": 5}, r"unknown parameter\(s\) 'antz'; did you mean 'ants'\? \(accepted: alpha, ants, beta"),
     ({"q": 1.0}, "unknown parameter.*'q'"),  # praco has no Q
     ({"ants": 0}, "ants must be a positive integer"),
     ({"colonies": 2.5}, "colonies must be a positive integer"),
@@ -314,8 +314,10 @@ def test_bad_overrides(eil51, overrides, match):
 
 
 def test_bad_planner_seed_and_problem(eil51):
-    with pytest.raises(ValueError, match=r"unknown TSP planner 'acs'; accepted: \('aco', 'praco'\)"):
+    with pytest.raises(ValueError, match=r"unknown TSP planner 'acs'; did you mean 'aco'\? \(accepted: aco, praco\)"):
         solve_tsp(eil51, "acs")
+    with pytest.raises(ValueError, match=r"'iteration'; did you mean 'iterations'\?"):
+        solve_tsp(eil51, "aco", iteration=3)
     with pytest.raises(ValueError, match="seed"):
         solve_tsp(eil51, "aco", seed=-1)
     with pytest.raises(ValueError, match="n >= 3"):

@@ -351,6 +351,42 @@ def test_run_tuning_writes_log_checkpoints_fragment_and_figure(tmp_path):
     assert json.loads((run / "summary.json").read_text())["resumed_from_generation"] == 3
 
 
+def test_best_toml_of_a_quick_run_keeps_the_configs_own_settings(tmp_path, monkeypatch):
+    """`jaxplan tune --quick` searches with its smoke settings (ants = 2, iterations = 1), but best.toml is an entry
+    to run with: the tuned weights and the config's own ants = 4, iterations = 2, and a comment saying so. The
+    search itself is replaced by a stub (the workflow around it is what is tested)."""
+    import jaxplan.tune._workflow as wf
+
+    seen = {}
+    build = wf.build_objective
+
+    def built(c):
+        seen["overrides"] = dict(c.overrides)  # what the quick search ran with
+        return build(c)
+
+    def search(objective, strategy, generations, run_dir, **kw):
+        x = np.asarray(objective.defaults, np.float32)
+        return {"best_x": x, "best_f": 0.5, "evaluations": 2, "resumed_from": 0, "n_bad": 0, "rows": []}
+
+    side = {"objective": 0.5, "seed_sd": 0.1}
+    monkeypatch.setattr(wf, "build_objective", built)
+    monkeypatch.setattr(wf, "tune_loop", search)
+    monkeypatch.setattr(wf, "compare", lambda *a, **k: {"defaults": side, "tuned": side, "improvement": 0.0})
+    monkeypatch.setattr(wf, "plot_tuning", lambda *a, **k: [])
+    cfg = tmp_path / "t.toml"
+    cfg.write_text(CONFIG.replace("[tune.space]", "[tune.quick]\npopulation = 2\ngenerations = 1\n"
+                                  "overrides = { ants = 2, iterations = 1 }\n[tune.space]"))
+    run = run_tuning(cfg, out=tmp_path / "runs", quick=True, progress=False)
+    assert run.name == "t-quick"
+    assert seen["overrides"]["ants"] == 2 and seen["overrides"]["iterations"] == 1
+    text = (run / "best.toml").read_text()
+    exp = parse_config('[experiment]\nname = "x"\nseeds = 1\n[[maps]]\ngenerator = "random"\n'
+                       'scenarios = { source = "random", count = 1 }\n' + text)
+    ov = exp.planners[0].overrides
+    assert ov["ants"] == 4 and ov["iterations"] == 2 and len(ov["lambdas"]) == 3 and "beta" in ov
+    assert "a quick (smoke) run: the search ran with { ants = 2, iterations = 1 }" in text
+
+
 @pytest.mark.parametrize("edit, match", [
     (("beta = [1.0, 10.0]", "beta = [10.0, 1.0]"), "tune.space.beta: need low < high"),
     (("beta = [1.0, 10.0]", "beta = [1.0, nan]"), "tune.space.beta: bounds must be finite"),

@@ -1,10 +1,11 @@
 """The papers' ACO planners as presets of the colony engine, and the batch entry point.
 
-Defaults are the papers' values (DESIGN §4). Where a paper is silent jaxplan chooses,
+Defaults are the papers' values. Where a paper is silent jaxplan chooses,
 and says so here:
-  * ``dead_end``: ``"die"`` for plain ``aco`` (Ant System), ``"retreat"`` for ``iaco``
-    and ``risk_aco`` (cui2025/chen2023 do not say; with dying ants rooms and mazes fail
-    a share of scenarios, DESIGN §4), ``"alert"`` for ``opt_ant`` (chu2024; the ant steps
+  * ``dead_end``: ``"retreat"`` for ``aco`` (Ant System), ``iaco`` and ``risk_aco`` (the papers
+    do not say; with dying ants half of room-64-64-8's runs fail, docs/decisions.md, so a
+    baseline that dies would lose comparisons for a reason that is not its rule; ``"die"`` is
+    still there to ask for), ``"alert"`` for ``opt_ant`` (chu2024; the ant steps
     back and the dead end becomes a pseudo-obstacle of the run),
     ``"retreat"`` with the edge penalty for ``praco`` (yu2020).
   * τ0 = 1 where a paper gives no initial pheromone (``aco``, ``iaco``, ``praco``);
@@ -27,6 +28,7 @@ and says so here:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from typing import Any, Mapping, NamedTuple
@@ -50,6 +52,7 @@ from jaxplan.registry import register_planner, resolve
 from jaxplan.result import PlanResult
 from jaxplan.scale import (
     BATCH_AXIS,
+    Knob,
     MemoryEstimate,
     aco_memory,
     auto_mesh,
@@ -79,7 +82,7 @@ _COMMON = {"ants": 50, "iterations": 50, "alpha": 1.0, "beta": 7.0, "connectivit
            "walk_backend": "auto", "update_backend": "auto"}
 
 _DEFAULTS: dict[str, dict[str, Any]] = {
-    "aco": {**_COMMON, "dead_end": "die", "rho": 0.3, "q": 100.0, "tau0": 1.0},
+    "aco": {**_COMMON, "rho": 0.3, "q": 100.0, "tau0": 1.0},  # dead_end "retreat" since issue 43 (was "die")
     "iaco": {**_COMMON, "rho": 0.3, "q": 100.0, "tau0": 1.0, "lambdas": (0.5, 0.3, 0.2), "delta": 0.7},
     "risk_aco": {**_COMMON, "ants": 100, "beta": 8.0, "rho": 0.3, "q": 110.0, "u": 100.0, "v": 1.0, "w": 100.0,
                  "f0": 1.0},
@@ -361,6 +364,12 @@ def _colony_memory(name: str, grid: GridMap, cfg: RunConfig, connectivity: int, 
                       objective_variants=variants)
 
 
+def _ants_knob(name: str, grid: GridMap, cfg: RunConfig, connectivity: int, runs: int) -> Knob:
+    """The ant count as a refusal's knob: the largest ``ants`` that fits is the advice when one run does not."""
+    return Knob("ants" if cfg.colonies == 1 else "ants per colony", cfg.ants,
+                lambda n: _colony_memory(name, grid, dataclasses.replace(cfg, ants=n), connectivity, runs))
+
+
 def _colony_what(name: str, grid: GridMap, cfg: RunConfig) -> str:
     return f"planner {name!r} with {cfg.colonies * cfg.ants} ants on a {grid.shape[0]}x{grid.shape[1]} map"
 
@@ -395,7 +404,9 @@ def _run_colony(name: str, grid: GridMap, starts: np.ndarray, goals: np.ndarray,
     # Refuse a batch that cannot fit before anything of it is allocated (on a mesh, per device).
     devices = 1 if mesh is None else mesh.devices.size
     check_memory(_colony_memory(name, grid, cfg, connectivity, runs // devices), _colony_what(name, grid, cfg),
-                 unit="runs (scenarios x seeds)" + (" per device" if devices > 1 else ""))
+                 unit="runs (scenarios x seeds)" + (" per device" if devices > 1 else ""),
+                 advice="Plan fewer scenarios or seeds per call",
+                 knob=_ants_knob(name, grid, cfg, connectivity, runs // devices))
     tables = cached_map_tables(grid, connectivity, vh)
     keys = seed_keys(seeds)
     gt = goal_tables(grid, starts, goals, connectivity, vh, geodesic=cfg.heuristic == "geodesic",

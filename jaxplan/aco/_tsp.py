@@ -57,7 +57,8 @@ from jaxplan.aco import _rules as R
 from jaxplan.aco._tsplib import TSPProblem, tour_length
 from jaxplan.aco._walk import hash_uniform
 from jaxplan.core.cache import Built, memoize
-from jaxplan.scale import BATCH_AXIS, auto_mesh, batch_mesh, check_memory, tsp_memory
+from jaxplan.core.names import did_you_mean
+from jaxplan.scale import BATCH_AXIS, Knob, auto_mesh, batch_mesh, check_memory, tsp_memory
 
 __all__ = ["TSP_MIN_ANTS_PER_DEVICE", "TSP_PLANNERS", "TSP_STATIC_PARAMS", "TSPConfig", "TSPOutput", "TourResult",
            "candidate_lists", "resolve_tsp", "run_tsp", "solve_tsp", "tsp_config", "tsp_defaults"]
@@ -81,7 +82,8 @@ _LOCAL_SEARCH = (None, "2opt")
 def tsp_defaults(planner: str) -> dict[str, Any]:
     """A copy of the defaults of TSP planner ``planner`` (``"aco"`` or ``"praco"``)."""
     if planner not in _DEFAULTS:
-        raise ValueError(f"unknown TSP planner {planner!r}; accepted: {tuple(_DEFAULTS)}")
+        raise ValueError(f"unknown TSP planner {planner!r}{did_you_mean(str(planner), _DEFAULTS)} "
+                         f"(accepted: {', '.join(_DEFAULTS)})")
     return dict(_DEFAULTS[planner])
 
 
@@ -388,7 +390,8 @@ def resolve_tsp(planner: str, overrides: dict[str, Any]) -> dict[str, Any]:
     p = tsp_defaults(planner)
     unknown = sorted(set(overrides) - set(p))
     if unknown:
-        raise ValueError(f"TSP planner {planner!r}: unknown parameter(s) {unknown}; accepted: {sorted(p)}")
+        named = "; ".join(f"{k!r}{did_you_mean(str(k), p)}" for k in unknown)
+        raise ValueError(f"TSP planner {planner!r}: unknown parameter(s) {named} (accepted: {', '.join(sorted(p))})")
     p.update(overrides)
     for k in ("colonies", "ants", "iterations"):
         if k in p and (not isinstance(p[k], (int, np.integer)) or isinstance(p[k], bool) or p[k] < 1):
@@ -467,7 +470,8 @@ def solve_tsp(problem: TSPProblem, planner: str = "praco", seed: int = 0, *, mes
         evenly over, or a distance matrix that is not a finite, non-negative ``[n, n]`` array with n >= 3.
     """
     if planner not in TSP_PLANNERS:
-        raise ValueError(f"unknown TSP planner {planner!r}; accepted: {tuple(TSP_PLANNERS)}")
+        raise ValueError(f"unknown TSP planner {planner!r}{did_you_mean(str(planner), TSP_PLANNERS)} "
+                         f"(accepted: {', '.join(TSP_PLANNERS)})")
     p = resolve_tsp(planner, overrides)
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or not 0 <= seed < 2**32:
         raise ValueError(f"seed must be an integer in [0, 2**32), got {seed!r}")
@@ -478,9 +482,10 @@ def solve_tsp(problem: TSPProblem, planner: str = "praco", seed: int = 0, *, mes
         raise ValueError("problem.dist must hold finite, non-negative distances")
     cfg = tsp_config(planner, p, d.shape[0])
     mesh = _ant_mesh(mesh, cfg.colonies * cfg.ants)
-    check_memory(tsp_memory(d.shape[0], cfg.colonies, cfg.ants, cfg.iterations, 1,
-                            local_search=cfg.local_search == "2opt"),
-                 f"TSP planner {planner!r} with {cfg.colonies * cfg.ants} ants on {d.shape[0]} cities", unit="runs")
+    est = lambda ants: tsp_memory(d.shape[0], cfg.colonies, ants, cfg.iterations, 1,  # noqa: E731
+                                  local_search=cfg.local_search == "2opt")
+    check_memory(est(cfg.ants), f"TSP planner {planner!r} with {cfg.colonies * cfg.ants} ants on {d.shape[0]} cities",
+                 unit="runs", knob=Knob("ants" if cfg.colonies == 1 else "ants per colony", cfg.ants, est))
     params = {k: jnp.asarray(v, jnp.float32) for k, v in p.items() if k not in TSP_STATIC_PARAMS}
     dist = jnp.asarray(d, jnp.float32)
     key = jax.random.key(int(seed))

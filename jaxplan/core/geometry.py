@@ -26,6 +26,10 @@ import jax.numpy as jnp
 import numpy as np
 from numba import njit
 
+from jaxplan.core.compile_cache import on_first_use
+
+on_first_use()  # jaxplan's cache folders, before numba fixes the cache folder of the kernels below
+
 __all__ = [
     "point_square_distance", "point_segment_distance", "segment_square_distance",
     "point_square_distance_np", "point_segment_distance_np", "segment_square_distance_np",

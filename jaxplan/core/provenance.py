@@ -20,8 +20,8 @@ import subprocess
 from pathlib import Path
 from typing import Any
 
-__all__ = ["GENERATED", "PACKAGES", "provenance", "git_revision", "cpu_info", "machine_line", "package_versions", "ram_gb",
-           "usable_cores"]
+__all__ = ["GENERATED", "PACKAGES", "provenance", "git_revision", "cpu_info", "machine_line", "package_versions",
+           "ram_gb", "usable_cores"]
 
 PACKAGES = ("jaxplan", "jax", "jaxlib", "numpy", "scipy", "numba")
 """The distributions whose versions a record names."""

@@ -13,13 +13,16 @@ the run folder is touched, `check_experiment` estimates:
 
 Each is checked against `jaxplan.scale.memory_limit` (``$JAXPLAN_MEMORY_LIMIT``, default 80 % of the
 available memory) by `jaxplan.scale.check_memory`; a refusal is a `jaxplan.scale.MemoryLimitError`
-naming the chunk, the largest number of runs that fits, and the knobs (``--chunk``, the seeds).
+naming the chunk, the largest number of runs that fits, and the knobs (``--chunk``, the largest seed count, and
+when a colony's single run does not fit, the largest ant count).
 """
 
 from __future__ import annotations
 
+from typing import Any, Mapping
+
 from jaxplan.experiments.prepare import Prepared, trial_columns
-from jaxplan.scale import MemoryEstimate, check_memory, episode_memory, memory_limit, table_memory, tsp_memory
+from jaxplan.scale import Knob, MemoryEstimate, check_memory, episode_memory, memory_limit, table_memory, tsp_memory
 
 __all__ = ["check_experiment", "chunk_memory", "TRIAL_BYTES"]
 
@@ -51,8 +54,9 @@ def _chunk_scenarios(prep: Prepared, m: int, p: int) -> int:
     return cfg.chunk if padded else min(cfg.chunk, len(prep.maps[m].starts))
 
 
-def chunk_memory(prep: Prepared, m: int, p: int) -> MemoryEstimate:
-    """Estimated working memory (bytes) of one chunk of planner ``p`` on map (or instance) ``m``."""
+def chunk_memory(prep: Prepared, m: int, p: int, extra: Mapping[str, Any] | None = None) -> MemoryEstimate:
+    """Estimated working memory (bytes) of one chunk of planner ``p`` on map (or instance) ``m`` (with its
+    overrides and ``extra`` ones on top: a refusal's "what if fewer ants")."""
     from jaxplan.aco import COLONIES, plan_memory
 
     cfg = prep.config
@@ -61,13 +65,13 @@ def chunk_memory(prep: Prepared, m: int, p: int) -> MemoryEstimate:
     if pc.kind == "tsp":
         from jaxplan.aco import resolve_tsp
 
-        q = resolve_tsp(pc.name, _overrides(pc))
+        q = resolve_tsp(pc.name, {**_overrides(pc), **(extra or {})})
         return tsp_memory(int(mw.problem.n), int(q.get("colonies", 1)), int(q["ants"]), int(q["iterations"]), R,
                           local_search=q["local_search"] == "2opt")
     runs = _chunk_scenarios(prep, m, p) * R
     if pc.kind == "navigate" and pc.team is not None:
         runs *= int(pc.team.robots)  # a team trial is N robot episodes (and N global plans)
-    ov = _overrides(pc)
+    ov = {**_overrides(pc), **(extra or {})}
     if pc.kind == "plan":
         est = plan_memory(mw.grid, pc.name, runs, **ov)
         host = runs * _path_cells(mw.grid, ov) * _METRIC_BYTES if pc.name in COLONIES else 0
@@ -83,6 +87,21 @@ def chunk_memory(prep: Prepared, m: int, p: int) -> MemoryEstimate:
     parts = {**ep.parts, **({"global plans": plans.total} if plans is not None else {})}
     total = ep.total + (plans.total if plans is not None else 0)
     return MemoryEstimate(total, parts, runs, ep.per_run + (plans.per_run if plans is not None else 0))
+
+
+def _ants_knob(prep: Prepared, m: int, p: int) -> Knob | None:
+    """A colony chunk's ant count as the refusal's knob (None for a planner without ants, and navigation)."""
+    from jaxplan.aco import COLONIES, resolve_tsp
+    from jaxplan.registry import resolve
+
+    pc = prep.config.planners[p]
+    if pc.kind == "tsp":
+        ants = resolve_tsp(pc.name, _overrides(pc))["ants"]
+    elif pc.kind == "plan" and pc.name in COLONIES:
+        ants = resolve(pc.name, _overrides(pc))[1]["ants"]
+    else:
+        return None
+    return Knob("ants", int(ants), lambda n: chunk_memory(prep, m, p, {"ants": n}))
 
 
 def check_experiment(prep: Prepared, limit: int | None = None) -> None:
@@ -106,8 +125,11 @@ def check_experiment(prep: Prepared, limit: int | None = None) -> None:
         fits = est.largest_batch(limit)
         advice = (f"With {R} seeds at most {fits // R} scenarios per chunk fit: lower --chunk (now {cfg.chunk})"
                   if pc.kind != "tsp" and fits >= R else
-                  f"Use fewer seeds (now {R}; a chunk runs them all at once), ants or iterations")
-        check_memory(est, what, limit=limit, unit="runs (scenarios x seeds)", advice=advice)
+                  f"Use at most {fits} seeds (now {R}; a chunk runs every seed at once)"
+                  + (" with --chunk 1" if pc.kind != "tsp" else ""))
+        check_memory(est, what, limit=limit, unit="runs (scenarios x seeds)", advice=advice,
+                     knob=_ants_knob(prep, u.m, u.p),
+                     single="Use fewer samples or steps of the local planner" if pc.kind == "navigate" else "")
     trials = prep.trials
     per = TRIAL_BYTES + _COLUMN_BYTES * len(trial_columns(cfg))
     check_memory(table_memory(trials, {"trials.csv and its statistics": per}),

@@ -35,7 +35,7 @@ from jaxplan.experiments.evidence import Evidence, family_sites, paired_units, u
 from jaxplan.experiments.verdicts import DIRECTIONS, Margin, judge_contrast, judge_trend, parse_margin
 
 __all__ = ["CLAIM_TESTS", "CLAIM_VERDICTS", "Claim", "Claims", "ClaimResult", "load_claims", "check_claims",
-           "evaluate_claim", "absolute_verdict"]
+           "evaluate_claim", "absolute_verdict", "units_label"]
 
 CLAIM_TESTS = ("contrast", "trend", "absolute", "not_testable")
 CLAIM_VERDICTS = ("reproduced", "not reproduced", "opposite", "inconclusive", "not testable")
@@ -272,7 +272,7 @@ def evaluate_claim(c: Claim, ev: Evidence | None, claims: Claims, *, alpha: floa
             base = float(np.nanmean(b)) if np.isfinite(b).any() else math.nan
             v = judge_contrast(a, b, paired=True, direction=c.direction, margin=_abs(margin, base), alpha=alpha)
             test = _describe(ev, fams, f"contrast {c.proposed} − {c.baseline}, paired")
-        unit = " + ".join(dict.fromkeys(unit_name(ev, f) for f in fams))
+        unit = units_label(ev, fams)
         return ClaimResult(c, v.verdict, v.rule, test, v.effect, v.interval, v.relative, v.n, unit)
     # trend
     xs, ys = [], []
@@ -294,9 +294,17 @@ def evaluate_claim(c: Claim, ev: Evidence | None, claims: Claims, *, alpha: floa
     ok = np.isfinite(ys)
     base = float(np.mean(ys[ok])) if ok.any() else math.nan
     v = judge_trend(xs[ok], ys[ok], direction=c.direction, margin=_abs(margin, base), alpha=alpha)
-    unit = " + ".join(dict.fromkeys(unit_name(ev, f) for f in fams))
+    unit = units_label(ev, fams)
     return ClaimResult(c, v.verdict, v.rule, f"{what}; {len(ev.config.seeds)} seeds", v.effect, v.interval,
                        v.relative, v.n, unit)
+
+
+def units_label(ev: Evidence, fams: Sequence[str]) -> str:
+    """What the units of a claim over ``fams`` are: seeds or map draws of one map, (map, seed) means of several."""
+    kinds = list(dict.fromkeys(unit_name(ev, f) for f in dict.fromkeys(fams)))
+    if len(set(fams)) > 1 and kinds == ["seeds"]:
+        return "map × seed means"
+    return " + ".join(kinds)
 
 
 def _abs(margin: Margin | None, reference: float) -> float:

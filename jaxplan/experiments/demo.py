@@ -4,7 +4,10 @@ Both pipelines drive the same robot from the same start to the same goal on the 
 48x32 warehouse (`jaxplan.demo_warehouse`) among the same moving discs (random routes
 that keep clear of the start and goal). The table compares the episodes; ``demo.png``
 shows the executed trajectories over their global paths and the speed profiles, and
-``demo.gif`` animates both robots with the discs (matplotlib's pillow writer).
+``demo.gif`` animates both robots with the discs (matplotlib's pillow writer). Both go to
+``runs/demo/`` by default, a folder git ignores: a clone stays clean after its first command. The
+committed ``figures/demo.png`` and ``demo.gif`` are regenerated on purpose with
+``jaxplan demo --out-dir figures``.
 
 Speed. Each pipeline compiles its global planner and its episode program once (most of
 the demo's time); the settings below keep the demo short on a small CPU, the first run
@@ -33,7 +36,6 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from jaxplan.core.io import atomic_path
 from jaxplan.core.progress import ProgressBar
 from jaxplan.experiments import plots
 from jaxplan.experiments.tables import text_table
@@ -120,26 +122,17 @@ def demo_table(result: DemoResult) -> str:
                   "moving discs (same start, goal, discs and seed)")
 
 
-def _figure(result: DemoResult, grid, path: Path) -> list[str]:
-    fig, (a, b) = plt.subplots(1, 2, figsize=(13, 4.8), gridspec_kw={"width_ratios": [1.6, 1]},
+def _figure(result: DemoResult, grid, path: Path, footprint: Any = None) -> list[str]:
+    from jaxplan.experiments.pictures import draw_episodes
+    from jaxplan.experiments.style import robot_colour
+
+    fig, (a, b) = plt.subplots(1, 2, figsize=(13, 5.4), gridspec_kw={"width_ratios": [1.6, 1]},
                                constrained_layout=True)
-    plots.plot_map(a, grid, title="executed trajectories (solid) over global paths (dashed)")
+    draw_episodes(a, grid, result.episodes, footprint=footprint,
+                  title="executed trajectories (solid) over global paths (dashed)")
     for k, (name, ep) in enumerate(result.episodes.items()):
-        c = f"C{k}"
-        if len(ep.plan):
-            pl = grid.centre(np.asarray(ep.plan))
-            a.plot(pl[:, 0], pl[:, 1], ls="--", lw=1.0, color=c)
-        a.plot(ep.trajectory[:, 0], ep.trajectory[:, 1], lw=2.0, color=c,
-               label=f"{name}: {'goal' if ep.success else ep.reason}")
-        b.plot(ep.times[:-1], ep.controls[:, 0], color=c, lw=1.3, label=f"{name} v")
-    op = np.asarray(result.episodes[PIPELINES[0]].obstacle_positions)
-    for j in range(op.shape[1]):
-        a.plot(op[:, j, 0], op[:, j, 1], ":", color="0.4", lw=0.9, label="moving discs" if j == 0 else None)
-    ep0 = result.episodes[PIPELINES[0]]
-    a.plot(*ep0.trajectory[0, :2], "o", color="tab:green", ms=10, mec="k", label="start")
-    a.plot(*ep0.trajectory[-1, :2] if ep0.success else ep0.waypoints[-1], "*", color="tab:red", ms=13, mec="k",
-           label="goal")
-    a.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+        b.plot(ep.times[:-1], ep.controls[:, 0], color=robot_colour(k, len(result.episodes)), lw=1.3,
+               label=f"{name} v")
     b.set_xlabel("time (s)")
     b.set_ylabel("linear velocity v (m/s)")
     b.set_title("speed profiles")
@@ -149,63 +142,20 @@ def _figure(result: DemoResult, grid, path: Path) -> list[str]:
     return written
 
 
-def animate_episodes(episodes: Mapping[str, Any], grid, path: str | Path, frames: int = 30) -> list[str]:
-    """A GIF of ``episodes`` (`jaxplan.nav.Episode` by label) on ``grid``: each robot's trail and the first
-    episode's moving discs, ``frames`` frames evenly spaced over the longest episode (matplotlib's Pillow writer;
-    raises ``ImportError`` without Pillow). Returns the files written."""
-    from matplotlib.animation import PillowWriter
+def animate_episodes(episodes: Mapping[str, Any], grid, path: str | Path, frames: int = 30, **kw: Any) -> list[str]:
+    """A GIF of ``episodes`` on ``grid`` (`jaxplan.experiments.pictures.animate_episodes`, in the style of every
+    picture: footprints and walkers to scale, sized to the map); returns the files written."""
+    from jaxplan.experiments.pictures import animate_episodes as animate
 
-    path = Path(path)
-    eps = list(episodes.items())
-    T = max(len(ep.trajectory) for _, ep in eps)
-    idx = np.unique(np.linspace(0, T - 1, frames).round().astype(int))
-    fig, ax = plt.subplots(figsize=(6, 4.2))
-    plots.plot_map(ax, grid, colorbar=False)
-    op_all = [np.asarray(ep.obstacle_positions) for _, ep in eps]
-    radii = np.asarray(eps[0][1].obstacles.radii)
-    discs = [plt.Circle((0, 0), float(r), color="tab:red", alpha=0.6) for r in radii]
-    for d in discs:
-        ax.add_patch(d)
-    trails, robots = [], []
-    for k, (name, _ep) in enumerate(eps):
-        (tr,) = ax.plot([], [], color=f"C{k}", lw=1.6, label=name)
-        (rb,) = ax.plot([], [], "o", color=f"C{k}", ms=7, mec="k")
-        trails.append(tr)
-        robots.append(rb)
-    ax.legend(fontsize=8, loc="upper right")
-    title = ax.set_title("")
-    period = float(eps[0][1].times[1] - eps[0][1].times[0]) if len(eps[0][1].times) > 1 else 0.2
-
-    def draw(t):
-        for (_name, ep), tr, rb in zip(eps, trails, robots, strict=True):
-            s = min(t, len(ep.trajectory) - 1)
-            tr.set_data(ep.trajectory[:s + 1, 0], ep.trajectory[:s + 1, 1])
-            rb.set_data([ep.trajectory[s, 0]], [ep.trajectory[s, 1]])
-        op = op_all[0]  # the discs move the same in both episodes
-        s = min(t, len(op) - 1)
-        for j, d in enumerate(discs):
-            d.center = tuple(op[s, j])
-        title.set_text(f"t = {t * period:5.1f} s")
-        return trails + robots + discs + [title]
-
-    path.parent.mkdir(parents=True, exist_ok=True)
-    # The writer driven directly: `FuncAnimation.save` renders every frame twice (a draw, then
-    # the grab's own savefig), half of this function's time.
-    writer = PillowWriter(fps=10)
-    with atomic_path(path) as tmp, writer.saving(fig, str(tmp), dpi=64):
-        for t in idx:
-            draw(int(t))
-            writer.grab_frame()
-    plt.close(fig)
-    return [str(path)]
+    return animate(episodes, grid, path, frames, **kw)
 
 
-def run_demo(out_dir: str | Path = "figures", *, seed: int = 0, quick: bool = False, gif: bool = True,
+def run_demo(out_dir: str | Path = "runs/demo", *, seed: int = 0, quick: bool = False, gif: bool = True,
              frames: int = 30, progress: bool = False) -> DemoResult:
     """Runs both pipelines and writes ``OUT/demo.png`` (and ``demo.gif``); see the module docstring.
 
     Args:
-      out_dir: where the figures go.
+      out_dir: where the figures go (default ``runs/demo``, not tracked; see the module docstring).
       seed: the colonies' seed and the discs' draw.
       quick: the small test variant (a generated 14x10 warehouse).
       gif: write the animation.
@@ -235,12 +185,13 @@ def run_demo(out_dir: str | Path = "figures", *, seed: int = 0, quick: bool = Fa
         out = Path(out_dir)
         bar.update(len(PIPELINES), description="demo: figure")
         t0 = time.perf_counter()
-        files = _figure(result, grid, out / "demo.png")
+        files = _figure(result, grid, out / "demo.png", cfg.dwa.robot.footprint)
         wall["figure"] = time.perf_counter() - t0
         if gif:
             bar.update(len(PIPELINES) + 1, description="demo: animation")
             t0 = time.perf_counter()
-            files += animate_episodes(result.episodes, grid, out / "demo.gif", frames)
+            files += animate_episodes(result.episodes, grid, out / "demo.gif", frames,
+                                      footprint=cfg.dwa.robot.footprint)
             wall["animation"] = time.perf_counter() - t0
         bar.update(steps, description="demo")
     return dataclasses.replace(result, files=tuple(files))

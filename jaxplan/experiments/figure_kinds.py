@@ -12,8 +12,9 @@ import math
 from typing import Any, Callable
 
 import numpy as np
+from matplotlib.lines import Line2D
 
-from jaxplan.experiments import plots
+from jaxplan.experiments import plots, style
 from jaxplan.experiments.comparability import comparable
 from jaxplan.experiments.config import METRICS, ExperimentConfig, FigureSpec, applies, nav_config
 from jaxplan.experiments.run_data import (
@@ -421,6 +422,17 @@ def _map_features(grid) -> tuple[bool, bool]:
     return rules, tunnels
 
 
+def _map_view(mw) -> dict:
+    """`plots.plot_map`'s ``keepout`` and ``y_up`` for a prepared map: a ROS map in its world frame (y up) with its
+    keep-out cells drawn as zones, not walls (`style.keepout_mask`); any other map as before."""
+    from jaxplan.grid import is_ros_map
+
+    path = getattr(mw.spec, "path", None)
+    if path is None or not is_ros_map(path):
+        return {"keepout": None, "y_up": False}
+    return {"keepout": style.keepout_mask(path, mw.grid, dict(mw.spec.ros)), "y_up": True}
+
+
 def _paths(run, spec):
     from jaxplan.smooth import smooth
 
@@ -452,7 +464,7 @@ def _paths(run, spec):
         rules, tunnels = _map_features(mw.grid)
         marks |= {k for k, on in (("turn", rules), ("tunnel", tunnels)) if on}
         plots.plot_map(ax, mw.grid, layer=map_layer(mw.grid), title=f"{mw.spec.name}, scenario {sc}, seed {seed}",
-                       show_turn_rule=rules, show_tunnels=tunnels)
+                       show_turn_rule=rules, show_tunnels=tunnels, **_map_view(mw))
         plots.plot_paths(ax, mw.grid, paths, labels=labels, start=cell_path_m(mw.starts[sc][None], 1, mw.grid)[0],
                          goal=cell_path_m(mw.goals[sc][None], 1, mw.grid)[0], coords="m")
         if smoothed:
@@ -462,7 +474,8 @@ def _paths(run, spec):
                 line.set_linestyle("--")
             plots.legend_outside(ax)  # with the dashes
     fig.suptitle(figure_title(spec, "Planned paths"))
-    cap = f"Global paths of each planner at scenario {sc}, seed {seed} (cell centres; start circle, goal star)"
+    cap = (f"Global paths of each planner at scenario {sc}, seed {seed} (cell centres; start green circle, goal "
+           "red star)")
     if smoother:
         cap += f"; dashed: the same path after the {smoother!r} smoother (jaxplan.smooth)"
     if "turn" in marks:
@@ -490,7 +503,7 @@ def _pheromone(run, spec):
         res = plan(mw.grid, mw.starts[sc], mw.goals[sc], planner=pc.name, seed=seed, keep_pheromone=True,
                    **overrides)
         plots.plot_pheromone(ax, mw.grid, res.info["tau"], log=spec.params.get("log", True),
-                             title=f"{pc.label} on {mw.spec.name}")
+                             title=f"{pc.label} on {mw.spec.name}", y_up=_map_view(mw)["y_up"])
         if res.success:  # its legend goes below the map, clear of the colour bar
             plots.plot_paths(ax, mw.grid, [np.asarray(res.path)], labels=[f"{pc.label} path"], lw=1.2)
     fig.suptitle(figure_title(spec, "Final pheromone per cell"))
@@ -540,42 +553,44 @@ def _trajectories(run, spec):
             ax = axes[0][k]
             k += 1
             pc = run.config.planners[p]
-            plots.plot_map(ax, mw.grid, layer=map_layer(mw.grid), title=f"{pc.label} on {mw.spec.name}")
+            plots.plot_map(ax, mw.grid, layer=map_layer(mw.grid), title=f"{pc.label} on {mw.spec.name}",
+                           **_map_view(mw))
             got = _nav_trial(run, m, p, sc, r)
             if got is None:
                 continue
             pos, _, steps, plan = got
-            period = nav_config(pc)[0].dwa.period
+            dwa = nav_config(pc)[0].dwa
             obs = trial_obstacles(run, m, p, sc, seed)
             if obs is not None:
-                times = np.arange(steps + 1) * period
-                d = disc_positions(obs, times)
+                d = disc_positions(obs, np.arange(steps + 1) * dwa.period)
                 radii = np.asarray(obs.radii, np.float64)
-                for j in range(d.shape[1]):
-                    first = j == 0  # one legend entry per kind of mark
-                    ax.plot(d[:, j, 0], d[:, j, 1], color="0.45", lw=0.8, ls=":",
-                            label="moving disc tracks" if first else None)
-                    # where each disc was when the robot came closest to it
-                    t_close = int(np.argmin(np.hypot(*(d[:, j] - pos[:len(d)]).T)))
-                    ax.add_patch(plt.Circle(tuple(d[t_close, j]), radii[j], color="tab:red", alpha=0.5,
-                                            label="disc at the robot's closest approach" if first else None))
-                    ax.plot(*pos[t_close], "x", color="tab:red", ms=5,
-                            label="robot at its closest approach" if first else None)
+                # each walker where the robot came closest to it, the robot's footprint there: the gap it kept
+                near = style.closest_approach(pos, d)
+                style.draw_walkers(ax, d, radii, at=near, disc_label="walkers at their closest approach (to scale)")
+                for i, j in enumerate(style.real_walkers(radii)):
+                    style.draw_footprint(ax, pos[min(int(near[j]), len(pos) - 1)], dwa.robot.footprint,
+                                         color="0.2", fill=False, alpha=1.0,
+                                         label="robot at a walker's closest approach (to scale)" if i == 0 else None)
             mates = _teammates(run, m, p, sc, r)
             team = max(team, len(mates) + 1)
             for j, (tp, ts, tg) in enumerate(mates):
                 ax.plot(tp[:, 0], tp[:, 1], color="tab:purple", lw=1.0, alpha=0.8,
                         label="teammates (executed)" if j == 0 else None)
-                ax.plot(*ts, "o", color="tab:purple", ms=4, label="teammates' starts" if j == 0 else None)
-                ax.plot(*tg, "*", color="tab:purple", ms=7, label="teammates' goals" if j == 0 else None)
-            plots.plot_paths(ax, mw.grid, [plan, pos], labels=["global path", "executed"],
-                             start=pos[0], goal=cell_path_m(mw.goals[sc][None], 1, mw.grid)[0], coords="m", lw=1.5)
+                style.mark_start_goal(ax, ts, tg, team=True, label=j == 0)
+            # the robot in the style's colours (the colour cycle's orange is the walkers')
+            if len(plan):
+                ax.plot(plan[:, 0], plan[:, 1], **{**style.PLAN, "label": "global path"})
+            ax.plot(pos[:, 0], pos[:, 1], color=style.ROBOT, lw=1.5, zorder=3, label="executed")
+            style.mark_start_goal(ax, pos[0, :2], cell_path_m(mw.goals[sc][None], 1, mw.grid)[0])
+            plots.legend_outside(ax)
     fig.suptitle(figure_title(spec, f"Executed trajectories, scenario {sc}, seed {seed}"))
-    caption = (f"Executed trajectories (scenario {sc}, seed {seed}) over the global path; dotted: the moving "
-               "discs' tracks, red discs where each disc was at the robot's closest approach (x).")
+    caption = (f"Executed trajectories (scenario {sc}, seed {seed}) over the global path; dashed orange: the "
+               "walkers' paths, orange discs (to scale) where each walker was at the robot's closest approach, with "
+               "the robot's footprint (outline) at that moment.")
     if team > 1:
         caption += (f" A team of {team} robots shares each episode: robot 0 (the scenario's start and goal) is drawn "
-                    "with its global path; purple: its teammates' executed paths, starts (o) and goals (*).")
+                    "with its global path; purple: its teammates' executed paths; hollow circles and stars: their "
+                    "starts and goals.")
     return fig, caption
 
 
@@ -623,15 +638,16 @@ def _fan(run, spec):
         if navcfg.evaluator is None and pipe.evaluator and hasattr(dwa, "evaluator"):
             dwa = dataclasses.replace(dwa, evaluator=pipe.evaluator)
         dwa = dataclasses.replace(dwa, keep_rollouts=True)  # episodes drop them; the fan needs them
-        plots.plot_map(ax, mw.grid, title=f"{pc.label} on {mw.spec.name}", colorbar=False)
+        view = _map_view(mw)
+        plots.plot_map(ax, mw.grid, title=f"{pc.label} on {mw.spec.name}", colorbar=False, **view)
         got = _nav_trial(run, m, p, sc, r)
         if got is None or got[1] is None:
             continue
         pos, states, steps, plan = got
         wanted = spec.params.get("steps") or [steps // 2]
         obs = trial_obstacles(run, m, p, sc, seed)
-        ax.plot(pos[:, 0], pos[:, 1], color="0.3", lw=1.0, label="executed")
-        ax.plot(plan[:, 0], plan[:, 1], color="C2", lw=1.0, ls="--", label="global path")
+        ax.plot(pos[:, 0], pos[:, 1], color=style.ROBOT, lw=1.0, label="executed")
+        ax.plot(plan[:, 0], plan[:, 1], **{**style.PLAN, "label": "global path"})
         for w, s in enumerate(wanted):
             s = min(int(s), steps)
             once = w == 0  # one legend entry per kind of mark
@@ -646,9 +662,8 @@ def _fan(run, spec):
                 from jaxplan.nav import discs_at
 
                 discs = discs_at(obs, s * dwa.period)
-                for i, (c, rad) in enumerate(zip(np.asarray(discs.positions), np.asarray(discs.radii), strict=True)):
-                    ax.add_patch(plt.Circle(tuple(c), float(rad), color="tab:red", alpha=0.5,
-                                            label="moving discs" if once and i == 0 else None))
+                style.draw_walkers(ax, np.asarray(discs.positions)[None], np.asarray(discs.radii), at=0, paths=False,
+                                   disc_label="walkers (to scale)" if once else None)
             _, info = dwa_step(state, subgoal, mw.grid, obstacles=discs, params=weights or None, config=dwa,
                                path=plan if len(plan) > 1 else None)
             ro, ok = np.asarray(info.rollouts), np.asarray(info.feasible)
@@ -660,17 +675,28 @@ def _fan(run, spec):
                         label="feasible rollouts" if once and i == 0 else None)
             ch = int(info.chosen)
             ax.plot(ro[ch, :, 0], ro[ch, :, 1], color="k", lw=2.0, label="chosen rollout" if once else None)
-            ax.plot(*subgoal, "*", color="C1", ms=9, label="sub-goal" if once else None)
-        plots.legend_outside(ax)
+            # an outline: the fan starts inside the footprint
+            style.draw_footprint(ax, state[:3], dwa.robot.footprint, fill=False, alpha=1.0,
+                                 label="robot (footprint to scale)" if once else None)
+            # a diamond: the goal's star stays the goal's, in every figure
+            ax.plot(*subgoal, "D", color="tab:cyan", mec="k", ms=7, zorder=6,
+                    label=f"sub-goal ({navcfg.lookahead:g} m ahead on the global path)" if once else None)
+        legend = plots.legend_outside(ax)
+        for h in legend.legend_handles if legend is not None else ():
+            if isinstance(h, Line2D) and h.get_linewidth() < 1.0:
+                h.set_linewidth(1.5)  # a rollout's hairline, legible in the legend
+                h.set_alpha(1.0)
         if len(wanted) == 1:  # zoom on the fan
             c = states[min(int(wanted[0]), steps), :2]
             span = max(2.5, dwa.horizon * float(dwa.robot.v_max) * 1.3)
             ax.set_xlim(c[0] - span, c[0] + span)
-            ax.set_ylim(c[1] + span, c[1] - span)  # row 0 at the top, as plot_map draws it
+            # row 0 at the top, as plot_map draws it (a ROS map's world frame: y up)
+            ax.set_ylim((c[1] - span, c[1] + span) if view["y_up"] else (c[1] + span, c[1] - span))
     fig.suptitle(figure_title(spec, "DWA trajectory fans"))
     steps_text = ", ".join(str(int(v)) for v in spec.params["steps"]) if spec.params.get("steps") else "mid-episode"
     return fig, (f"Dynamic-window rollouts at control steps {steps_text} "
-                 f"(scenario {sc}, seed {seed}): feasible blue, infeasible red, chosen black, sub-goal star; "
+                 f"(scenario {sc}, seed {seed}): feasible blue, infeasible red, chosen black, sub-goal diamond, the "
+                 "robot's footprint to scale; "
                  "recomputed with jaxplan.dwa_step at the stored robot states.")
 
 

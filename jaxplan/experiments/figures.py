@@ -32,6 +32,9 @@ Output: ``OUT/RUN/STEM.png`` and ``.svg`` (``format`` = one of png/svg/pdf write
 ``OUT/RUN/index.md`` (one section per figure with its caption), and ``OUT/index.md``
 listing every run's index found under ``OUT``; every file is written atomically
 (`jaxplan.core.io`), and STEM (a `jaxplan.core.io.SAFE_NAME`) stays inside ``OUT/RUN``.
+``OUT`` defaults to a ``figures`` folder beside the run folder (`default_figures_root`: ``runs/figures``
+for ``runs/NAME``), which is not tracked: the committed ``figures/`` of the repository are rewritten only on
+purpose, by `jaxplan reproduce` (or an explicit ``OUT``).
 
 A figure that needs the arrays of a chunk that are missing, damaged (checked against the SHA-256
 the runner stored) or not computed yet is not drawn: it is listed with the chunk and what to do
@@ -53,7 +56,7 @@ from jaxplan.experiments.config import FigureSpec
 from jaxplan.experiments.figure_kinds import DRAW
 from jaxplan.experiments.run_data import MissingArrays, RunData, load_run
 
-__all__ = ["Drawn", "RunData", "load_run", "draw_figures", "write_index", "DRAW"]
+__all__ = ["Drawn", "RunData", "load_run", "draw_figures", "default_figures_root", "write_index", "DRAW"]
 
 plt = plots.plt  # the Agg backend is chosen in plots
 
@@ -122,14 +125,26 @@ def _draw_one(run: RunData, spec: FigureSpec, d: Path) -> Drawn:
     return Drawn(spec.name, spec.kind, tuple(files), caption, partial)
 
 
-def draw_figures(run_dir: str | os.PathLike, out: str | os.PathLike = "figures", *,
+def default_figures_root(run_dir: str | os.PathLike) -> Path:
+    """Where a run's figures go unless told: ``figures/`` beside the run folder (``runs/NAME`` -> ``runs/figures``,
+    so ``runs/figures/NAME/``). Beside the run, because the run folder's parent is output already (``runs/`` is
+    not tracked), and never the repository's committed ``figures/``, which only `jaxplan reproduce` rewrites.
+    Relative to the working folder when it lies inside it (so messages name ``runs/figures``)."""
+    root = Path(run_dir).resolve().parent / "figures"
+    try:
+        return root.relative_to(Path.cwd().resolve())
+    except ValueError:
+        return root
+
+
+def draw_figures(run_dir: str | os.PathLike, out: str | os.PathLike | None = None, *,
                  data_dir: str | os.PathLike | None = None, strict: bool = False,
                  partial: bool = False, progress: bool = False) -> tuple[list[Drawn], list[str]]:
     """Draws every ``[[figures]]`` entry of a run folder's config.
 
     Args:
       run_dir: a folder written by `run_experiment`.
-      out: figure root; files go to ``out/RUN/`` (RUN = the run folder's name).
+      out: figure root; files go to ``out/RUN/`` (RUN = the run folder's name); default `default_figures_root`.
       data_dir: where the config's relative map paths resolve (as for `run_experiment`).
       strict: raise on the first figure that cannot be drawn (default: list it, whatever the error, and go on).
       partial: draw a figure whose chunks' arrays are partly missing or damaged, labelled partial
@@ -144,7 +159,8 @@ def draw_figures(run_dir: str | os.PathLike, out: str | os.PathLike = "figures",
     """
     run = load_run(run_dir, data_dir, partial=partial)
     run_name = Path(run_dir).resolve().name
-    d = Path(out) / run_name
+    out = default_figures_root(run_dir) if out is None else Path(out)
+    d = out / run_name
     d.mkdir(parents=True, exist_ok=True)
     drawn, problems = [], []
     figures = run.config.figures
@@ -159,5 +175,5 @@ def draw_figures(run_dir: str | os.PathLike, out: str | os.PathLike = "figures",
                 known = isinstance(e, (ValueError, KeyError, FileNotFoundError, MissingArrays))
                 problems.append(f"{spec.name} ({spec.kind}): {e if known else f'{type(e).__name__}: {e}'}")
         bar.update(len(figures), description=f"{run_name}: figures")
-    write_index(Path(out), run_name, run.config.description or run.config.name, drawn, problems)
+    write_index(out, run_name, run.config.description or run.config.name, drawn, problems)
     return drawn, problems

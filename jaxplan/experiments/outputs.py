@@ -14,6 +14,11 @@ One plan (`plan_record`, `write_plan`):
 One episode (`write_episode`): ``.json`` (`jaxplan.nav.Episode.to_dict` with the run's settings and provenance),
 ``.gif`` (the robot's trail among the walkers; needs Pillow, which matplotlib installs) or ``.png`` (the trail
 over the map).
+
+Images follow `jaxplan.experiments.style`: start green circle, goal red star, legend outside the map, a ROS map
+in its world frame (y up) with its keep-out zones hatched and its speed zones tinted (not drawn as walls); an
+episode's picture adds the walkers' paths and discs and the robot's footprint to scale
+(`jaxplan.experiments.pictures`).
 """
 
 from __future__ import annotations
@@ -85,14 +90,15 @@ def _csv_points(points: np.ndarray, grid: Any) -> bytes:
     return buf.getvalue().encode()
 
 
-def _figure(grid: Any, title: str, draw) -> Any:
-    from jaxplan.experiments import plots
+def _map_view(map_path: str, options: Mapping[str, Any] | None, grid: Any) -> dict:
+    """`plot_map`'s ``keepout`` and ``y_up`` for a map file: a ROS map in its world frame with its keep-out cells
+    apart from its walls (`jaxplan.experiments.style.keepout_mask`); a MovingAI map as before."""
+    from jaxplan.experiments.style import keepout_mask
+    from jaxplan.grid import is_ros_map
 
-    fig, ax = plots.plt.subplots(figsize=(6, 6 * grid.shape[0] / max(grid.shape[1], 1) + 0.6))
-    plots.plot_map(ax, grid, colorbar=False)
-    draw(ax, plots)
-    ax.set_title(title, fontsize=9)
-    return fig
+    if not is_ros_map(map_path):
+        return {"keepout": None, "y_up": False}
+    return {"keepout": keepout_mask(map_path, grid, options or {}), "y_up": True}
 
 
 def write_plan(out: str | os.PathLike, record: dict, grid: Any, result: Any, smoothed: Any = None) -> Path:
@@ -106,30 +112,32 @@ def write_plan(out: str | os.PathLike, record: dict, grid: Any, result: Any, smo
         pts = np.asarray(smoothed.points if smoothed is not None else result.path).reshape(-1, 2)
         atomic_write(p, _csv_points(pts, grid))
     else:
+        from jaxplan.experiments import plots, style
+
         start, goal = np.asarray(record["start"]), np.asarray(record["goal"])
-
-        def draw(ax, plots):
-            paths, labels = [np.asarray(result.path).reshape(-1, 2)], [record["planner"]]
-            if smoothed is not None:
-                paths.append(np.asarray(smoothed.points).reshape(-1, 2))
-                labels.append(f"smoothed ({record['smoothed']['method']})")
-            plots.plot_paths(ax, grid, paths, labels, start=start, goal=goal)
-            if len(labels) > 1 or not result.success:
-                ax.legend(fontsize=8, loc="upper right")
-
+        paths, labels = [np.asarray(result.path).reshape(-1, 2)], [record["planner"]]
+        if smoothed is not None:
+            paths.append(np.asarray(smoothed.points).reshape(-1, 2))
+            labels.append(f"smoothed ({record['smoothed']['method']})")
         head = (f"{record['planner']} on {Path(record['map']['path']).name}: "
                 + (f"{result.length:.2f} m, {result.turns} turns" if result.success else "no path"))
-        fig = _figure(grid, head, draw)
-        from jaxplan.experiments.plots import plt, save_figure
-
-        save_figure(fig, str(p))
-        plt.close(fig)
+        fig, ax = plots.plt.subplots(figsize=style.map_figsize(grid), constrained_layout=True)
+        plots.plot_map(ax, grid, colorbar=False, **_map_view(record["map"]["path"], record["map"].get("options"),
+                                                             grid))
+        plots.plot_paths(ax, grid, paths, labels, start=start, goal=goal)
+        plots.legend_outside(ax, ncol=3)
+        ax.set_title(head, fontsize=9)
+        plots.save_figure(fig, str(p))
+        plots.plt.close(fig)
     return p
 
 
 def write_episode(out: str | os.PathLike, episode: Any, grid: Any, record: Mapping[str, Any],
-                  frames: int = 40) -> Path:
+                  frames: int = 40, footprint: Any = None) -> Path:
     """Writes one navigation episode to ``out`` (``.json``, ``.gif`` or an image); returns the path.
+
+    ``footprint``: the robot's, drawn to scale (default: `jaxplan.nav.NavConfig`'s robot, which `jaxplan
+    navigate` drives).
 
     Raises:
       ImportError: ``.gif`` without Pillow.
@@ -149,22 +157,19 @@ def write_episode(out: str | os.PathLike, episode: Any, grid: Any, record: Mappi
         if importlib.util.find_spec("PIL") is None:
             raise ImportError("jaxplan navigate --out *.gif needs Pillow (matplotlib's GIF writer): pip install "
                               "pillow; or write .json or .png")
-        from jaxplan.experiments.demo import animate_episodes
+        from jaxplan.experiments.pictures import animate_episodes
 
-        animate_episodes({label: episode}, grid, p, frames)
+        animate_episodes({label: episode}, grid, p, frames, footprint=footprint,
+                         **_map_view(str(record.get("map", "")), record.get("map_options"), grid))
     else:
-        def draw(ax, plots):
-            tr = np.asarray(episode.trajectory)
-            ax.plot(tr[:, 0], tr[:, 1], lw=1.6, label=label)
-            plan = np.asarray(episode.plan).reshape(-1, 2)
-            if len(plan):
-                plots.plot_paths(ax, grid, [plan], ["global plan"], lw=1.0)
-            ax.legend(fontsize=8, loc="upper right")
-
-        head = f"{label}: {episode.reason}, {episode.time_s:.1f} s, {episode.collisions} collisions"
-        fig = _figure(grid, head, draw)
+        from jaxplan.experiments.pictures import episode_figure
         from jaxplan.experiments.plots import plt, save_figure
 
+        head = (f"{label} on {Path(str(record.get('map', ''))).name}: {episode.reason}, {episode.time_s:.1f} s, "
+                f"{episode.collisions} collisions")
+        fig = episode_figure(grid, {label: episode}, footprint=footprint, title=head,
+                             **_map_view(str(record.get("map", "")), record.get("map_options"), grid))
+        fig.axes[0].title.set_fontsize(9)
         save_figure(fig, str(p))
         plt.close(fig)
     return p

@@ -1,6 +1,7 @@
 """Plot helpers (matplotlib only, Agg backend; no metric logic here).
 
-Everything is drawn in world coordinates (m) with row 0 at the top, as in MovingAI files:
+Everything is drawn in world coordinates (m) with row 0 at the top, as in MovingAI files (a ROS map, with
+``y_up=True``, in its world frame: row 0 at the bottom, y up, as RViz shows it):
 cell ``(x, y)`` covers ``origin + [x·res, (x + 1)·res] × [y·res, (y + 1)·res]`` and its centre lies at
 `GridMap.centre`, ``origin + ((x + 0.5)·res, (y + 0.5)·res)`` (DESIGN §2; ``origin`` is ``(0, 0)`` unless
 the map has one, as a ROS map does). Each helper draws onto a given ``ax`` and
@@ -18,7 +19,8 @@ returns it, so a figure is composed from small calls::
     plot_pheromone(b, scene.grid, res.info["tau"][0])
     save_figure(fig, "figures/iaco.png")
 
-The only computations here are reductions for display (pheromone per cell, order
+Markers, colours, zones and legends follow `jaxplan.experiments.style` (one visual language for every
+picture). The only computations here are reductions for display (pheromone per cell, order
 statistics of convergence curves over seeds); metrics come from `jaxplan.metrics`.
 """
 
@@ -32,10 +34,12 @@ import matplotlib
 matplotlib.use("Agg")  # headless by default; figures are written to files
 import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.colors import LogNorm, Normalize
+from matplotlib.colors import ListedColormap, LogNorm, Normalize
 from numpy.typing import ArrayLike
 
 from jaxplan.core.io import atomic_path
+from jaxplan.experiments import style
+from jaxplan.experiments.style import legend_outside
 from jaxplan.grid import GridMap, Neighbours, neighbour_table
 
 __all__ = [
@@ -61,14 +65,16 @@ def _extent(grid: GridMap) -> tuple[float, float, float, float]:
     return (x0 + 0.0, x0 + W * res, y0 + H * res, y0 + 0.0)
 
 
-def _frame(ax: plt.Axes, grid: GridMap, title: str | None) -> None:
-    """Limits, equal aspect and labels of a map axes."""
+def _frame(ax: plt.Axes, grid: GridMap, title: str | None, y_up: bool = False) -> None:
+    """Limits, equal aspect and labels of a map axes: row 0 at the top, or with ``y_up`` (a ROS map's world
+    frame) at the bottom."""
     left, right, bottom, top = _extent(grid)
     ax.set_xlim(left, right)
-    ax.set_ylim(bottom, top)
+    ax.set_ylim((top, bottom) if y_up else (bottom, top))
     ax.set_aspect("equal")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
+    frame = ", map frame" if y_up else ""
+    ax.set_xlabel(f"x (m{frame})")
+    ax.set_ylabel(f"y (m{frame})")
     if title:
         ax.set_title(title)
 
@@ -86,10 +92,14 @@ def _draw_field(
     return im
 
 
-def _draw_blocked(ax: plt.Axes, grid: GridMap) -> None:
-    """Blocked cells in dark grey, free cells transparent."""
-    blocked = np.ma.masked_where(np.asarray(grid.free), np.ones(grid.shape))
-    im = ax.imshow(blocked, cmap="Greys", vmin=0, vmax=1.25, extent=_extent(grid), interpolation="nearest")
+def _draw_blocked(ax: plt.Axes, grid: GridMap, keepout: np.ndarray | None = None) -> None:
+    """Blocked cells in `style.WALL` grey, free cells (and keep-out cells, drawn as zones) transparent."""
+    show = ~np.asarray(grid.free)
+    if keepout is not None:
+        show &= ~np.asarray(keepout, bool)
+    blocked = np.ma.masked_where(~show, np.ones(grid.shape))
+    im = ax.imshow(blocked, cmap=ListedColormap([style.WALL]), vmin=0, vmax=1, extent=_extent(grid),
+                   interpolation="nearest")
     im.set_label("blocked")
 
 
@@ -146,8 +156,10 @@ def plot_map(
     show_turn_rule: bool = False,
     show_tunnels: bool = False,
     colorbar: bool = True,
+    keepout: ArrayLike | None = None,
+    y_up: bool = False,
 ) -> plt.Axes:
-    """Draws the map in world coordinates (m): blocked cells dark, optionally a layer underneath.
+    """Draws the map in world coordinates (m): blocked cells dark, optionally a layer underneath, and its zones.
 
     Args:
       ax: matplotlib axes.
@@ -161,6 +173,12 @@ def plot_map(
       show_tunnels: outline, hatched, the free cells with a finite ``clearance_height`` (chu2024's
         tunnels; legend label ``"tunnel (headroom ... m)"``).
       colorbar: add a colour bar for ``layer`` (not when it has no cell to show).
+      keepout: ``bool[H, W]`` the cells a Nav2 keep-out mask blocked (`style.keepout_mask`): hatched red, not
+        drawn as walls.
+      y_up: a ROS map's world frame: row 0 (the image's bottom row) at the bottom, y up, axes "(m, map frame)".
+
+    Speed zones (`GridMap.speed_limit` below 1) are tinted yellow, one legend entry per limit. When a zone is
+    drawn, the walls get a legend entry too, so the legend tells walls, keep-out and speed zones apart.
 
     Returns:
       ``ax``. The layer image has label ``layer``'s colour-bar text, the blocked-cell image
@@ -172,23 +190,19 @@ def plot_map(
         norm = Normalize(vmin=0.0, vmax=float(data.max())) if layer == "risk" and data.count() else None
         _draw_field(ax, grid, data, LAYERS[layer], label, norm=norm, colorbar=colorbar and data.count() > 0,
                     bar_label="risk (Poisson draws per cell)" if layer == "risk" else None)
-    _draw_blocked(ax, grid)
+    ko = None if keepout is None else np.asarray(keepout, bool)
+    _draw_blocked(ax, grid, ko)
+    zones = style.draw_speed_zones(ax, grid)
+    if ko is not None and style.draw_keepout(ax, grid, ko) is not None:
+        zones.append(ko)
+    if zones:
+        style.draw_wall_key(ax, grid)
     if show_turn_rule:
         _draw_turn_rule(ax, grid)
     if show_tunnels:
         _draw_tunnels(ax, grid)
-    _frame(ax, grid, title)
+    _frame(ax, grid, title, y_up)
     return ax
-
-
-def legend_outside(ax: plt.Axes, ncol: int = 2, fontsize: float = 8):
-    """Puts ``ax``'s legend (every labelled line, marker and patch) below the axes, clear of a map and of its
-    colour bar; returns the legend, or None when nothing is labelled."""
-    handles, labels = ax.get_legend_handles_labels()
-    if not labels:
-        return None
-    return ax.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=ncol,
-                     fontsize=fontsize, borderaxespad=0.0, frameon=False)
 
 
 def figure_legend(fig: plt.Figure, ncol: int = 1, fontsize: float = 8):
@@ -278,7 +292,8 @@ def plot_paths(
         the centre of cell ``(x, y)``, or in world metres with ``coords="m"``. Empty paths
         (failed plans) draw nothing.
       labels: one legend label per path.
-      start, goal: ``[2]`` points (same ``coords``), drawn as a circle and a star.
+      start, goal: ``[2]`` points (same ``coords``), drawn as `style.START` (green circle) and `style.GOAL`
+        (red star).
       lengths: ``int[P]`` points to draw of each path (a scalar for one ``[L, 2]`` path);
         the rest is padding and is ignored.
       coords: ``"cells"`` (drawn at ``GridMap.centre(p)``, world metres) or ``"m"`` (drawn as given).
@@ -300,13 +315,16 @@ def plot_paths(
         q = _to_metres(p, grid, coords)
         if len(q):
             ax.plot(q[:, 0], q[:, 1], lw=lw, label=None if labels is None else labels[i])
-    for point, marker, name in ((start, "o", "start"), (goal, "*", "goal")):
+    ends = []
+    for point, name in ((start, "start"), (goal, "goal")):
+        c = None
         if point is not None:
             c = np.asarray(point, dtype=np.float64)
             if c.shape != (2,):
                 raise ValueError(f"{name} must be a point (x, y), got shape {c.shape}")
             c = _to_metres(c, grid, coords)
-            ax.plot(c[0], c[1], marker, ms=12, mec="k", label=name)
+        ends.append(c)
+    style.mark_start_goal(ax, *ends)
     if labels is not None or start is not None:
         legend_outside(ax)
     return ax
@@ -396,6 +414,7 @@ def plot_pheromone(
     title: str | None = None,
     cmap: str = "magma",
     colorbar: bool = True,
+    y_up: bool = False,
 ) -> plt.Axes:
     """Heat map of the final pheromone per cell, with blocked cells on top.
 
@@ -411,6 +430,7 @@ def plot_pheromone(
       title: axes title.
       cmap: colour map.
       colorbar: add a colour bar.
+      y_up: a ROS map's world frame, as `plot_map`.
 
     Returns:
       ``ax``; the heat map is the `AxesImage` labelled ``"pheromone"`` whose data are the
@@ -432,7 +452,7 @@ def plot_pheromone(
     im = _draw_field(ax, grid, data, cmap, label, norm=norm, colorbar=colorbar, bar_label=bar)
     im.set_label("pheromone")
     _draw_blocked(ax, grid)
-    _frame(ax, grid, title)
+    _frame(ax, grid, title, y_up)
     return ax
 
 

@@ -10,12 +10,12 @@ import math
 from typing import TYPE_CHECKING, Any
 
 from jaxplan.experiments.config import METRICS, ExperimentConfig, applies
-from jaxplan.experiments.stats import PER_CHUNK, PER_SEED, Analysis, SummaryRow
+from jaxplan.experiments.stats import PER_CHUNK, PER_SEED, Analysis, SummaryRow, TestRow, significant, spread_note
 
 if TYPE_CHECKING:  # pragma: no cover
     from jaxplan.experiments.prepare import Prepared
 
-__all__ = ["summary_markdown", "report_markdown", "fmt"]
+__all__ = ["summary_markdown", "report_markdown", "fmt", "p_cell"]
 
 
 def fmt(x: float | None, digits: int = 4) -> str:
@@ -77,6 +77,13 @@ def _map_table(a: Analysis, cfg: ExperimentConfig, map_: str) -> str:
     return _table(head, body)
 
 
+def p_cell(t: TestRow, p: float, alpha: float) -> str:
+    """A p-value cell: the value, `` *`` when significant (never for an undefined test), and the zero-variance
+    note (which groups have no spread) so a constant group is seen rather than starred."""
+    note = spread_note(t)
+    return fmt(p, 3) + (" *" if significant(p, alpha) else "") + (f" {note}" if note else "")
+
+
 def _tests_markdown(a: Analysis, cfg: ExperimentConfig) -> str:
     if not a.tests:
         return ""
@@ -86,15 +93,15 @@ def _tests_markdown(a: Analysis, cfg: ExperimentConfig) -> str:
     if anova:
         out += ["One-way ANOVA across planners:", "",
                 _table(["map", "metric", "F", "p", "groups"], text=2, rows=
-                       [[t.map, t.metric, fmt(t.statistic), fmt(t.p_value, 3) + (" *" if t.p_value < alpha else ""),
-                         str(t.n_b)] for t in anova]), ""]
+                       [[t.map, t.metric, fmt(t.statistic), p_cell(t, t.p_value, alpha), str(t.n_b)]
+                        for t in anova]), ""]
     pairs = [t for t in a.tests if t.test == "welch_t"]
     if pairs:
         adj = "Holm-adjusted p" if cfg.stats.correction == "holm" else "p (unadjusted)"
         out += ["Pairwise Welch t-tests:", "",
                 _table(["map", "metric", "A", "B", "t", "p", adj], text=4, rows=
                        [[t.map, t.metric, t.planner_a, t.planner_b, fmt(t.statistic), fmt(t.p_value, 3),
-                         fmt(t.p_adjusted, 3) + (" *" if t.p_adjusted < alpha else "")] for t in pairs]), ""]
+                         p_cell(t, t.p_adjusted, alpha)] for t in pairs]), ""]
     return "\n".join(out)
 
 

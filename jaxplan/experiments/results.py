@@ -42,6 +42,7 @@ from jaxplan.experiments.claims import (
     Claims,
     absolute_verdict,
     evaluate_claim,
+    units_label,
 )
 from jaxplan.experiments.comparability import comparable
 from jaxplan.experiments.config import METRICS, ExperimentConfig, PaperValue
@@ -51,10 +52,9 @@ from jaxplan.experiments.evidence import (
     load_evidence,
     rate_counts,
     runs,
-    unit_name,
     units,
 )
-from jaxplan.experiments.report import fmt
+from jaxplan.experiments.report import fmt, p_cell
 from jaxplan.experiments.stats import Analysis, hedges_g
 from jaxplan.experiments.verdicts import Margin, judge_number, mean_interval, wilson_interval
 
@@ -202,7 +202,7 @@ def _units(ev: Evidence, fams: Sequence[str], planner: str, metric: str) -> np.n
 
 
 def _unit_name(ev: Evidence, fams: Sequence[str]) -> str:
-    return " + ".join(dict.fromkeys(unit_name(ev, f) for f in fams))
+    return units_label(ev, fams)
 
 
 def _judge(ev: Evidence, fams: Sequence[str], planner: str, pv: PaperValue, margins: Mapping[str, Margin],
@@ -443,12 +443,13 @@ def _tests(a: Analysis, cfg: ExperimentConfig) -> str:
     alpha = cfg.stats.alpha
     out = [f"Per-seed means as samples; * marks p < {alpha:g}. Hedges' g: the difference of the means (A − B) "
            "over the pooled sd, small-sample corrected (|g| ≈ 0.2 small, 0.5 medium, 0.8 large); an exact "
-           "planner's constant per-seed means leave t and g undefined (–).", ""]
+           "planner's constant per-seed means leave g undefined (–) and are named \"no spread\"; a test in which "
+           "no group has spread is undefined (–), never starred.", ""]
     if anova:
         out += ["One-way ANOVA across planners:", "",
                 _table(["map", "metric", "F", "p", "groups"], text=2, rows=[
-                    [t.map, t.metric, fmt(t.statistic), fmt(t.p_value, 3) + (" *" if t.p_value < alpha else ""),
-                     str(t.n_b)] for t in anova]), ""]
+                    [t.map, t.metric, fmt(t.statistic), p_cell(t, t.p_value, alpha), str(t.n_b)] for t in anova]),
+                ""]
     if pairs:
         adj = "p (Holm)" if cfg.stats.correction == "holm" else "p"
         rows = []
@@ -457,7 +458,7 @@ def _tests(a: Analysis, cfg: ExperimentConfig) -> str:
             y = a.per_seed.get((t.map, t.planner_b, t.metric))
             g = hedges_g(x, y) if x is not None and y is not None else math.nan
             rows.append([t.map, t.metric, t.planner_a, t.planner_b, fmt(t.statistic), fmt(t.p_value, 3),
-                         fmt(t.p_adjusted, 3) + (" *" if t.p_adjusted < alpha else ""), fmt(g, 3)])
+                         p_cell(t, t.p_adjusted, alpha), fmt(g, 3)])
         out += ["Pairwise Welch t-tests:", "",
                 _table(["map", "metric", "A", "B", "t", "p", adj, "Hedges' g"], rows, text=4), ""]
     return "\n".join(out)

@@ -27,13 +27,13 @@ Example::
     values = r.section({"n": -1, "sped": 2.0}, "obstacles", Obstacles)
     r.problems  # ["obstacles.sped: unknown key; did you mean 'speed'?", "obstacles.n: must be >= 0, got -1"]
 
-This module imports nothing from jaxplan: experiment and tuning configs both build on it.
+This module imports nothing from jaxplan but `jaxplan.core.names` (`did_you_mean`, the package's one
+did-you-mean, re-exported here): experiment and tuning configs both build on it.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import functools
 import math
 import re
@@ -41,6 +41,8 @@ import warnings
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, Callable, Iterator, Mapping, Sequence
+
+from jaxplan.core.names import did_you_mean
 
 __all__ = [
     "TYPES", "UNSET", "MAX_SEED", "MAX_SEED_COUNT", "ConfigError", "Setting", "setting", "declaration", "settings",
@@ -220,12 +222,6 @@ def join(path: str, key: str) -> str:
     return f"{path}.{key}" if path else key
 
 
-def did_you_mean(name: str, known: Sequence[str]) -> str:
-    """``"; did you mean 'x'?"`` for the closest of ``known`` to ``name``, else ``""``."""
-    near = difflib.get_close_matches(name, list(known), n=1)
-    return f"; did you mean {near[0]!r}?" if near else ""
-
-
 def frozen(d: Mapping[str, Any] | None) -> Mapping[str, Any]:
     """A read-only mapping whose lists became tuples (TOML arrays as hashable parameter values)."""
     def fix(v):
@@ -259,8 +255,7 @@ class Reader:
             return {}
         for k in obj:
             if k not in allowed:
-                near = difflib.get_close_matches(k, list(allowed), n=1)
-                hint = f"; did you mean {near[0]!r}?" if near else f" (expected one of: {', '.join(sorted(allowed))})"
+                hint = did_you_mean(k, allowed) or f" (expected one of: {', '.join(sorted(allowed))})"
                 self.bad(join(path, k), f"unknown key{hint}")
         for k in required:
             if k not in obj:
@@ -424,8 +419,7 @@ def check(s: Setting, v: Any) -> str | None:
     """Why value ``v`` (of the setting's type) breaks setting ``s``'s choices, bounds or pattern, or None."""
     choices = s.options()
     if choices is not None and v not in choices:
-        near = difflib.get_close_matches(str(v), [str(c) for c in choices], n=1)
-        hint = f"; did you mean {near[0]!r}?" if near else ""
+        hint = did_you_mean(str(v), [str(c) for c in choices])
         return f"must be one of {', '.join(map(repr, choices))}, got {v!r}{hint}"
     for bound, op, fails in ((s.ge, ">=", lambda b: v < b), (s.gt, ">", lambda b: v <= b),
                              (s.le, "<=", lambda b: v > b)):

@@ -15,7 +15,11 @@ with one scenario per map (its configs) a trial is a seed's run.
 Significance (if ``[stats]`` asks): per map and metric, a one-way ANOVA across planners
 (`scipy.stats.f_oneway`) and Welch t-tests between every pair (`scipy.stats.ttest_ind`
 with ``equal_var=False``), with the per-seed means as samples (n = seeds per planner).
-Pairwise p-values are also given Holm-adjusted within each (map, metric) family.
+Pairwise p-values are also given Holm-adjusted within each (map, metric) family. A group without
+spread (every seed gave the same per-seed mean: an exact planner, or a smoke run) is named in the
+test's ``no_spread``; when no group of a test has spread the test is undefined (scipy would give
+F or t = ∞ and p = 0, a "certain" difference that is only an artefact of zero variance), so its
+statistic and p are nan and it is never marked significant.
 
 Wall-clock metrics (``plan_time_s``, ``step_time_s``) come from timings.csv, one value
 per chunk (the batched call's time divided by its trials): mean ± sd over chunks.
@@ -37,13 +41,14 @@ import numpy as np
 from jaxplan.experiments.config import METRICS, ExperimentConfig, PaperValue, applies
 
 __all__ = ["SummaryRow", "TestRow", "Analysis", "read_trials", "trial_mask", "per_seed_means", "trial_range",
-           "analyse", "holm", "confidence_interval", "hedges_g", "write_summary", "write_significance", "write_timings",
+           "analyse", "holm", "no_spread", "spread_note", "significant", "confidence_interval", "hedges_g",
+           "write_summary", "write_significance", "write_timings",
            "SUMMARY_COLUMNS", "SIGNIFICANCE_COLUMNS", "TIMING_COLUMNS"]
 
 SUMMARY_COLUMNS = ("map", "planner", "metric", "unit", "statistic", "n", "trials", "mean", "sd", "min", "max",
                    "paper_mean", "paper_sd", "paper_min", "paper_max", "paper_source")
 SIGNIFICANCE_COLUMNS = ("map", "metric", "test", "planner_a", "planner_b", "statistic", "p_value", "p_adjusted",
-                        "n_a", "n_b")
+                        "n_a", "n_b", "no_spread")
 TIMING_COLUMNS = ("uid", "map", "planner", "kind", "scenario_lo", "scenario_hi", "trials", "session", "compile_s",
                   "time_s", "plan_time_s", "step_time_s")
 PER_SEED = "mean over seeds of per-seed means (sd: ddof=1)"
@@ -75,7 +80,11 @@ class SummaryRow:
 
 @dataclass(frozen=True)
 class TestRow:
-    """An ANOVA (``planner_b`` empty) or a Welch t-test between two planners."""
+    """An ANOVA (``planner_b`` empty) or a Welch t-test between two planners.
+
+    ``no_spread`` names the groups whose per-seed means are all equal; when it names every group of the
+    test, the test is undefined and ``statistic``, ``p_value`` and ``p_adjusted`` are nan.
+    """
 
     map: str
     metric: str
@@ -87,6 +96,7 @@ class TestRow:
     p_adjusted: float
     n_a: int
     n_b: int
+    no_spread: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -188,6 +198,28 @@ def hedges_g(x: np.ndarray, y: np.ndarray) -> float:
     return float((np.mean(x) - np.mean(y)) / pooled * (1.0 - 3.0 / (4.0 * (nx + ny) - 9.0)))
 
 
+def no_spread(groups: Mapping[str, np.ndarray]) -> tuple[str, ...]:
+    """The labels of the groups of two or more values that are all equal (zero sample variance), in order."""
+    return tuple(k for k, v in groups.items() if v.size >= 2 and float(np.ptp(v)) == 0.0)
+
+
+def spread_note(t: TestRow) -> str:
+    """What a table prints beside a test's p-value about zero variance: nothing when every group has spread,
+    ``"(undefined: no spread in any group)"`` when the test has no within-group variance at all, else
+    ``"(no spread: A*)"`` naming the constant groups (the test stands, but on the other groups' spread)."""
+    if not t.no_spread:
+        return ""
+    groups = t.n_b if t.test == "anova" else 2
+    if len(t.no_spread) == groups:
+        return "(undefined: no spread in any group)"
+    return f"(no spread: {', '.join(t.no_spread)})"
+
+
+def significant(p: float, alpha: float) -> bool:
+    """Whether a p-value earns the table's star: below ``alpha`` and defined (nan, an undefined test, never)."""
+    return bool(math.isfinite(p) and p < alpha)
+
+
 def holm(p: Sequence[float]) -> np.ndarray:
     """Holm's step-down adjusted p-values (nan stays nan)."""
     p = np.asarray(p, float)
@@ -265,33 +297,39 @@ def analyse(trials_path: str | os.PathLike, timings_path: str | os.PathLike | No
                 # Constant groups (an exact planner gives the same per-seed mean for every seed) make the
                 # statistic undefined: scipy warns and returns nan, which the table shows as such.
                 warnings.simplefilter("ignore")
+                flat = no_spread(groups)
                 if st.anova:
                     usable = [v for v in groups.values() if v.size >= 2]
-                    if len(usable) >= 2 and len(usable) == len(groups):
+                    # No within-group variance at all: F = ∞, p = 0 from scipy is an artefact, not evidence.
+                    if len(usable) >= 2 and len(usable) == len(groups) and len(flat) < len(groups):
                         r = sps.f_oneway(*usable)
                         f, p = float(r.statistic), float(r.pvalue)
                     else:
                         f, p = math.nan, math.nan
                     tests.append(TestRow(mp.name, metric, "anova", "", "", f, p, p,
-                                         sum(v.size for v in groups.values()), len(groups)))
+                                         sum(v.size for v in groups.values()), len(groups), flat))
                 if st.pairwise:
                     pairs = []
                     for a, b in itertools.combinations(groups, 2):
                         x, y = groups[a], groups[b]
-                        if x.size >= 2 and y.size >= 2:
+                        both_flat = a in flat and b in flat  # t = ±∞, p = 0: undefined, as for the ANOVA
+                        if x.size >= 2 and y.size >= 2 and not both_flat:
                             r = sps.ttest_ind(x, y, equal_var=False)
                             pairs.append([a, b, float(r.statistic), float(r.pvalue), x.size, y.size])
                         else:
                             pairs.append([a, b, math.nan, math.nan, x.size, y.size])
                     adj = holm([q[3] for q in pairs]) if st.correction == "holm" else [q[3] for q in pairs]
                     for q, pa in zip(pairs, adj, strict=True):
-                        tests.append(TestRow(mp.name, metric, "welch_t", q[0], q[1], q[2], q[3], float(pa), q[4], q[5]))
+                        tests.append(TestRow(mp.name, metric, "welch_t", q[0], q[1], q[2], q[3], float(pa), q[4], q[5],
+                                             tuple(k for k in flat if k in (q[0], q[1]))))
     return Analysis(tuple(summary), tuple(tests), per_seed, seeds, infeasible)
 
 
 def _cell(v) -> str:
     if v is None:
         return ""
+    if isinstance(v, tuple):  # a list of planner labels (``no_spread``)
+        return ";".join(map(str, v))
     if isinstance(v, float):
         return "nan" if math.isnan(v) else repr(v)
     return str(v)
@@ -316,7 +354,8 @@ def write_summary(path: str | os.PathLike, a: Analysis) -> None:
 
 
 def write_significance(path: str | os.PathLike, a: Analysis) -> None:
-    """significance.csv: `SIGNIFICANCE_COLUMNS` (an ANOVA row has no ``planner_b``; ``n_b`` is its group count)."""
+    """significance.csv: `SIGNIFICANCE_COLUMNS` (an ANOVA row has no ``planner_b``; ``n_b`` is its group count;
+    ``no_spread`` lists the groups without spread, ``;``-separated)."""
     _write_csv(path, SIGNIFICANCE_COLUMNS, [[getattr(r, c) for c in SIGNIFICANCE_COLUMNS] for r in a.tests])
 
 

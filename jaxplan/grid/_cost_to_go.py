@@ -27,9 +27,12 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike
 
+from jaxplan.core.compile_cache import on_first_use
 from jaxplan.grid._gridmap import GridMap, check_cells, passable
 from jaxplan.grid._neighbours import neighbour_table
 from jaxplan.grid._search_parts import heap_pop, heap_push
+
+on_first_use()  # jaxplan's cache folders, before numba fixes the cache folder of the kernels below
 
 __all__ = ["state_cost_to_go"]
 

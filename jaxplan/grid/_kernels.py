@@ -22,7 +22,10 @@ import numba
 import numpy as np
 from numba import njit
 
+from jaxplan.core.compile_cache import on_first_use
 from jaxplan.grid._search_parts import H_NONE, cell_heuristic
+
+on_first_use()  # jaxplan's cache folders, before numba fixes the cache folder of the kernels below
 
 # Up to this many targets the heuristic is the minimum over targets; beyond, plain Dijkstra.
 _MAX_HEURISTIC_TARGETS = 8

@@ -10,6 +10,10 @@ import math
 
 from numba import njit
 
+from jaxplan.core.compile_cache import on_first_use
+
+on_first_use()  # jaxplan's cache folders, before numba fixes the cache folder of the kernels below
+
 __all__ = ["H_EUCLID", "H_MANHATTAN", "H_NONE", "H_OCTILE", "cell_heuristic", "heap_pop", "heap_push"]
 
 H_NONE, H_MANHATTAN, H_OCTILE, H_EUCLID = 0, 1, 2, 3

@@ -12,6 +12,7 @@ import numpy as np
 from jax.sharding import Mesh
 from numpy.typing import ArrayLike
 
+from jaxplan.core.names import did_you_mean
 from jaxplan.dwa import DWAParams, footprint_radius, validate_config, validate_params
 from jaxplan.grid import GridMap
 from jaxplan.mppi import MPPIParams
@@ -53,7 +54,8 @@ def resolve_config(config: NavConfig | None, pipeline: Pipeline, local_planner: 
         raise ValueError(f"config must be a NavConfig, got {type(cfg).__name__}")
     local = local_planner or cfg.local or pipeline.local
     if local not in LOCAL_PLANNERS:
-        raise ValueError(f"unknown local planner {local!r}; choose from {LOCAL_PLANNERS}")
+        raise ValueError(f"unknown local planner {local!r}{did_you_mean(str(local), LOCAL_PLANNERS)} "
+                         f"(choose from {', '.join(LOCAL_PLANNERS)})")
     if cfg.subgoal not in SUBGOAL_MODES:
         raise ValueError(f"unknown sub-goal mode {cfg.subgoal!r}; choose from {SUBGOAL_MODES}")
     if cfg.prediction not in PREDICTIONS:

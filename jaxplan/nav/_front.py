@@ -49,7 +49,7 @@ from jaxplan.nav._moving import MovingObstacles, obstacle_state, stack_obstacles
 from jaxplan.nav._pipelines import Pipeline
 from jaxplan.nav._results import Episode, EpisodeBatch
 from jaxplan.nav._state import GOAL, REASONS, EpisodeInputs
-from jaxplan.scale import BATCH_AXIS, auto_mesh, check_memory, episode_memory, pad_leading
+from jaxplan.scale import BATCH_AXIS, Knob, auto_mesh, check_memory, episode_memory, pad_leading
 
 __all__ = ["navigate", "navigate_batch", "navigate_multi", "planning_grid", "prepare_episodes", "PreparedEpisodes",
            "CURVATURE_MIN_SPEED", "INFEASIBLE_START",
@@ -355,10 +355,11 @@ def _check_episode_memory(cfg: NavConfig, grid: GridMap, robots: int, obstacles:
     else:
         samples, points = cfg.dwa.samples, cfg.dwa.steps
     discs = obstacles.count if isinstance(obstacles, MovingObstacles) else 0
-    est = episode_memory(robots, cfg.steps, samples, rollout_steps=points, discs=discs,
-                         map_cells=int(np.asarray(grid.free).size))
-    check_memory(est, f"navigation ({cfg.local}, {robots} robot episodes of up to {cfg.steps} steps)",
-                 unit="robot episodes (scenarios x seeds x robots)", advice="Use fewer scenarios, seeds or robots")
+    est = lambda n: episode_memory(robots, cfg.steps, n, rollout_steps=points, discs=discs,  # noqa: E731
+                                   map_cells=int(np.asarray(grid.free).size))
+    check_memory(est(samples), f"navigation ({cfg.local}, {robots} robot episodes of up to {cfg.steps} steps)",
+                 unit="robot episodes (scenarios x seeds x robots)", advice="Use fewer scenarios, seeds or robots",
+                 knob=Knob(f"{cfg.local} samples", samples, est))
 
 
 def _run(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str | None, global_planner: str | None,

@@ -11,6 +11,8 @@ import dataclasses
 from types import MappingProxyType
 from typing import Any, Mapping
 
+from jaxplan.core.names import did_you_mean
+
 __all__ = ["Pipeline", "PIPELINES", "pipelines", "get_pipeline"]
 
 
@@ -84,5 +86,6 @@ def get_pipeline(name: str) -> Pipeline:
     """The pipeline ``name``; a clear error listing the names otherwise."""
     p = PIPELINES.get(name)
     if p is None:
-        raise ValueError(f"unknown pipeline {name!r}; choose from {', '.join(PIPELINES)}")
+        raise ValueError(f"unknown pipeline {name!r}{did_you_mean(str(name), PIPELINES)} "
+                         f"(choose from {', '.join(PIPELINES)})")
     return p

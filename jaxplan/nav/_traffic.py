@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike
 from scipy import ndimage
 
 from jaxplan.core.geometry import segment_square_distance_np
+from jaxplan.core.names import did_you_mean
 from jaxplan.grid import TOUCH, GridMap, clearance_field, grid_from_array
 from jaxplan.nav._moving import MovingObstacles, moving_obstacles, no_obstacles, per_obstacle
 from jaxplan.search import astar
@@ -243,7 +244,8 @@ def random_obstacles(grid: Any, n: int = 5, speed: Any = 1.0, radius: Any = 0.25
     g = _as_grid(grid)
     rng = _rng(seed)
     if behavior not in BEHAVIORS:
-        raise ValueError(f"unknown walker behavior {behavior!r}; choose from {BEHAVIORS}")
+        raise ValueError(f"unknown walker behavior {behavior!r}{did_you_mean(str(behavior), BEHAVIORS)} "
+                         f"(choose from {', '.join(BEHAVIORS)})")
     if not isinstance(n, (int, np.integer)) or n < 0:
         raise ValueError(f"n must be an integer >= 0, got {n!r}")
     if not isinstance(waypoints, (int, np.integer)) or waypoints < 1:

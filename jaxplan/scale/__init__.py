@@ -22,12 +22,14 @@ from jaxplan.scale._host_devices import (
 )
 from jaxplan.scale._hosts import host_share, initialize, merge_shards, shard_path, write_shard
 from jaxplan.scale._memory import (
+    Knob,
     MemoryEstimate,
     MemoryLimitError,
     aco_memory,
     check_memory,
     dwa_memory,
     episode_memory,
+    largest_count,
     memory_limit,
     table_memory,
     tsp_memory,
@@ -35,6 +37,7 @@ from jaxplan.scale._memory import (
 from jaxplan.scale._mesh import BATCH_AXIS, batch_mesh, check_mesh, pad_leading, padded_size
 
 __all__ = ["AUTO_MIN_PER_DEVICE", "HOST_DEVICES_ENV", "auto_mesh", "host_devices_setting", "use_host_devices",
-           "BATCH_AXIS", "batch_mesh", "check_mesh", "pad_leading", "padded_size", "MemoryEstimate",
+           "BATCH_AXIS", "batch_mesh", "check_mesh", "pad_leading", "padded_size", "Knob", "largest_count",
+           "MemoryEstimate",
            "MemoryLimitError", "aco_memory", "check_memory", "dwa_memory", "episode_memory", "table_memory",
            "tsp_memory", "memory_limit", "host_share", "initialize", "merge_shards", "shard_path", "write_shard"]

@@ -3,7 +3,8 @@
 A sweep of thousands of scenarios × seeds fails late and badly when it runs out of memory
 (the kernel kills the process, or XLA aborts mid-run). `plan_batch` therefore estimates the
 working memory of its compiled program from the configuration's sizes before it allocates
-anything, and refuses a batch above the limit with the largest batch that would fit; so do
+anything, and refuses a batch above the limit with the largest batch that would fit (and, as a single run
+cannot be split, the largest ant or sample count when not even one run fits, `Knob`); so do
 `solve_tsp` (`tsp_memory`), a tuning population, and an experiment's chunks (navigation:
 `episode_memory`) and trials (`table_memory`), before their first step.
 
@@ -18,10 +19,10 @@ from __future__ import annotations
 
 import math
 import os
-from typing import NamedTuple
+from typing import Callable, NamedTuple
 
-__all__ = ["MemoryEstimate", "MemoryLimitError", "aco_memory", "dwa_memory", "tsp_memory", "episode_memory",
-           "table_memory", "memory_limit", "check_memory"]
+__all__ = ["MemoryEstimate", "MemoryLimitError", "Knob", "largest_count", "aco_memory", "dwa_memory", "tsp_memory",
+           "episode_memory", "table_memory", "memory_limit", "check_memory"]
 
 _F32 = 4
 _I32 = 4
@@ -54,6 +55,42 @@ class MemoryEstimate(NamedTuple):
 
 class MemoryLimitError(MemoryError):
     """A batch whose estimated memory exceeds the limit (raised before anything is allocated)."""
+
+
+class Knob(NamedTuple):
+    """A count inside each batch element that the user chose (ants per colony, samples per control step), for a
+    refusal to name the largest value that fits: when not even one element of the batch fits, "split the batch"
+    cannot help (a single run cannot be split) and this count is what to lower.
+
+    Attributes:
+      name: what the count counts, as the user sets it (``"ants"``, ``"samples"``).
+      now: its current value.
+      estimate: the same batch's estimate with the count set to its argument (non-decreasing in it).
+    """
+
+    name: str
+    now: int
+    estimate: Callable[[int], MemoryEstimate]
+
+
+def largest_count(knob: Knob, limit: int) -> int:
+    """The largest value of ``knob`` in ``[0, knob.now]`` whose estimate stays within ``limit`` bytes (bisection on
+    the non-decreasing estimate; 0 when not even a count of 1 fits)."""
+    lo, hi = 0, int(knob.now)
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if knob.estimate(mid).total <= limit:
+            lo = mid
+        else:
+            hi = mid - 1
+    return lo
+
+
+def _size(nbytes: float) -> str:
+    """A JAXPLAN_MEMORY_LIMIT value at least ``nbytes``: whole GiB (``49G``), or MiB below 1 GiB."""
+    if nbytes >= 2**30:
+        return f"{math.ceil(nbytes / 2**30)}G"
+    return f"{max(1, math.ceil(nbytes / 2**20))}M"
 
 
 def aco_memory(cells: int, moves: int, runs: int, colonies: int, ants: int, max_steps: int, iterations: int,
@@ -217,15 +254,36 @@ def _available_bytes() -> int:
 
 
 def check_memory(estimate: MemoryEstimate, what: str, limit: int | None = None, unit: str = "runs",
-                 advice: str = "Split the batch") -> None:
-    """Raises `MemoryLimitError` naming the largest batch that fits if ``estimate`` exceeds ``limit`` (``advice``:
-    what the caller's user can change, before "or raise the limit with JAXPLAN_MEMORY_LIMIT")."""
+                 advice: str = "Split the batch", knob: Knob | None = None, single: str = "") -> None:
+    """Raises `MemoryLimitError` if ``estimate`` exceeds ``limit``, naming what fits.
+
+    The message names the largest batch that fits ("at most K {unit} fit") and then what to change: ``advice``
+    (the batch's own knobs: fewer scenarios, seeds or robots) when some of the batch fits; when not even one
+    element fits, splitting cannot help, so it names the largest ``knob`` count that fits ("use at most N ants
+    (now M)") or, without a knob, ``single`` (what makes one element large). Last, the limit to set if the machine
+    has the memory: the estimate rounded up, which is above the current limit.
+    """
     limit = memory_limit() if limit is None else int(limit)
     if estimate.total <= limit:
         return
     top = sorted(estimate.parts.items(), key=lambda kv: -kv[1])[:3]
     biggest = ", ".join(f"{k} {v / 2**30:.2f} GiB" for k, v in top)
+    fits = estimate.largest_batch(limit)
+    change = []
+    if fits >= 1:
+        change.append(advice)
+    if knob is not None:
+        n = largest_count(knob, limit)
+        if n >= 1:
+            change.append(f"use at most {n} {knob.name} (now {knob.now})" + (f" with all {estimate.runs} {unit}"
+                                                                            if fits >= 1 else ""))
+        elif fits == 0:
+            change.append(f"not even 1 of the {knob.name} fits: the rest of the configuration alone is too large")
+    elif fits == 0 and single:
+        change.append(single)
+    head = f"at most {fits} {unit} fit" + (" (a single one cannot be split)" if fits == 0 else "")
+    todo = "; or ".join(change)
     raise MemoryLimitError(
         f"{what} needs about {estimate.total / 2**30:.2f} GiB ({biggest}) for {estimate.runs} {unit}, above the "
-        f"limit of {limit / 2**30:.2f} GiB; at most {estimate.largest_batch(limit)} {unit} fit. {advice}, "
-        f"or raise the limit with JAXPLAN_MEMORY_LIMIT (e.g. 16G)")
+        f"limit of {limit / 2**30:.2f} GiB; {head}." + (f" {todo[:1].upper()}{todo[1:]}." if todo else "")
+        + f" If the machine has that much free memory, raise the limit: JAXPLAN_MEMORY_LIMIT={_size(estimate.total)}")

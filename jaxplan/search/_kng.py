@@ -34,11 +34,14 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike
 
+from jaxplan.core.compile_cache import on_first_use
 from jaxplan.grid import GridMap, passable
 from jaxplan.metrics import count_sharp_turns, count_turns, path_length
 from jaxplan.result import PlanResult
 from jaxplan.search._exact import _validate_exact, astar
 from jaxplan.search._sampling import _clear, _threshold
+
+on_first_use()  # jaxplan's cache folders, before numba fixes the cache folder of the kernels below
 
 __all__ = ["astar_kng", "key_node_path"]
 

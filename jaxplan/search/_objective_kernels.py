@@ -30,7 +30,10 @@ import numba
 import numpy as np
 from numba import njit
 
+from jaxplan.core.compile_cache import on_first_use
 from jaxplan.grid import cell_heuristic, heap_pop, heap_push
+
+on_first_use()  # jaxplan's cache folders, before numba fixes the cache folder of the kernels below
 
 
 @njit(cache=True, nogil=True)

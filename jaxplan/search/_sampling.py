@@ -74,10 +74,13 @@ from numba import njit
 from numpy.typing import ArrayLike
 from scipy import ndimage
 
+from jaxplan.core.compile_cache import on_first_use
 from jaxplan.core.geometry import point_segment_distance_nb, segment_square_distance_nb
 from jaxplan.grid import TOUCH, GridMap, cached_collision_map, check_cell
 from jaxplan.metrics import count_turns, path_length
 from jaxplan.result import PlanResult
+
+on_first_use()  # jaxplan's cache folders, before numba fixes the cache folder of the kernels below
 
 __all__ = [
     "rrt_star", "mrbs_rrt", "SamplingRegions", "sampling_regions", "region_probabilities", "mrbs_sample",

@@ -165,7 +165,8 @@ class Objective:
         n, R = len(self.splits[split].starts), len(self.splits[split].seeds)
         check_memory(self.memory(int(population), split),
                      f"objective {self.name!r} on {n} scenario{'s' * (n != 1)} x {R} seed{'s' * (R != 1)} ({split})",
-                     unit="weight vectors (population)", advice="Use a smaller population, fewer scenarios or seeds")
+                     unit="weight vectors (population)", advice="Use a smaller population, fewer scenarios or seeds",
+                     single=f"Use fewer scenarios or seeds for {split!r} (each weight vector runs them all at once)")
 
     def with_mesh(self, mesh: Any) -> "Objective":
         """This objective evaluated on ``mesh`` (a `Mesh`, ``"auto"`` or None); compiled programs are not shared."""

@@ -21,7 +21,8 @@ Run folder ``OUT/NAME`` (``OUT/NAME-quick`` for quick runs)::
     summary.json              defaults vs best weights on the train and held-out test sets, the
                               seed-to-seed spread (sd over seeds of the per-seed mean cost; null with
                               one seed), NaN count; strict JSON (a NaN or inf number is written null)
-    best.toml                 the best weights as a [[planners]] entry for `jaxplan run`
+    best.toml                 the best weights as a [[planners]] entry for `jaxplan run`, with the config's own
+                              overrides (never a quick run's smaller ants or iterations)
     convergence.png           best-so-far and generation mean against evaluations
 
 A checkpoint commits in two steps — orbax writes the state, then the manifest (temporary
@@ -45,7 +46,7 @@ import shutil
 import sys
 import time
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 import jax
 import jax.numpy as jnp
@@ -484,10 +485,14 @@ def run_tuning(config_path, out="runs", quick: bool = False, data_dir=None, prog
     one, exactly; without it the folder's checkpoints are discarded), then writes
     summary.json (defaults vs best on train and test with the seed-to-seed spread),
     best.toml (a ``[[planners]]`` entry `jaxplan run` accepts) and convergence.png.
+
+    best.toml holds the tuned weights with the config's own ``overrides`` (its ants, iterations, DWA settings),
+    also after a ``quick`` run: a smoke run's smaller settings are how it searched, not a setting to run with.
     """
     from jaxplan.tune._config import apply_tune_quick, load_tune_config
 
     cfg = load_tune_config(config_path, data_dir=data_dir)
+    own = dict(cfg.overrides)  # before [tune.quick] replaces some of them
     if quick:
         cfg = apply_tune_quick(cfg)
     objective = build_objective(cfg)
@@ -496,10 +501,29 @@ def run_tuning(config_path, out="runs", quick: bool = False, data_dir=None, prog
     run_dir = confined(out, cfg.name + ("-quick" if cfg.is_quick else ""))
     run_dir.mkdir(parents=True, exist_ok=True)
     with folder_lock(run_dir):
-        return _run_tuning(cfg, objective, run_dir, progress, resume)
+        return _run_tuning(cfg, objective, run_dir, progress, resume, own)
 
 
-def _run_tuning(cfg, objective: Objective, run_dir: Path, progress: bool, resume: bool) -> Path:
+def _best_comment(cfg, evaluations: int, test: dict, own: Mapping[str, Any]) -> str:
+    """The comment above best.toml's entry: where the weights come from and their held-out result; for a quick
+    run, that the entry keeps the config's own settings and which smoke-run settings the search used instead."""
+    out = (f"best weights of tuning run {cfg.name} ({cfg.strategy}, {evaluations} evaluations)\n"
+           f"held-out test objective: tuned {test['tuned']['objective']:.6g} ± {_sd_text(test['tuned']['seed_sd'])}, "
+           f"{'defaults' if cfg.kind == 'mppi' else 'paper defaults'} {test['defaults']['objective']:.6g} ± "
+           f"{_sd_text(test['defaults']['seed_sd'])} "
+           f"(sd over {len(cfg.test_seeds)} seed{'s' if len(cfg.test_seeds) != 1 else ''})")
+    changed = {k: v for k, v in cfg.overrides.items() if k not in own or own[k] != v}
+    if cfg.is_quick:
+        searched = f" with {_inline(changed)}" if changed else ""
+        out += (f"\na quick (smoke) run: the search ran{searched}; the entry keeps the config's own settings, "
+                "so rerun without --quick for weights worth using")
+    return out
+
+
+def _run_tuning(cfg, objective: Objective, run_dir: Path, progress: bool, resume: bool,
+                own: Mapping[str, Any] | None = None) -> Path:
+    """The search and its outputs; ``own``: the config's overrides before ``[tune.quick]`` (best.toml's)."""
+    own = dict(cfg.overrides) if own is None else dict(own)
     strategy = make_strategy(cfg.strategy, cfg.population, cfg.generations, **dict(cfg.options))
     fp = hashlib.sha256(cfg.text.encode() + (b"|quick" if cfg.is_quick else b"")).hexdigest()
     atomic_write(run_dir / "config.toml", cfg.text.encode())
@@ -520,13 +544,8 @@ def _run_tuning(cfg, objective: Objective, run_dir: Path, progress: bool, resume
         "weights": dict(cfg.weights), "wall_s_this_session": wall,
     }
     atomic_write(run_dir / "summary.json", json.dumps(_json_safe(summary), indent=1, allow_nan=False).encode())
-    te = summary["test"]
-    comment = (f"best weights of tuning run {cfg.name} ({cfg.strategy}, {res['evaluations']} evaluations)\n"
-               f"held-out test objective: tuned {te['tuned']['objective']:.6g} ± {_sd_text(te['tuned']['seed_sd'])}, "
-               f"{'defaults' if cfg.kind == 'mppi' else 'paper defaults'} {te['defaults']['objective']:.6g} ± "
-               f"{_sd_text(te['defaults']['seed_sd'])} "
-               f"(sd over {len(cfg.test_seeds)} seed{'s' if len(cfg.test_seeds) != 1 else ''})")
-    frag = fragment_toml(objective, best, label=f"{cfg.planner}-tuned", overrides=dict(cfg.overrides),
+    comment = _best_comment(cfg, res["evaluations"], summary["test"], own)
+    frag = fragment_toml(objective, best, label=f"{cfg.planner}-tuned", overrides=own,
                          pipeline=cfg.pipeline, comment=comment)
     atomic_write(run_dir / "best.toml", frag.encode())
     plot_tuning({cfg.strategy: res["rows"]}, run_dir / "convergence.png", title=f"{cfg.name}: {cfg.strategy}")
