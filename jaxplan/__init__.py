@@ -1,6 +1,6 @@
 """jaxplan: grid path planning for warehouse robots and logistics vehicles, in JAX.
 
-The public names of DESIGN §3 are re-exported here::
+The public names are re-exported here::
 
     import jaxplan as jp
     grid = jp.load_map("den520d.map")

@@ -1,4 +1,4 @@
-"""The front door of the global planners: `plan` and `planners` (DESIGN §3), as ``jaxplan.plan`` and
+"""The front door of the global planners: `plan` and `planners` (docs/guide/planners.md), as ``jaxplan.plan`` and
 ``jaxplan.planners``.
 
 Planners register themselves with `jaxplan.registry` when their module is imported: the exact and

@@ -1,4 +1,4 @@
-"""The planner registry (DESIGN §3), at the bottom of the planners' import graph.
+"""The planner registry (docs/guide/planners.md), at the bottom of the planners' import graph.
 
 Every planner has the signature ``fn(grid, start, goal, seed, **params) -> PlanResult``
 and registers its defaults with `register_planner` when its module is imported; `resolve`

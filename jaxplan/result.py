@@ -1,4 +1,4 @@
-"""`PlanResult`: what every global planner returns (DESIGN §3)."""
+"""`PlanResult`: what every global planner returns (docs/guide/planners.md)."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ class PlanResult(NamedTuple):
       path: ``int64[L, 2]`` cells ``(x, y)`` from start to goal inclusive; ``[0, 2]`` when
         the goal was not reached.
       length: path length in metres (``inf`` when not reached).
-      turns: vertices with a heading change (DESIGN §6).
+      turns: vertices with a heading change (docs/guide/smoothing-and-metrics.md).
       cost: the planner's own objective (for exact planners, the length).
       history: ``f64[iterations]`` best cost after each iteration (empty for exact planners).
       time_s: wall-clock planning time in seconds (excluding one-off compilation where noted).

@@ -102,7 +102,7 @@ def init_opt_ant(tables: MapTables, params: dict) -> jnp.ndarray:
     """chu2024, Eq. 2: C on boundary cells, else C + 1/(1 + n_blocked) − σ·H/H_max.
 
     The paper prints "+ σ·H/H_max" but says a larger σ makes high cells less likely;
-    DESIGN §4 follows the text. H_max is the largest |H|, so that terrain below the datum
+    docs/guide/planners.md follows the text. H_max is the largest |H|, so that terrain below the datum
     (negative heights) keeps the term in [−σ, σ] instead of dividing by a floored maximum
     (the same for heights >= 0). Floored at TAU_FLOOR.
     """
@@ -121,7 +121,7 @@ def cost_length(stats: PathStats, params: dict, tables: MapTables, goal: GoalTab
 
 
 def cost_iaco(stats: PathStats, params: dict, tables: MapTables, goal: GoalTables) -> jnp.ndarray:
-    """cui2025, Eq. 4 (as DESIGN §4 reads it): F = λ1·L/L0 + λ2·Σ|θ|/π + λ3·Σ 1/d_j,
+    """cui2025, Eq. 4 (as docs/guide/planners.md reads it): F = λ1·L/L0 + λ2·Σ|θ|/π + λ3·Σ 1/d_j,
     L0 the straight-line start–goal distance."""
     l0 = jnp.linalg.norm(tables.xy[goal.start] - tables.xy[goal.goal])
     lam = params["lambdas"]

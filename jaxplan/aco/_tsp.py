@@ -1,4 +1,4 @@
-"""TSP mode of the ACO engine: Ant System and P-RACO on a complete graph (DESIGN §4).
+"""TSP mode of the ACO engine: Ant System and P-RACO on a complete graph (docs/guide/planners.md).
 
 A run is one compiled program: `lax.scan` over iterations; inside, all ants of all
 sub-colonies build their tours together in a `lax.scan` over the n − 1 construction steps

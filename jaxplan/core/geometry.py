@@ -1,7 +1,7 @@
 """Exact distances from points and segments to unit squares (blocked cells), as JAX, numpy and numba twins.
 
 A blocked cell ``(x, y)`` is the closed unit square centred at ``(x, y)`` in cell coordinates
-(DESIGN §2). Every clearance question of jaxplan reduces to three distances:
+(docs/guide/maps-and-scenarios.md#conventions). Every clearance question of jaxplan reduces to three distances:
 
 * point–square: ``|max(|p − c| − ½, 0)|`` (0 inside);
 * point–segment: to the nearest point of the segment (clamped projection);

@@ -1,6 +1,6 @@
 """Clearance of trajectory points: to the map's blocked squares and to moving discs.
 
-Clearance (DESIGN §5) is the distance from a point to the nearest blocked cell's
+Clearance (docs/guide/navigation.md) is the distance from a point to the nearest blocked cell's
 boundary (a blocked cell is the closed unit square around its centre; outside the map
 is blocked) or to the edge of a moving disc. The rollouts ask it for every one of
 S·T points per robot and step, so the static part is a table lookup built once per

@@ -7,7 +7,7 @@ one compilation per combination — while its distances and the robot's limits a
 traced leaves: changing a limit does not recompile, and robots with different limits
 can be ``vmap``-ped. `DWAParams` holds the critic
 weights and the softmax temperature as arrays: the quantities tuning ``vmap``-s over
-and differentiates (DESIGN §7), never a reason to recompile.
+and differentiates (docs/guide/experiments.md), never a reason to recompile.
 """
 
 from __future__ import annotations
@@ -63,9 +63,9 @@ class DWAConfig:
       escape: when the robot is already closer than d_safe to an obstacle (a moving disc
         came close, or it started there), a rollout is also feasible if it never gets
         closer than the current clearance (less `ESCAPE_SLACK`), so the robot can move
-        away instead of rotating in place for ever (static; DESIGN §5's recovery still
+        away instead of rotating in place for ever (static; the navigation guide's recovery still
         applies when even that is impossible).
-      recovery: what to do when no sample is feasible (static): ``"rotate"`` — DESIGN §5's
+      recovery: what to do when no sample is feasible (static): ``"rotate"`` — the navigation guide's
         stop and rotate in place towards the sub-goal — or ``"flee"``: take the sample whose
         rollout keeps the largest minimum clearance (against a moving disc heading for the
         robot, standing still is often the worst choice; navigation episodes use this).

@@ -14,7 +14,7 @@ Selection:
     `Ackermann` robot that may reverse has its blended yaw rate clipped to its curvature
     limit (|ω| <= κ|v| is not convex across v = 0).
 
-Recovery (DESIGN §5): when no sample is feasible the robot brakes as hard as the
+Recovery (docs/guide/navigation.md): when no sample is feasible the robot brakes as hard as the
 window allows towards v = 0 and turns as fast as it allows towards the sub-goal's
 side (left when the sub-goal is dead ahead) — "stop and rotate in place"; an
 `Ackermann` robot cannot turn on the spot, so its yaw rate also follows the curvature

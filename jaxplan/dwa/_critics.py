@@ -1,7 +1,7 @@
 """Critics: small pure functions scoring rollouts, and the weighted and classic evaluators.
 
 Every critic maps the S rollouts of one step to ``f32[S]`` in [0, 1], higher is better
-(cui2025 Eq. (7) and DESIGN §5):
+(cui2025 Eq. (7) and docs/guide/navigation.md):
 
 * `heading` G = 1 − |Δ|/π, Δ the angle between the rollout's end heading and the
   direction from its end point to the sub-goal ("the angular deviation between the

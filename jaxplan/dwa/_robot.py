@@ -1,11 +1,11 @@
 """Robot models for the local planner: kinematic limits, footprints and the motion model.
 
 Two models share one state layout, ``[5] = (x, y, theta, v, omega)`` in m, rad, m/s,
-rad/s (DESIGN §3), and one motion model (a unicycle: ``ẋ = v cos θ``, ``ẏ = v sin θ``,
+rad/s (docs/guide/navigation.md), and one motion model (a unicycle: ``ẋ = v cos θ``, ``ẏ = v sin θ``,
 ``θ̇ = ω``):
 
 * `Unicycle` — a differential-drive robot; defaults from cui2025 (§4.1: v ≤ 1.2 m/s,
-  |ω| ≤ 2.0 rad/s, |a| ≤ 0.5 m/s², the 0.25 m disc of DESIGN §5, angular acceleration
+  |ω| ≤ 2.0 rad/s, |a| ≤ 0.5 m/s², the 0.25 m disc, angular acceleration
   3.0 rad/s²). It can turn on the spot.
 * `Ackermann` — li2026's warehouse robot (Table 1: "Ackerman steering", 1.5 m/s,
   0.3 m/s²). A bicycle model about the rear axle has exactly the unicycle's kinematics
@@ -20,7 +20,7 @@ leaves (traced under ``jit``, so changing a limit does not recompile and a batch
 robots with different limits can be ``vmap``-ped), while the model class and the
 number of covering circles are static.
 
-Footprints: a `Disc` (DESIGN §5) or a `Rectangle` covered by ``circles`` equal discs
+Footprints: a `Disc` (docs/guide/navigation.md) or a `Rectangle` covered by ``circles`` equal discs
 along its length (the usual conservative approximation: each disc covers a
 ``length/circles × width`` slice, so the union contains the rectangle). Clearance is
 measured from the covering discs' centres; a footprint collides when a centre's

@@ -333,7 +333,7 @@ def one_robot(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, config: DWACo
 def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any = None,
              params: DWAParams | Mapping[str, float] | None = None, *, config: DWAConfig | None = None,
              path: ArrayLike | None = None, full_info: bool = True) -> tuple[np.ndarray, DWAInfo | None]:
-    """One Dynamic Window Approach step for one robot or a batch (DESIGN §3, §5).
+    """One Dynamic Window Approach step for one robot or a batch (docs/guide/navigation.md).
 
     Args:
       state: ``[5]`` = (x, y, theta, v, omega) in m, rad, m/s, rad/s, or ``[B, 5]``.

@@ -1,4 +1,4 @@
-"""Experiments: configs, the resumable runner, statistics, reports and figures (DESIGN §7).
+"""Experiments: configs, the resumable runner, statistics, reports and figures (docs/guide/experiments.md).
 
 * `config`: TOML experiment configs, validated in full before any work (`load_config`, `ConfigError`).
 * `schema`: settings declared once on dataclass fields, the reader that checks configs against them, and

@@ -74,7 +74,7 @@ class Metric:
       name: column name in trials.csv / summary.csv.
       kinds: planner kinds it applies to (``"plan"``, ``"navigate"``).
       unit: for tables ("" for counts and ratios).
-      description: one line (DESIGN §6).
+      description: one line (docs/guide/smoothing-and-metrics.md).
       timing: a wall-clock time: written to timings.csv per chunk, not to trials.csv
         (it differs from run to run; trials.csv must not).
       given_success: averaged over successful trials only (e.g. the arrival time).
@@ -101,7 +101,8 @@ DRAW_SEP = "~"
 """Separates a generated map's name from its draw index in the name of draw d > 0 (``warehouse20m~3``)."""
 
 ACCURACY_GAP = 0.10
-"""cui2025's "accuracy" (DESIGN §6): the share of trials that succeed with an optimality gap <= this."""
+"""cui2025's "accuracy" (docs/guide/smoothing-and-metrics.md): the share of trials that succeed with an optimality gap
+<= this."""
 
 _P, _N, _B = frozenset({"plan"}), frozenset({"navigate"}), frozenset({"plan", "navigate"})
 _T, _PT = frozenset({"tsp"}), frozenset({"plan", "tsp"})
@@ -151,7 +152,7 @@ METRICS: Mapping[str, Metric] = MappingProxyType({m.name: m for m in (
     Metric("passive_contacts", _N, "", "contacts begun with the robot at rest", default=False),
     Metric("time_s", _N, "s", "simulated time to the goal", given_success=True),
     Metric("rmse", _N, "m", "RMS distance of executed positions to the tracked path"),
-    Metric("energy", _N, "J", "energy proxy (DESIGN §6)"),
+    Metric("energy", _N, "J", "energy proxy (docs/guide/smoothing-and-metrics.md)"),
     Metric("path_length", _N, "m", "executed path length"),
     Metric("recoveries", _N, "", "control steps with no feasible DWA sample"),
     Metric("replans", _N, "", "in-episode re-plans"),

@@ -80,7 +80,7 @@ def _run_plan(mw: MapWork, pc: PlannerConfig, idx: np.ndarray, seeds: tuple[int,
                           n=br.n_cells[:n].reshape(-1))
         raw = {k: np.where(ok, np.asarray(pm[k], np.float64).reshape(n, R), np.nan) for k in PATH_KEYS}
         # The device's float32 sums depend on the batch's layout, so a --chunk change moved the last bits of a
-        # stored path's length; DESIGN promises same seed, same result: recompute from the integer cells.
+        # stored path's length; the same seed gives the same result: recompute from the integer cells.
         length = grid_path_lengths(br.paths[:n].reshape(n * R, P, 2), br.n_cells[:n].reshape(-1),
                                    float(mw.grid.resolution)).reshape(n, R)
         raw["length"] = np.where(ok, length, np.nan)

@@ -4,7 +4,8 @@ One plan (`plan_record`, `write_plan`):
   * ``.json``: the map (size, resolution, origin), start and goal, the planner with every parameter (defaults and
     ``--set`` overrides), the seed, the result (success, length m, cost, turns, history, time), the path in cells
     and in world metres (cell centres, the map's origin included: `GridMap.centre`), the smoothed path when asked,
-    the path metrics (DESIGN §6), why a failed plan failed, and the provenance record (`jaxplan.core.provenance`:
+    the path metrics (docs/guide/smoothing-and-metrics.md), why a failed plan failed, and the provenance record
+    (`jaxplan.core.provenance`:
     jaxplan version, git revision, library versions, machine). Non-finite numbers (the ``inf`` length of a failed
     plan) are ``null``.
   * ``.csv``: one row per path point: ``step, x, y`` (cells) and ``x_m, y_m`` (world metres); the smoothed polyline

@@ -3,7 +3,8 @@
 Everything is drawn in world coordinates (m) with row 0 at the top, as in MovingAI files (a ROS map, with
 ``y_up=True``, in its world frame: row 0 at the bottom, y up, as RViz shows it):
 cell ``(x, y)`` covers ``origin + [x·res, (x + 1)·res] × [y·res, (y + 1)·res]`` and its centre lies at
-`GridMap.centre`, ``origin + ((x + 0.5)·res, (y + 0.5)·res)`` (DESIGN §2; ``origin`` is ``(0, 0)`` unless
+`GridMap.centre`, ``origin + ((x + 0.5)·res, (y + 0.5)·res)`` (docs/guide/maps-and-scenarios.md#conventions;
+``origin`` is ``(0, 0)`` unless
 the map has one, as a ROS map does). Each helper draws onto a given ``ax`` and
 returns it, so a figure is composed from small calls::
 

@@ -36,7 +36,8 @@ PATH_ROWS = (
 
 
 def path_column(res: Any, grid: Any) -> list[str]:
-    """The `PATH_ROWS` cells of one `PlanResult` ``res`` on ``grid`` (metrics of DESIGN §6, time in ms)."""
+    """The `PATH_ROWS` cells of one `PlanResult` ``res`` on ``grid`` (docs/guide/smoothing-and-metrics.md; time in
+    ms)."""
     from jaxplan.metrics import path_metrics
 
     # The table shows no gap: the planner's own length as `optimal` skips a second exact search.

@@ -5,7 +5,8 @@ metrics here turn them into trials.csv values that depend on each trial's own ce
 the batch's layout or padding, so a ``--chunk`` change leaves every number as it was): grid path
 lengths as left-to-right float64 sums, optimality gaps, cui2025's accuracy, yu2020's
 line-of-sight reductions, the Hausdorff distance to the exact path, the smoothed exact
-optimum an executed path is measured against (DESIGN §6), the gap to each planner's own optimum, and the
+optimum an executed path is measured against (docs/guide/smoothing-and-metrics.md), the gap to each planner's own
+optimum, and the
 convergence iterations of an iterative planner's best-so-far history (`convergence_metrics`).
 """
 
@@ -30,7 +31,8 @@ _GAP_TOL = 1e-9  # a gap of exactly 10 % computes as 0.10000000000000009: count 
 
 
 def accuracy(success: np.ndarray, gap: np.ndarray, threshold: float = ACCURACY_GAP) -> np.ndarray:
-    """cui2025's accuracy per trial (DESIGN §6): 1 for a success with ``gap <= threshold``, else 0.
+    """cui2025's accuracy per trial (docs/guide/smoothing-and-metrics.md): 1 for a success with ``gap <= threshold``,
+    else 0.
 
     Args:
       success: ``[...]`` 1/0 outcomes (nan: undefined).
@@ -148,7 +150,8 @@ def hausdorff(mw: MapWork, idx: np.ndarray, paths: np.ndarray, n_cells: np.ndarr
 def executed_optimum(mw: MapWork, pc: PlannerConfig, idx: np.ndarray) -> np.ndarray:
     """``f64[n]`` the reference length (m) an executed path is measured against, per scenario: the exact path on
     the planning map (the map closed within d_safe of obstacles, as the pipelines plan) after the line-of-sight
-    smoothing the pipelines apply (clearance d_safe) — DESIGN §6's "the same smoothing applied to the exact path".
+    smoothing the pipelines apply (clearance d_safe) — the metrics guide's "the same smoothing applied to the exact
+    path".
     nan where the robot does not fit (start or goal closed, or not connected)."""
     from jaxplan.aco import plan_batch
     from jaxplan.metrics import path_metrics

@@ -1,7 +1,7 @@
 """Exact geometry of points and segments against the blocked cells of a map, in JAX.
 
 A blocked cell ``(x, y)`` is the closed unit square centred at ``(x, y)`` in cell
-coordinates (the cell-centre convention of DESIGN §2, before scaling by the
+coordinates (the cell-centre convention, docs/guide/maps-and-scenarios.md#conventions, before scaling by the
 resolution); everything outside the map counts as blocked. Smoothers, metrics and
 the local planner ask two questions of it:
 
@@ -171,7 +171,7 @@ def segment_clearance(cmap: CollisionMap, p: jnp.ndarray, q: jnp.ndarray, radius
 def segment_free(cmap: CollisionMap, p: jnp.ndarray, q: jnp.ndarray, radius=0.0, reach: float | None = None,
                  chunk: int = 8, step: float = 1.0) -> jnp.ndarray:
     """True if the segment ``p``–``q`` stays at least ``radius`` cells (and more than touching) from
-    every blocked square. Clearance equal to the radius is not a collision (DESIGN §5).
+    every blocked square. Clearance equal to the radius is not a collision (docs/guide/navigation.md).
     ``reach``, ``chunk`` and ``step`` as in `segment_clearance`."""
     thr = jnp.maximum(jnp.asarray(radius, jnp.float32), TOUCH)
     return segment_clearance(cmap, p, q, radius, reach, chunk, step) >= thr

@@ -1,6 +1,6 @@
 """The `GridMap` pytree: an occupancy grid with the extra layers the seed papers use.
 
-Conventions (DESIGN §2): cells are ``(x, y)`` = (column, row), row 0 at the top;
+Conventions (docs/guide/maps-and-scenarios.md#conventions): cells are ``(x, y)`` = (column, row), row 0 at the top;
 flat index ``i = y * W + x``; the centre of cell ``(x, y)`` lies at
 ``origin + ((x + 0.5) * res, (y + 0.5) * res)`` metres, with ``origin`` ``(0, 0)`` unless the map
 says otherwise (a ROS map's YAML does: see `jaxplan.grid.load_ros_map`).
@@ -251,7 +251,7 @@ def grid_from_array(
 def passable(grid: GridMap, vehicle_height: float | None = None) -> np.ndarray:
     """``bool[H, W]``: free cells, less tunnel/bridge cells too low for the vehicle.
 
-    A cell with ``clearance_height <= vehicle_height`` is blocked (DESIGN §4, opt_ant).
+    A cell with ``clearance_height <= vehicle_height`` is blocked (docs/guide/planners.md, opt_ant).
     """
     free = np.asarray(grid.free, dtype=bool)
     if vehicle_height is None:

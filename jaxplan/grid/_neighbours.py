@@ -1,6 +1,6 @@
 """Neighbourhoods for 4-, 8- and 16-connected moves, as flat tables ready for gathers.
 
-Move rule (DESIGN §2): a move from cell c to c + (dx, dy) is allowed when every
+Move rule (docs/guide/maps-and-scenarios.md#conventions): a move from cell c to c + (dx, dy) is allowed when every
 cell whose closed square meets the closed segment between the two centres is
 passable. For straight moves that is just the target; for diagonal moves the
 segment passes through the shared corner, so both orthogonal neighbours must be

@@ -1,4 +1,4 @@
-"""Path, run and episode metrics (definitions: DESIGN §6).
+"""Path, run and episode metrics (definitions: docs/guide/smoothing-and-metrics.md).
 
 Batched JAX functions over padded arrays (``jit``/``vmap``-able, shapes in the docstrings):
 

@@ -1,4 +1,4 @@
-"""Clearance of a padded path's vertices from the blocked cells of a map (DESIGN §6), in JAX.
+"""Clearance of a padded path's vertices from the blocked cells of a map (docs/guide/smoothing-and-metrics.md), in JAX.
 
 The clearance of a point is its distance to the nearest blocked unit square (the map's
 outside counts as blocked), in metres. The points measured are the path's **vertices**.

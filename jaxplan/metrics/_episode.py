@@ -1,4 +1,5 @@
-"""Episode metrics of a navigation run (DESIGN §6): success, collisions, tracking RMSE, energy, timing.
+"""Episode metrics of a navigation run (docs/guide/smoothing-and-metrics.md): success, collisions, tracking RMSE,
+energy, timing.
 
 An executed trajectory is ``positions [..., T, 2]`` in world metres (the ``(x, y)`` of the
 robot's state, sample ``t`` at time ``t·dt``, sample 0 the start) of which the first
@@ -51,7 +52,7 @@ def collision_steps(
         a padding obstacle can be placed at ``+inf``.
       obstacle_radii: ``[..., O]`` their radii (m); required with ``obstacles``.
 
-    A blocked-square collision is clearance < radius (DESIGN §5: touching is not a
+    A blocked-square collision is clearance < radius (docs/guide/navigation.md: touching is not a
     collision), the clearance being `point_clearance` of the centre: the decision is exact
     for a radius up to ``window`` cells (static; raise it for robots wider than 2 cells,
     e.g. on fine grids); a disc collision is centre distance < radius + obstacle radius.
@@ -144,7 +145,7 @@ def rmse(
 
 @dataclasses.dataclass(frozen=True)
 class EnergyModel:
-    """Constants of the energy proxy ``∫ (m·|a|·|v| + c_r·m·g·|v| + c_w·|ω|) dt`` (DESIGN §6).
+    """Constants of the energy proxy ``∫ (m·|a|·|v| + c_r·m·g·|v| + c_w·|ω|) dt`` (docs/guide/smoothing-and-metrics.md).
 
     Attributes (defaults for the cui2025 robot: 0.25 m radius, v <= 1.2 m/s):
       mass: m, kg. 30 kg: a differential-drive robot of 0.5 m diameter with a light load
@@ -210,7 +211,7 @@ def energy(
 
 
 class EpisodeTiming(NamedTuple):
-    """Wall-clock costs of an episode (DESIGN §6).
+    """Wall-clock costs of an episode (docs/guide/smoothing-and-metrics.md).
 
     Attributes:
       plan_time_s: global planning time (s), compilation excluded.

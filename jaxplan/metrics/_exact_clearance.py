@@ -4,7 +4,8 @@
 `point_clearance` searches a fixed 5x5 window, so beyond 2 cells it returns an upper bound
 (up to √2 cells high); a static shape cannot hold an exact search whose reach grows with
 the answer, but a k-d tree over the blocked-cell centres can. A blocked cell is the closed
-unit square centred at its cell (DESIGN §2); one ring of blocked centres around the map
+unit square centred at its cell (docs/guide/maps-and-scenarios.md#conventions); one ring of blocked centres around the
+map
 stands for the blocked outside (its nearest part to any inside point is in that ring).
 
 Bounds used to find every square that can be nearest: a unit square centred at ``b`` holds

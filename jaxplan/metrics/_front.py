@@ -1,4 +1,5 @@
-"""`path_metrics`: the path metrics of DESIGN §6 for one path or a padded batch, in one compiled call.
+"""`path_metrics`: the path metrics (docs/guide/smoothing-and-metrics.md) for one path or a padded batch, in one
+compiled call.
 
 The host side validates the input (the compiled core cannot raise), pads the path length
 up to a power of two so that one compilation serves every length in a bucket, and calls
@@ -148,7 +149,7 @@ def _check_grid_moves(free: np.ndarray, paths: np.ndarray, n: np.ndarray) -> Non
         a = p[b, i]
         corner = [int(a[0] + d[b, i, 0]), int(a[1])] if not side_x[b, i] else [int(a[0]), int(a[1] + d[b, i, 1])]
         raise ValueError(f"{where(b)} step {i}, {a.tolist()} -> {p[b, i + 1].tolist()}, cuts a corner of blocked "
-                         f"cell {corner} (no corner cutting, DESIGN §2); pass optimal= explicitly")
+                         f"cell {corner} (no corner cutting); pass optimal= explicitly")
 
 
 def _optimal(grid: GridMap, paths: np.ndarray, n: np.ndarray, optimal: ArrayLike | None, single: bool):
@@ -199,7 +200,7 @@ def path_metrics(
     cost: ArrayLike | None = None,
     objective_optimum: ArrayLike | None = None,
 ) -> dict[str, Any]:
-    """The path metrics of DESIGN §6 for one path or a padded batch of paths.
+    """The path metrics (docs/guide/smoothing-and-metrics.md) for one path or a padded batch of paths.
 
     Args:
       path: ``[L, 2]`` one path, or ``[B, L, 2]`` a batch, of points ``(x, y)`` in cell
@@ -242,7 +243,7 @@ def path_metrics(
         optimum is `jaxplan.shortest_lengths` between each path's ends (8-connected,
         octile, no corner cutting), and each step must be a legal move on the map; for any
         other path None — a smoothed or any-angle path must be compared with the same
-        smoothing of the exact path (DESIGN §6), so pass it. A
+        smoothing of the exact path (docs/guide/smoothing-and-metrics.md), so pass it. A
         start = goal path has gap 0.
       * ``objective_gap`` (only with ``cost`` and ``objective_optimum``) = cost / objective_optimum − 1:
         how far the path is from the optimum of its planner's own objective (IACO's fitness, the risk

@@ -1,4 +1,5 @@
-"""Geometry metrics of padded paths (DESIGN §6): length, heading changes, turns, smoothness, curvature.
+"""Geometry metrics of padded paths (docs/guide/smoothing-and-metrics.md): length, heading changes, turns, smoothness,
+curvature.
 
 A path is ``[..., L, 2]`` points ``(x, y)`` in cell coordinates (integers for raw grid
 paths, floats for smoothed or any-angle paths) of which the first ``n [...]`` are valid;

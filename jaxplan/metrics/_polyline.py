@@ -4,7 +4,7 @@ A polyline is ``[..., L, 2]`` points of which the first ``n [...]`` are valid: t
 points on its ``n − 1`` segments (a single point when ``n == 1``, empty when ``n == 0``).
 Distances are in the units of the coordinates (the callers scale cells to metres).
 
-Hausdorff distance (DESIGN §6, `hausdorff_bounds`): the symmetric Hausdorff distance
+Hausdorff distance (docs/guide/smoothing-and-metrics.md, `hausdorff_bounds`): the symmetric Hausdorff distance
 between the two polylines **as point sets** (every point of every segment, not just the
 vertices), ``H(A, B) = max(sup_{a∈A} d(a, B), sup_{b∈B} d(b, A))``. Each directed part is
 evaluated exactly at sample points — the vertices plus ``k − 1`` equally spaced points

@@ -1,4 +1,5 @@
-"""Two-level navigation (DESIGN §5): global path -> waypoints -> DWA episode among moving obstacles, multi-robot.
+"""Two-level navigation (docs/guide/navigation.md): global path -> waypoints -> DWA episode among moving obstacles,
+multi-robot.
 
 * `navigate` / `navigate_batch` / `navigate_multi` (`_front`): host fronts with validation,
   the planning map inflated to d_safe, global plans, waypoints, one compiled episode call,

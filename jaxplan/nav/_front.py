@@ -1,6 +1,6 @@
 """`navigate`, `navigate_batch`, `navigate_multi`: two-level navigation from the host.
 
-The steps of every episode (DESIGN §5):
+The steps of every episode (docs/guide/navigation.md):
 
 1. **Planning map.** The map inflated for the robot: a free cell whose centre is closer
    than d_safe to a blocked square is closed for planning, so the global path fits the
@@ -15,7 +15,7 @@ The steps of every episode (DESIGN §5):
 3. **Waypoints**: the pipeline's smoothers (`jaxplan.smooth`, clearance d_safe) reduce
    the path; the start is dropped, the goal is the last waypoint.
 4. **Episode**: `jaxplan.nav._episode.run_episodes`, one compiled call for the batch.
-5. **Metrics** (DESIGN §6) from the trajectories: success (goal within tolerance, no
+5. **Metrics** (docs/guide/smoothing-and-metrics.md) from the trajectories: success (goal within tolerance, no
    collision, within the time limit), collisions (contacts), time, RMSE to the polyline
    being tracked (after a re-plan, the new one), max curvature of the executed motion (|ω|/v over steps moving at least
    `CURVATURE_MIN_SPEED`; turning on the spot has no finite curvature), energy proxy
@@ -520,7 +520,7 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: s
              pipeline: str | None = None, config: NavConfig | None = None,
              params: DWAParams | MPPIParams | Mapping[str, float] | None = None, time_limit: float | None = None,
              progress: bool = False, **overrides: Any) -> Episode:
-    """One two-level navigation episode (DESIGN §3).
+    """One two-level navigation episode (docs/guide/navigation.md).
 
     Args:
       grid: the map.

@@ -1,6 +1,6 @@
 """Moving obstacles: discs that travel piecewise-linear routes at constant speed (the motion model).
 
-The model (DESIGN §5; li2026's moving obstacles at 1.0 and 1.5 m/s, chu2024's
+The model (docs/guide/navigation.md; li2026's moving obstacles at 1.0 and 1.5 m/s, chu2024's
 head-on encounter of Figure 11):
 
 * An obstacle is a disc of radius ``r`` (m) whose centre moves along a route, a polyline

@@ -15,7 +15,7 @@ __all__ = ["Episode", "EpisodeBatch"]
 
 
 class Episode(NamedTuple):
-    """One robot's navigation episode (numpy; DESIGN §3).
+    """One robot's navigation episode (numpy; docs/guide/navigation.md).
 
     Attributes:
       trajectory: ``f32[T + 1, 3]`` poses (x, y, theta) in m, rad, from the start; ``T``
@@ -27,7 +27,7 @@ class Episode(NamedTuple):
       collisions: contacts with the map, moving discs or other robots: ``active_contacts +
         passive_contacts`` (active: begun while the robot moved faster than 0.05 m/s; passive: at rest).
       time_s: simulated time until the robot stopped (s).
-      metrics: the DESIGN §6 episode metrics (see `EpisodeBatch.METRICS`).
+      metrics: the episode metrics (docs/guide/smoothing-and-metrics.md) (see `EpisodeBatch.METRICS`).
       plan: global path ``f64[L, 2]`` in cell coordinates (empty if the planner failed).
       waypoints: ``f32[K, 2]`` the waypoints tracked at first (m); ``final_waypoints`` after re-plans.
       obstacles: the `MovingObstacles` of the episode; ``obstacle_positions f32[T + 1, M, 2]``.

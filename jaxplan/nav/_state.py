@@ -17,7 +17,8 @@ REASONS = ("running", "goal", "collision", "time limit")
 """Why a robot stopped, indexed by the codes above."""
 
 ACTIVE_SPEED = 0.05
-"""m/s: a contact is active when the robot moves faster than this as it begins (DESIGN §9), else passive —
+"""m/s: a contact is active when the robot moves faster than this as it begins (docs/guide/navigation.md), else
+passive —
 the robot was at rest and was hit (passive motion safety asks only that no contact be active)."""
 
 

@@ -1,7 +1,7 @@
 """Scale-out: device meshes for the batched entry points, memory estimates, multi-host runs.
 
 ``jp.plan_batch(..., mesh=jaxplan.scale.batch_mesh())`` splits the scenarios of an ACO batch over
-every device (DESIGN §7); results equal the single-device call's. Before it allocates, `plan_batch`
+every device (docs/guide/experiments.md); results equal the single-device call's. Before it allocates, `plan_batch`
 estimates its working memory (`aco_memory`) and refuses a batch above `memory_limit()`
 (``$JAXPLAN_MEMORY_LIMIT``, default 80 % of the available memory) with `MemoryLimitError`,
 naming the largest batch that fits; `jaxplan.solve_tsp` (`tsp_memory`), a tuning population, an

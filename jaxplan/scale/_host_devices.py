@@ -5,7 +5,7 @@ cores several host devices, with batches sharded over them, keep every core busy
 and the measurements behind the rules below: docs/decisions.md). JAX decides its CPU device count
 once, when its backend starts, and the setting is process-wide: it is the user's to choose. So
 importing jaxplan changes no JAX setting; programs that want the devices opt in, before their
-first JAX computation (DESIGN §9)::
+first JAX computation (docs/guide/navigation.md)::
 
     import jaxplan as jp
     jp.use_host_devices()          # one CPU host device per core (or jp.use_host_devices(4))

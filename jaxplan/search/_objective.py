@@ -2,7 +2,7 @@
 
 The ACO planners minimise their papers' objectives, not the length, so their gap to the shortest path
 says little about how well a colony searches. Each of these costs is a sum over moves, turns and
-path cells (DESIGN §4, `jaxplan.aco`'s ``cost_*`` rules on `PathStats`):
+path cells (docs/guide/planners.md, `jaxplan.aco`'s ``cost_*`` rules on `PathStats`):
 
 =============  ==========================================  ==========  ===============  ==========  ===============
 planner        cost                                        per metre   per rad of turn  per turn    per path cell

@@ -1,4 +1,5 @@
-"""Path post-processing (DESIGN §4): line-of-sight pruning, key nodes, arc fillets, Bezier corners, B-splines.
+"""Path post-processing (docs/guide/planners.md): line-of-sight pruning, key nodes, arc fillets, Bezier corners,
+B-splines.
 
 Each smoother is a pure JAX function ``f(cmap, points [L, 2], n, ..., radius) -> Smoothed``
 on one padded path in cell coordinates, to be ``vmap``-ed over a batch; `smooth` is

@@ -1,4 +1,5 @@
-"""Tuning the planners' weights (DESIGN §7): objectives over scenario batches, gradient-free and differentiable
+"""Tuning the planners' weights (docs/guide/experiments.md): objectives over scenario batches, gradient-free and
+differentiable
 optimisers.
 
 * `_bounds`: the search box (`make_bounds`, validated: finite, low < high, named dimensions).

@@ -40,7 +40,7 @@ Layout (the design, written down):
 Cost per episode (`NAV_METRICS`, weights default ``{"failure": 1, "time": 1}``: success first,
 time to goal second): ``failure`` = not (at the goal without contact before the time limit);
 ``time`` = time to the goal / the episode's time limit (1 when not reached); ``collision`` = a
-contact; ``active_contacts``, ``passive_contacts`` = counts (DESIGN §9). Metrics also report
+contact; ``active_contacts``, ``passive_contacts`` = counts (docs/guide/navigation.md). Metrics also report
 ``success``, ``time_s`` (seconds driven) and ``success_<kind>`` per walker kind. A scenario whose
 robot does not run (infeasible for the footprint, or no global path) counts as a failure of time 1
 for every member. Cost axis 1 is (map, row, walker kind), row-major: ``[P, Σ rows·kinds, R]``.

@@ -13,7 +13,7 @@ different scenarios AND different seeds; tuning sees only the training split.
 
 ACO metrics per run (`ACO_METRICS`): ``gap`` = length/optimal − 1 (a failed run counts
 `FAIL_GAP`), ``failure`` = 1 − success, ``turns`` (count), ``roughness`` = 1 − smoothness
-(DESIGN §6), ``clearance`` = 1 / mean clearance (1/m); a failed run contributes only its
+(docs/guide/smoothing-and-metrics.md), ``clearance`` = 1 / mean clearance (1/m); a failed run contributes only its
 gap and failure terms. The tuned weights act on how the ants search; the objective's
 metrics are fixed, so e.g. shrinking IACO's λ does not shrink the objective.
 
