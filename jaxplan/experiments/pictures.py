@@ -47,6 +47,15 @@ def _walkers(ep) -> tuple[np.ndarray, np.ndarray]:
     return pos, radii
 
 
+def _draw_plan(ax, grid, plan, colour, suffix: str, many: bool) -> None:
+    """An episode's global plan ``[P, 2]`` (cells), dashed under its trajectory; in the robot's colour when
+    several robots share the picture."""
+    if len(plan):
+        pl = grid.centre(np.asarray(plan, np.float64).reshape(-1, 2))
+        ax.plot(pl[:, 0], pl[:, 1], **{**style.PLAN, "label": f"global plan{suffix}", "zorder": 2.5,
+                                       **({"color": colour} if many else {})})
+
+
 def draw_episodes(ax, grid, episodes: Mapping[str, Any], *, footprint: Any = None, keepout: Any = None,
                   y_up: bool = False, title: str | None = None, legend: str | None = "below"):
     """Draws ``episodes`` (label -> `jaxplan.nav.Episode`, same start, goal and walkers) on ``ax`` over the map.
@@ -72,10 +81,7 @@ def draw_episodes(ax, grid, episodes: Mapping[str, Any], *, footprint: Any = Non
     for k, (name, ep) in enumerate(eps):
         c = style.robot_colour(k, len(eps))
         mine = "" if len(eps) == 1 else f" ({name})"
-        if len(ep.plan):
-            pl = grid.centre(np.asarray(ep.plan, np.float64).reshape(-1, 2))
-            ax.plot(pl[:, 0], pl[:, 1], **{**style.PLAN, "label": f"global plan{mine}", "zorder": 2.5,
-                                           **({} if len(eps) == 1 else {"color": c})})
+        _draw_plan(ax, grid, ep.plan, c, mine, len(eps) > 1)
         tr = np.asarray(ep.trajectory, np.float64)
         ax.plot(tr[:, 0], tr[:, 1], color=c, lw=1.8, zorder=3, label=f"executed: {name} ({ep.reason})")
         style.draw_footprint(ax, tr[-1], fp, color=c, label=f"robot at the end (footprint to scale){mine}")
@@ -181,10 +187,7 @@ def gif_figure(episodes: Mapping[str, Any], grid, *, footprint: Any = None, keep
     for k, (name, ep) in enumerate(eps):
         c = style.robot_colour(k, len(eps))
         mine = "" if len(eps) == 1 else f" ({name})"
-        if len(ep.plan):
-            pl = grid.centre(np.asarray(ep.plan, np.float64).reshape(-1, 2))
-            ax.plot(pl[:, 0], pl[:, 1], **{**style.PLAN, "label": f"global plan{mine}", "zorder": 2.5,
-                                           **({} if len(eps) == 1 else {"color": c})})
+        _draw_plan(ax, grid, ep.plan, c, mine, len(eps) > 1)
         (tr,) = ax.plot([], [], color=c, lw=1.8, zorder=3, label=f"executed: {name}")
         trails.append(tr)
         # above the start and goal markers: the moving robot is what a frame is about
