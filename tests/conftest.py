@@ -82,3 +82,23 @@ def room():
     goals = np.array([[14, 10], [1, 5], [0, 11]])
     return jp.grid_from_array(free, resolution=0.5), starts, goals
 
+
+def unlabelled_marks(ax) -> list[str]:
+    """Kinds of mark (type, colour, line style or hatch) drawn on ``ax`` of which no member has a legend label:
+    every line, marker and patch must be named (one labelled member names its kind)."""
+    from matplotlib.colors import to_hex
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+    from matplotlib.spines import Spine
+
+    kinds: dict[tuple, bool] = {}
+    for a in ax.get_children():
+        if isinstance(a, Line2D) and len(a.get_xdata()):
+            key = ("line", to_hex(a.get_color()), a.get_linestyle(), a.get_marker())
+        elif isinstance(a, Patch) and not isinstance(a, Spine) and a is not ax.patch and a.get_visible():
+            key = ("patch", to_hex(a.get_facecolor()), a.get_hatch())
+        else:
+            continue
+        named = not (a.get_label() or "_").startswith("_")
+        kinds[key] = kinds.get(key, False) or named
+    return [str(k) for k, named in kinds.items() if not named]

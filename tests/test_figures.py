@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import unlabelled_marks
 
 from jaxplan.cli import main
 from jaxplan.experiments import run_experiment
@@ -476,25 +477,6 @@ def _draw(run_dir, kind):
     return DRAW[kind](run, spec)[0]
 
 
-def _unnamed_kinds(ax) -> list[str]:
-    """Kinds of mark (type, colour, line style, marker or hatch) on ``ax`` none of whose members is in the legend."""
-    from matplotlib.colors import to_hex
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
-    from matplotlib.spines import Spine
-
-    kinds: dict[tuple, bool] = {}
-    for a in ax.get_children():
-        if isinstance(a, Line2D) and len(a.get_xdata()):
-            key = ("line", to_hex(a.get_color()), a.get_linestyle(), a.get_marker())
-        elif isinstance(a, Patch) and not isinstance(a, Spine) and a is not ax.patch and a.get_visible():
-            key = ("patch", to_hex(a.get_facecolor()), a.get_hatch())
-        else:
-            continue
-        kinds[key] = kinds.get(key, False) or not (a.get_label() or "_").startswith("_")
-    return [str(k) for k, named in kinds.items() if not named]
-
-
 def test_start_and_goal_look_the_same_in_every_figure_kind(plan_run, nav_run):
     """A green circle and a red star in the paths figure (plan planners) and the trajectories figure
     (navigation), as in `jaxplan.experiments.style`."""
@@ -526,7 +508,7 @@ def test_trajectories_draw_walkers_at_their_true_radius_and_name_every_mark(nav_
                  and p.get_facecolor()[3] < 1]
         walkers = [p for p in discs if p.get_radius() == pytest.approx(0.2)]  # the config's obstacles radius
         assert len(walkers) == 2
-        assert not _unnamed_kinds(ax), _unnamed_kinds(ax)
+        assert not unlabelled_marks(ax), unlabelled_marks(ax)
         fig.canvas.draw()
         legend = ax.get_legend()
         assert legend.get_window_extent().y1 < ax.get_window_extent().y0
@@ -542,7 +524,7 @@ def test_the_fan_figure_names_every_line_and_marker_outside_the_map(nav_run):
     fig = _draw(nav_run, "fan")
     try:
         ax = fig.axes[0]
-        assert not _unnamed_kinds(ax), _unnamed_kinds(ax)
+        assert not unlabelled_marks(ax), unlabelled_marks(ax)
         texts = [t.get_text() for t in ax.get_legend().get_texts()]
         for want in ("feasible rollouts", "chosen rollout", "robot (footprint to scale)", "executed", "global path"):
             assert want in texts, texts

@@ -8,6 +8,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
+from conftest import unlabelled_marks
 from matplotlib.colors import LogNorm
 
 import jaxplan as jp
@@ -484,27 +485,6 @@ def _walk(grid, T=30):
     return _episode(traj, np.stack([w1, w2, pad], 1), [0.3, 0.45, 0.0], plan=np.array([[0, 0], [W - 1, H - 1]]))
 
 
-def _unlabelled(ax) -> list[str]:
-    """Kinds of mark (type, colour, line style or hatch) drawn on ``ax`` of which no member has a legend label:
-    every line, marker and patch must be named (one labelled member names its kind)."""
-    from matplotlib.colors import to_hex
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
-    from matplotlib.spines import Spine
-
-    kinds: dict[tuple, bool] = {}
-    for a in ax.get_children():
-        if isinstance(a, Line2D) and len(a.get_xdata()):
-            key = ("line", to_hex(a.get_color()), a.get_linestyle(), a.get_marker())
-        elif isinstance(a, Patch) and not isinstance(a, Spine) and a is not ax.patch and a.get_visible():
-            key = ("patch", to_hex(a.get_facecolor()), a.get_hatch())
-        else:
-            continue
-        named = not (a.get_label() or "_").startswith("_")
-        kinds[key] = kinds.get(key, False) or named
-    return [str(k) for k, named in kinds.items() if not named]
-
-
 def _outside(legend, ax) -> bool:
     """The legend's box and the axes' box do not overlap (in pixels, after a draw)."""
     ax.figure.canvas.draw()
@@ -565,7 +545,7 @@ def test_walkers_are_discs_of_their_true_radius_with_dashed_paths(grid):
     for j, disc in zip((0, 1), sorted(walkers, key=lambda p: p.get_radius()), strict=True):
         k = int(np.argmin(np.hypot(*(ep.obstacle_positions[:, j] - tr).T)))
         np.testing.assert_allclose(disc.center, ep.obstacle_positions[k, j], atol=1e-6)
-    assert not _unlabelled(ax), _unlabelled(ax)
+    assert not unlabelled_marks(ax), unlabelled_marks(ax)
     assert _outside(ax.get_legend(), ax)
 
 
