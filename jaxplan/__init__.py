@@ -19,8 +19,6 @@ first loaded (`enable_compilation_cache` chooses their folder; ``JAXPLAN_CACHE=o
 from __future__ import annotations
 
 import importlib
-import sys
-import types
 from typing import Any
 
 _EXPORTS: dict[str, tuple[str, ...]] = {
@@ -31,16 +29,15 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
         "Scene", "UrbanGenerator", "WarehouseGenerator", "demo_warehouse", "poisson_risk", "warehouse_chen2023",
         "warehouse_yu2020",
     ),
-    "aco": ("BatchResult", "TourResult", "TSPProblem", "load_tour", "load_tsplib", "plan_batch", "solve_tsp",
-            "tour_length"),
-    "planning": ("plan", "planners"),
+    "aco": ("TourResult", "TSPProblem", "load_tour", "load_tsplib", "solve_tsp", "tour_length"),
+    "planning": ("plan", "plan_batch", "planners"),
     "registry": ("PlannerSpec", "register_planner"),
-    "result": ("PlanResult",),
+    "result": ("BatchResult", "PlanResult"),
     "dwa": ("Ackermann", "Disc", "DiscObstacles", "DWAConfig", "DWAInfo", "DWAParams", "Rectangle", "Unicycle",
             "DWAStepper", "dwa_control", "dwa_control_batch", "dwa_step", "make_stepper"),
     "mppi": ("MPPIConfig", "MPPIParams", "mppi_control", "mppi_step"),
-    "metrics": ("EnergyModel", "EpisodeTiming", "path_metrics"),
-    "smooth": ("Smoothed", "smooth"),
+    "metrics": ("EnergyModel", "EpisodeTiming", "PathMetrics", "path_metrics"),
+    "smoothing": ("Smoothed", "smooth"),
     "nav": ("Episode", "EpisodeBatch", "MovingObstacles", "NavConfig", "crossing_traffic", "head_on",
             "moving_obstacles", "navigate", "navigate_batch", "navigate_multi", "pipelines", "random_obstacles"),
     "search": ("SearchGraph", "astar", "dijkstra", "distance_from", "search_graph", "shortest_lengths"),
@@ -55,25 +52,16 @@ _DEPRECATED = {"warehouse_seed003": "warehouse_chen2023", "warehouse_seed004": "
 """Names of the previous release (papers by internal number) -> their author-year names; kept for one release."""
 
 _SUBMODULES = ("aco", "cli", "core", "dwa", "experiments", "grid", "metrics", "mppi", "nav", "papers", "planning",
-               "registry", "result", "scale", "search", "tune")
-"""Subpackages and modules reachable as attributes (``jp.search.path_cost``), imported on first use (``smooth`` is
-the function; its subpackage is ``import jaxplan.smooth``)."""
+               "registry", "result", "scale", "search", "smoothing", "tune")
+"""Subpackages and modules reachable as attributes (``jp.search.path_cost``), imported on first use (``jp.smooth``
+is the function; its subpackage is ``jp.smoothing``)."""
 
 __all__ = sorted([*_SOURCE, "metrics"])
 
 
-_NEEDS_EVERY_PLANNER = ("plan_batch",)
-"""Names that take any registered planner: loading one imports `jaxplan.planning` (which imports every planner
-jaxplan ships, so they are registered), as ``jp.plan`` does — else ``jp.plan_batch(..., planner="astar")``
-right after ``import jaxplan`` would not know A*."""
-
-
 def _load(name: str) -> Any:
-    if name in _NEEDS_EVERY_PLANNER:
-        importlib.import_module("jaxplan.planning")
     value = getattr(importlib.import_module(f"jaxplan.{_SOURCE[name]}"), name)
-    if name != "smooth":  # see _Package.smooth
-        globals()[name] = value  # later lookups skip __getattr__
+    globals()[name] = value  # later lookups skip __getattr__
     return value
 
 
@@ -98,20 +86,3 @@ def __getattr__(name: str) -> Any:
 
 def __dir__() -> list[str]:
     return sorted(set(globals()) | set(__all__) | set(_SUBMODULES) | {"__version__"})
-
-
-class _Package(types.ModuleType):
-    """jaxplan's module type: ``jaxplan.smooth`` is the function `jaxplan.smooth.smooth`, as the public API says,
-    even after the subpackage ``jaxplan.smooth`` is imported (the import system binds a subpackage to its parent's
-    attribute of the same name; the property keeps the function there)."""
-
-    @property
-    def smooth(self) -> Any:
-        return _load("smooth")
-
-    @smooth.setter
-    def smooth(self, value: Any) -> None:  # the import system binding the subpackage: the function stays
-        pass
-
-
-sys.modules[__name__].__class__ = _Package

@@ -278,7 +278,7 @@ def test_counts_and_weights_that_make_no_sense_are_refused(overrides, match):
 
 @pytest.mark.parametrize("dead_end", ["die", "alert", "retreat"])
 def test_praco_takes_every_dead_end_rule(dead_end):
-    # DESIGN §4: every ACO planner takes the three rules; the dead-corner penalty needs retreats only.
+    # docs/guide/planners.md: every ACO planner takes the three rules; the dead-corner penalty needs retreats only.
     free = np.ones((6, 7), bool)
     free[2:4, 2:5] = False
     r = jp.plan(jp.grid_from_array(free), (0, 0), (6, 5), planner="praco", dead_end=dead_end, ants=4, iterations=3)

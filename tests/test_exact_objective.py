@@ -3,6 +3,7 @@ own costs, and the property that no colony beats it."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -13,7 +14,7 @@ from jaxplan.aco import COLONIES
 from jaxplan.search import OBJECTIVE_PLANNERS, exact_objective, exact_objectives, path_objective, path_objectives
 
 # ---------------------------------------------------------------------------------------------
-# An independent reference: every simple path enumerated, each cost written out from DESIGN §4.
+# An independent reference: every simple path enumerated, each cost written out as docs/guide/planners.md defines it.
 
 
 def _offsets(conn: int) -> list[tuple[int, int]]:
@@ -21,8 +22,8 @@ def _offsets(conn: int) -> list[tuple[int, int]]:
 
 
 def _allowed(free: np.ndarray, x: int, y: int, dx: int, dy: int) -> bool:
-    """DESIGN §2 move rule, written out: target free and inside; a diagonal needs both orthogonal cells; a
-    knight move the two cells its segment crosses."""
+    """The move rule of docs/guide/maps-and-scenarios.md, written out: target free and inside; a diagonal needs both
+    orthogonal cells; a knight move the two cells its segment crosses."""
     H, W = free.shape
     tx, ty = x + dx, y + dy
     if not (0 <= tx < W and 0 <= ty < H and free[ty, tx]):
@@ -62,7 +63,7 @@ def _simple_paths(free: np.ndarray, start, goal, conn: int, rule=None):
 
 
 def _reference_cost(path, grid, planner, p) -> float:
-    """The planner's cost of ``path`` from its definition (DESIGN §4), in float64."""
+    """The planner's cost of ``path`` from its definition (docs/guide/planners.md), in float64."""
     res = float(grid.resolution)
     steps = [(b[0] - a[0], b[1] - a[1]) for a, b in zip(path[:-1], path[1:], strict=True)]
     L = sum(math.hypot(*s) for s in steps) * res
@@ -308,14 +309,15 @@ def test_path_metrics_objective_gap_is_opt_in():
     grid = jp.grid_from_array(free, resolution=0.5)
     path = np.array([[0, 0], [1, 0], [2, 0], [3, 0], [4, 0], [5, 1], [6, 2], [6, 3]])
     plain = jp.metrics.path_metrics(path, grid)
-    assert "objective_gap" not in plain and tuple(plain) == jp.metrics.PATH_METRICS
+    assert plain.objective_gap is None
+    assert [f.name for f in dataclasses.fields(plain)] == [*jp.metrics.PATH_METRICS, "objective_gap"]
     best = exact_objective(grid, (0, 0), (6, 3), planner="praco", omega2=2.0)
     cost = path_objective(path, grid, "praco", omega2=2.0)
     m = jp.metrics.path_metrics(path, grid, cost=cost, objective_optimum=best.cost)
-    assert {k: m[k] for k in plain} == plain  # the existing metrics unchanged
-    assert m["objective_gap"] == pytest.approx(cost / best.cost - 1) and m["objective_gap"] >= 0
+    assert dataclasses.replace(m, objective_gap=None) == plain  # the existing metrics unchanged
+    assert m.objective_gap == pytest.approx(cost / best.cost - 1) and m.objective_gap >= 0
     batch = jp.metrics.path_metrics(np.stack([path, path]), grid, cost=[cost, best.cost], objective_optimum=best.cost)
-    assert batch["objective_gap"][1] == 0.0
+    assert batch.objective_gap[1] == 0.0
     with pytest.raises(ValueError, match="go together"):
         jp.metrics.path_metrics(path, grid, cost=cost)
 

@@ -83,7 +83,7 @@ def test_segment_cells_rules():
 
 
 def _expected_crossed(dx: int, dy: int) -> list[tuple[int, int]]:
-    """The corner rules of DESIGN §2, written out by hand (independent of segment_cells)."""
+    """The corner rules of docs/guide/maps-and-scenarios.md, written out by hand (independent of segment_cells)."""
     sx, sy = int(np.sign(dx)), int(np.sign(dy))
     if abs(dx) == 1 and abs(dy) == 1:
         return [(sx, 0), (0, sy)]

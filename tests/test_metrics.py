@@ -1,4 +1,5 @@
-"""Metrics of DESIGN §6 against hand-computed values; batching, padding, compilation, bad input."""
+"""Metrics of docs/guide/smoothing-and-metrics.md against hand-computed values; batching, padding, compilation,
+bad input."""
 
 from __future__ import annotations
 
@@ -111,12 +112,12 @@ def test_empty_and_one_point_paths(path):
     assert g == {"length": 0.0, "turns": 0, "sharp_turns": 0, "smoothness": 1.0, "max_curvature": 0.0}
     assert (M.path_length(path), M.count_turns(path), M.count_sharp_turns(path), M.smoothness(path)) == (0.0, 0, 0, 1.0)
     m = M.path_metrics(path, open_grid())
-    assert (m["length"], m["turns"], m["smoothness"], m["max_curvature"]) == (0.0, 0, 1.0, 0.0)
+    assert (m.length, m.turns, m.smoothness, m.max_curvature) == (0.0, 0, 1.0, 0.0)
     if len(path) == 0:
-        assert m["min_clearance"] == m["mean_clearance"] == m["optimality_gap"] == math.inf
+        assert m.min_clearance == m.mean_clearance == m.optimality_gap == math.inf
     else:
-        assert m["optimality_gap"] == 0.0  # start = goal
-        assert m["min_clearance"] == m["mean_clearance"] == pytest.approx(3.5)  # (3, 4) on 8x8: 3.5 cells to the border
+        assert m.optimality_gap == 0.0  # start = goal
+        assert m.min_clearance == m.mean_clearance == pytest.approx(3.5)  # (3, 4) on 8x8: 3.5 cells to the border
 
 
 # --------------------------------------------------------------------------------------------
@@ -147,7 +148,7 @@ def test_host_turns_match_planner_turns():
     grid = jp.demo_warehouse().grid
     scene = jp.demo_warehouse()
     res = jp.astar(grid, scene.start, scene.goal)
-    assert res.turns == M.count_turns(res.path) == M.path_metrics(res.path, grid)["turns"]
+    assert res.turns == M.count_turns(res.path) == M.path_metrics(res.path, grid).turns
 
 
 # --------------------------------------------------------------------------------------------
@@ -166,8 +167,8 @@ def test_clearance_on_a_tiny_map(pillar):
     # (1,1): 1.5 cells to the border, √4.5 to the pillar; (2,2): √0.5 to the pillar's corner;
     # (3,2): 0.5 to its edge. In metres (x 0.5): 0.75, 0.3536, 0.25.
     m = M.path_metrics(np.array([[1, 1], [2, 2], [3, 2]]), pillar)
-    assert m["min_clearance"] == pytest.approx(0.25)
-    assert m["mean_clearance"] == pytest.approx((0.75 + 0.5 * math.sqrt(0.5) + 0.25) / 3, rel=1e-6)
+    assert m.min_clearance == pytest.approx(0.25)
+    assert m.mean_clearance == pytest.approx((0.75 + 0.5 * math.sqrt(0.5) + 0.25) / 3, rel=1e-6)
     # Float vertices: (1.5, 1) is 1.5 cells from the top border; (2.9, 2) 0.5 cells above the pillar.
     cmap = collision_map(pillar)
     c = _CLEARANCE(cmap, jnp.array([[1.5, 1.0], [2.9, 2.0], [9.0, 9.0]]), 2)
@@ -202,11 +203,11 @@ def test_float_vertex_clearance_is_exact_far_from_obstacles():
     assert want[0] == pytest.approx(0.5 * math.hypot(13.4 - 10.5, 12.6 - 10.5))
     for p, w in zip(pts, want, strict=True):
         m = M.path_metrics(p[None], grid)
-        assert m["min_clearance"] == m["mean_clearance"] == pytest.approx(w, rel=1e-6)
+        assert m.min_clearance == m.mean_clearance == pytest.approx(w, rel=1e-6)
     rng = np.random.default_rng(5)
     free = rng.random((30, 40)) > 0.15
     pts = rng.uniform(-0.5, [39.5, 29.5], size=(300, 2))
-    got = M.path_metrics(pts[:, None, :], jp.grid_from_array(free))["min_clearance"]
+    got = M.path_metrics(pts[:, None, :], jp.grid_from_array(free)).min_clearance
     np.testing.assert_allclose(got, _brute_clearance(free, pts), rtol=1e-6, atol=1e-7)
 
 
@@ -217,7 +218,7 @@ def test_float_path_clearance_is_measured_along_segments():
     free[3, 4] = False
     grid = jp.grid_from_array(free)
     m = M.path_metrics(np.array([[0.0, 2.0], [4.0, 4.0], [8.0, 4.0]]), grid)
-    assert m["min_clearance"] == pytest.approx(math.sqrt(0.05), rel=1e-6)
+    assert m.min_clearance == pytest.approx(math.sqrt(0.05), rel=1e-6)
     # The mean is weighted by arc length: along y = 1 of a 3x7 map the clearance is
     # min(x + 0.5, 6.5 − x, 1.5), whose integral over [0, 6] is 8; sparse and dense
     # vertices of the same line agree.
@@ -225,11 +226,11 @@ def test_float_path_clearance_is_measured_along_segments():
     for xs in ([0.0, 6.0], [0.0, 3.0, 6.0], np.linspace(0, 6, 13)):
         line = np.stack([np.asarray(xs, float), np.ones(len(xs))], 1)
         m = M.path_metrics(line, open3)
-        assert m["mean_clearance"] == pytest.approx(0.5 * 8 / 6, rel=1e-6)
-        assert m["min_clearance"] == pytest.approx(0.25, rel=1e-6)
+        assert m.mean_clearance == pytest.approx(0.5 * 8 / 6, rel=1e-6)
+        assert m.min_clearance == pytest.approx(0.25, rel=1e-6)
     # Raw grid (integer) paths keep the per-vertex values at the cell centres.
     m = M.path_metrics(np.array([[0, 1], [3, 1], [6, 1]]), open3)
-    assert m["mean_clearance"] == pytest.approx(0.5 * (0.5 + 1.5 + 0.5) / 3, rel=1e-6)
+    assert m.mean_clearance == pytest.approx(0.5 * (0.5 + 1.5 + 0.5) / 3, rel=1e-6)
 
 
 # --------------------------------------------------------------------------------------------
@@ -276,8 +277,8 @@ def test_hausdorff_in_path_metrics_and_bad_references():
     grid = open_grid(res=0.5)
     path = np.array([[0, 0], [4, 0]])
     m = M.path_metrics(path, grid, reference=np.array([[0.0, 1.0], [2.0, 3.0], [4.0, 1.0]]))
-    assert m["hausdorff"] == pytest.approx(1.5)
-    assert M.path_metrics(path, grid)["hausdorff"] is None
+    assert m.hausdorff == pytest.approx(1.5)
+    assert M.path_metrics(path, grid).hausdorff is None
     with pytest.raises(ValueError, match="reference must have shape"):
         M.path_metrics(path, grid, reference=np.zeros((2, 2, 2)))
     with pytest.raises(ValueError, match=r"\[L, 2\] or \[B, L, 2\]"):
@@ -297,15 +298,15 @@ def test_hausdorff_in_path_metrics_and_bad_references():
 def test_optimality_gap_of_raw_grid_paths_is_automatic():
     grid = open_grid(res=0.5)
     optimal = np.array([[0, 0], [1, 1], [2, 1], [3, 1]])  # octile optimum 2 + √2 cells
-    assert abs(M.path_metrics(optimal, grid)["optimality_gap"]) < 1e-6
+    assert abs(M.path_metrics(optimal, grid).optimality_gap) < 1e-6
     detour = np.array([[0, 0], [0, 1], [1, 1], [2, 1], [3, 1]])  # 4 cells
-    assert M.path_metrics(detour, grid)["optimality_gap"] == pytest.approx(4 / (2 + SQ2) - 1, rel=1e-6)
+    assert M.path_metrics(detour, grid).optimality_gap == pytest.approx(4 / (2 + SQ2) - 1, rel=1e-6)
     # Float, any-angle or 16-connected paths have no automatic optimum.
-    assert M.path_metrics(optimal.astype(float), grid)["optimality_gap"] is None
-    assert M.path_metrics(np.array([[0, 0], [2, 1]]), grid)["optimality_gap"] is None
+    assert M.path_metrics(optimal.astype(float), grid).optimality_gap is None
+    assert M.path_metrics(np.array([[0, 0], [2, 1]]), grid).optimality_gap is None
     # Given: length 2 m against 1.6 m.
     given = M.path_metrics(np.array([[0.0, 0.0], [4.0, 0.0]]), grid, optimal=1.6)
-    assert given["optimality_gap"] == pytest.approx(0.25)
+    assert given.optimality_gap == pytest.approx(0.25)
 
 
 def test_optimality_gap_rejects_bad_optimum_and_broken_paths():
@@ -340,8 +341,8 @@ def test_optimality_gap_rejects_illegal_moves_whose_ends_are_connected():
         M.path_metrics(np.array([[2, 0], [3, 0], [4, 0]]), grid)
     # Padding beyond n is not checked; given an optimum, nothing is.
     ok = M.path_metrics(np.array([[[1, 0], [2, 1], [0, 1]]]), grid, n=np.array([2]))
-    assert abs(ok["optimality_gap"][0]) < 1e-6
-    assert M.path_metrics(np.array([[0, 0], [1, 1]]), grid, optimal=2.0)["optimality_gap"] == pytest.approx(SQ2 / 2 - 1)
+    assert abs(ok.optimality_gap[0]) < 1e-6
+    assert M.path_metrics(np.array([[0, 0], [1, 1]]), grid, optimal=2.0).optimality_gap == pytest.approx(SQ2 / 2 - 1)
 
 
 # --------------------------------------------------------------------------------------------
@@ -362,19 +363,19 @@ def test_batched_equals_per_path_and_padding_is_ignored():
     batch = M.path_metrics(paths.astype(float), grid, n=n, reference=paths[0, :7].astype(float))
     for b in range(len(paths)):
         one = M.path_metrics(paths[b, : n[b]].astype(float), grid, reference=paths[0, :7].astype(float))
-        for k, v in one.items():
+        for k, v in one._asdict().items():
             if v is None:
-                assert batch[k] is None
+                assert getattr(batch, k) is None
             else:
-                assert batch[k][b] == pytest.approx(v, rel=1e-6), (k, b)
+                assert getattr(batch, k)[b] == pytest.approx(v, rel=1e-6), (k, b)
     # Garbage (NaN, huge) after n changes nothing.
     dirty = paths.astype(float)
     for b in range(len(paths)):
         dirty[b, n[b]:] = np.where(rng.random((len(paths[0]) - n[b], 2)) < 0.5, np.nan, 1e30)
     again = M.path_metrics(dirty, grid, n=n, reference=paths[0, :7].astype(float))
     for k in M.PATH_METRICS:
-        if batch[k] is not None:
-            np.testing.assert_array_equal(again[k], batch[k])
+        if getattr(batch, k) is not None:
+            np.testing.assert_array_equal(getattr(again, k), getattr(batch, k))
 
 
 def test_jax_functions_vmap_and_jit_like_the_batch():
@@ -424,7 +425,7 @@ def test_path_metrics_rejects_bad_paths():
     with pytest.raises(ValueError, match=r"n must have shape \[2\]"):
         M.path_metrics(np.zeros((2, 2, 2)), grid, n=np.array([1]))
     # NaN beyond n is padding, not an error.
-    assert M.path_metrics(np.array([[[0.0, 0.0], [np.nan, 1.0]]]), grid, n=np.array([1]))["length"][0] == 0.0
+    assert M.path_metrics(np.array([[[0.0, 0.0], [np.nan, 1.0]]]), grid, n=np.array([1])).length[0] == 0.0
 
 
 # --------------------------------------------------------------------------------------------

@@ -7,7 +7,7 @@ import pytest
 
 import jaxplan as jp
 from jaxplan.aco import COLONIES, aco_defaults, goal_tables, plan_memory
-from jaxplan.aco._objective import _weights, objective_tables
+from jaxplan.aco._objective import objective_tables
 from jaxplan.grid import neighbour_table, passable, state_cost_to_go
 from jaxplan.search import exact_objective, objective_cost_to_go, objective_terms
 
@@ -75,18 +75,35 @@ def test_cost_to_go_is_zero_on_the_goal_and_inf_where_it_cannot_be_reached():
         state_cost_to_go(grid, [[0, 0]], w_turn=-1.0)
 
 
-@pytest.mark.parametrize("planner,weights", CASES)
-def test_the_colony_weights_agree_with_objective_terms(planner, weights):
-    grid = _grid(2, turn_rule=planner == "opt_ant")
+def test_the_colony_weights_are_the_papers_costs():
+    """`cost_weights` (read by the colonies' heuristic and by the exact search alike) against each cost written out:
+    iaco λ1·L/L0 + λ2·Σ|θ|/π + λ3·Σ 1/clearance, risk_aco u·L + v·risk + w·turns, praco ω1·L + ω2·turns."""
+    from jaxplan.aco import cost_weights
+
+    grid = _grid(2, turn_rule=True)
     ok = np.argwhere(passable(grid, None))[:, ::-1]
     s, g = ok[:3], ok[-3:]
-    p = {**aco_defaults(planner), **weights}
-    w_len, w_angle, w_turn, cell, goal_first, turn_rule = _weights(planner, grid, s, g, p)
-    t = objective_terms(grid, s, g, planner, **weights)
-    np.testing.assert_array_equal(w_len, t.w_len)
-    assert (w_angle, w_turn, goal_first) == (t.w_angle, t.w_turn, t.goal_first)
-    np.testing.assert_array_equal(cell, t.cell)
-    np.testing.assert_array_equal(turn_rule, t.turn_rule)
+    res = float(grid.resolution)
+    iaco = cost_weights("iaco", grid, s, g, {**aco_defaults("iaco"), "lambdas": (0.2, 0.6, 0.2)})
+    l0 = np.hypot(*(s - g).T.astype(float)) * res
+    np.testing.assert_allclose(iaco.w_len, 0.2 / l0, rtol=1e-15)
+    assert iaco.w_angle == pytest.approx(0.6 / np.pi) and iaco.w_turn == 0.0
+    clear = np.maximum(jp.clearance_field(grid), 0.5 * res).ravel()
+    free = passable(grid, None).ravel()
+    np.testing.assert_allclose(iaco.cell[free], 0.2 / clear[free], rtol=1e-6)
+    assert (iaco.cell[~free] == 0).all()
+    risk = cost_weights("risk_aco", grid, s, g, {**aco_defaults("risk_aco"), "u": 1.0, "v": 5.0, "w": 2.0})
+    assert (risk.w_len == 1.0).all() and risk.w_turn == 2.0 and risk.w_angle == 0.0
+    np.testing.assert_array_equal(risk.cell[free], 5.0 * np.asarray(grid.risk).ravel()[free])
+    praco = cost_weights("praco", grid, s, g, {**aco_defaults("praco"), "omega2": 3.0})
+    assert (praco.w_len == 1.0).all() and praco.w_turn == 3.0 and not praco.cell.any() and not praco.goal_first
+    opt = cost_weights("opt_ant", grid, s, g, {**aco_defaults("opt_ant"), "vehicle_height": None, "b": 2.0})
+    assert opt.goal_first and opt.w_turn == 2.0
+    np.testing.assert_array_equal(opt.turn_rule, np.asarray(grid.turn_rule).ravel() == 1)
+    terms = objective_terms(grid, s, g, "iaco", lambdas=(0.2, 0.6, 0.2))  # the exact search reads the same weights
+    np.testing.assert_array_equal(terms.w_len, iaco.w_len)
+    with pytest.raises(ValueError, match=r"exact_objective: planner .risk_aco. gives cell \(\d+, \d+\) the path cost"):
+        cost_weights("risk_aco", grid, s, g, {**aco_defaults("risk_aco"), "v": -1.0}, what="exact_objective")
 
 
 def test_objective_tables_turn_variants():

@@ -125,7 +125,7 @@ def assert_collision_free(grid, obs: MovingObstacles, n_times: int = 400) -> Non
         assert len(p) <= _SEGMENTS
         p = np.concatenate([p, np.repeat(p[-1:], _SEGMENTS - len(p), axis=0)])
         q = np.concatenate([q, np.repeat(q[-1:], _SEGMENTS - len(q), axis=0)])
-        # 1e-4 cells of slack: clearance exactly equal to the radius is allowed (DESIGN §5),
+        # 1e-4 cells of slack: clearance exactly equal to the radius is allowed (docs/guide/navigation.md),
         # and the route has been rounded to float32 metres.
         ok = np.asarray(_segments_free(cmap, jnp.asarray(p, jnp.float32), jnp.asarray(q, jnp.float32),
                                        jnp.float32(max(r - 1e-4, 0.0))))

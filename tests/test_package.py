@@ -24,12 +24,21 @@ def test_every_public_name_resolves_from_its_subpackage():
         jp.nonesuch  # noqa: B018
 
 
-def test_smooth_is_the_function_even_after_its_subpackage_is_imported():
-    import jaxplan.smooth as module_or_function  # binds jaxplan.smooth: the function, as before the lazy package
-    from jaxplan.smooth import Smoothed, smooth
+def test_smooth_is_the_function_and_smoothing_the_subpackage():
+    import jaxplan.smoothing
+    from jaxplan.smoothing import Smoothed, smooth
 
-    assert jp.smooth is smooth and module_or_function is smooth and callable(jp.smooth)
-    assert jp.Smoothed is Smoothed
+    assert jp.smooth is smooth and jp.smoothing is jaxplan.smoothing and jp.Smoothed is Smoothed
+    assert callable(jp.smooth) and not isinstance(jp.smooth, type(jaxplan))
+
+
+def test_plan_batch_and_its_result_sit_beside_plan():
+    import jaxplan.planning
+    import jaxplan.result
+
+    assert jp.plan_batch is jaxplan.planning.plan_batch and jp.plan is jaxplan.planning.plan
+    assert jp.BatchResult is jaxplan.result.BatchResult and jp.PlanResult is jaxplan.result.PlanResult
+    assert jp.PathMetrics is jp.metrics.PathMetrics
 
 
 def test_plan_and_planners_see_every_shipped_planner():

@@ -9,7 +9,7 @@ import pytest
 
 import jaxplan as jp
 from jaxplan.metrics import count_sharp_turns, path_length
-from jaxplan.smooth import smooth
+from jaxplan.smoothing import smooth
 
 
 def _blocked_squares(grid) -> np.ndarray:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 from dataclasses import dataclass
-from typing import Callable, NamedTuple
+from typing import Any, Callable, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -159,7 +159,7 @@ class RunOutput(NamedTuple):
     ant_steps: jnp.ndarray
     loop_steps: jnp.ndarray
     slots: jnp.ndarray
-    tau: jnp.ndarray
+    tau: jnp.ndarray | None
 
 
 def goal_distances(tables: MapTables, goal: GoalTables, heuristic: str) -> jnp.ndarray:
@@ -169,7 +169,8 @@ def goal_distances(tables: MapTables, goal: GoalTables, heuristic: str) -> jnp.n
     return jnp.linalg.norm(tables.xy - tables.xy[goal.goal], axis=1)
 
 
-def _scatter_paths(flat_tau, colony_idx, cells, moves, n, amount, K: int, CK: int):
+def _scatter_paths(flat_tau: jnp.ndarray, colony_idx: jnp.ndarray, cells: jnp.ndarray, moves: jnp.ndarray,
+                   n: jnp.ndarray, amount: jnp.ndarray, K: int, CK: int) -> jnp.ndarray:
     """Adds ``amount [P]`` on every edge of paths ``cells [P, L + 1]``/``moves [P, L]`` of colony ``colony_idx [P]``."""
     L = moves.shape[1]
     mask = jnp.arange(L)[None, :] < n[:, None]
@@ -209,7 +210,7 @@ def _move_table(colony: Colony, tables: MapTables, params: dict, tau: jnp.ndarra
 
 
 def _choose(colony: Colony, cfg: RunConfig, tables: MapTables, params: dict, state: ColonyState, ants: Ants,
-            stats: R.PathStats, goal: GoalTables):
+            stats: R.PathStats, goal: GoalTables) -> tuple:
     """One run's costs, deposit amounts and best-so-far update from its ants (``[S * m]`` of them).
 
     Returns:
@@ -353,7 +354,7 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
         eta_v = jnp.swapaxes(eta_v, 0, 1)  # [V, B, C, K]
         variant = goal_b.variant[0]
         colony = dataclasses.replace(colony, heuristic_in_hook=True)
-        h_cell = None
+        h_cell: jnp.ndarray | None = None
         log_eta = jnp.zeros((B, 1, 1), jnp.float32)  # unused: the hook adds β·log η
     else:
         h_cell = jax.vmap(lambda g: goal_distances(tables, g, cfg.heuristic))(goal_b)  # [B, C]
@@ -376,6 +377,7 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
     if objective and backend == "jax":
         hook = functools.partial(R.hook_objective, tables, eta_v.reshape(-1, B * C, K), variant, rules)
     elif colony.hook is not None and backend == "jax":
+        assert h_cell is not None
         hook = functools.partial(colony.hook, tables, params, h_cell.reshape(B * C))
     # One seed per run and iteration, all drawn before the loop in one threefry call per run: the
     # walk's uniforms are hashed from it (`hash_uniform`). Keeping key splits and draws out of the
@@ -387,11 +389,11 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
     native_update = update_backend(cfg) == "numba"
     stat_tables = _walk_numba.stat_tables(tables) if native_update else None
 
-    def iteration(state: ColonyState, seeds):
+    def iteration(state: ColonyState, seeds: jnp.ndarray) -> tuple[ColonyState, tuple]:
         table = jax.vmap(functools.partial(_move_table, colony, tables, params, hooked=hooked))(state.tau, log_eta)
         walk_args = (nbr, table.reshape(B * S * C, K), start, goal, row0, cell0, seeds[run_of], local,
                      state.alert.reshape(B * C) if cfg.dead_end == "alert" else None)
-        sizes = dict(max_steps=L, width=cfg.width, lut=lut, dead_end=cfg.dead_end,
+        sizes: dict[str, Any] = dict(max_steps=L, width=cfg.width, lut=lut, dead_end=cfg.dead_end,
                      penalty_size=B * S * C * K if cfg.penalise else 0)
         if backend == "numba":
             hook_tables = None
@@ -399,6 +401,7 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
                 logits = (table[None] + eta_v[:, :, None]).reshape(-1, B * S * C, K)  # [V, B * S * C, K]
                 hook_tables = HookTables(logits, tables.right_turn, tables.turn_rule, variant, rules)
             elif colony.hook is not None:
+                assert colony.hook_logits is not None and h_cell is not None, "the numba walk needs hook_logits"
                 logits = colony.hook_logits(tables, params, h_cell, table)
                 hook_tables = HookTables(logits, tables.right_turn, tables.turn_rule)
             ants = _walk_numba.walk(*walk_args, **sizes, hook=hook_tables, stats=stat_tables, bits=bits)
@@ -410,11 +413,12 @@ def run_batch(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTabl
             penalty=None if ants.penalty is None else ants.penalty.reshape(B, S, C * K),
             ant_steps=ants.ant_steps.reshape(B, M), loop_steps=jnp.broadcast_to(ants.loop_steps, (B,)),
             marks=None if ants.marks is None else ants.marks.reshape(B, C),
-            slots=jnp.broadcast_to(ants.slots, (B,)),
+            slots=jnp.broadcast_to(jnp.asarray(ants.slots), (B,)),
         )
         if native_update:
             # Sums over the valid steps only; the numba walk has them already, a JAX walk's paths get
             # the same kernel (so both walks give the same bits).
+            assert stat_tables is not None
             rows = ants.stats if ants.stats is not None else _walk_numba.path_stats(
                 stat_tables, ants.cells, ants.moves, ants.n)
             stats = R.stats_from_rows(rows.reshape(-1, B, M))

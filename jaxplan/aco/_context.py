@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from jaxplan.aco._objective import objective_tables
-from jaxplan.grid import GridMap, check_cell, check_cells, clearance_field, distance_from, neighbour_table, passable
+from jaxplan.grid import GridMap, check_pair, check_pairs, clearance_field, distance_from, neighbour_table, passable
 
 __all__ = ["MapTables", "GoalTables", "map_tables", "goal_tables"]
 
@@ -40,7 +40,7 @@ class MapTables(NamedTuple):
       turn_angle: ``f32[K, K]`` |heading change| from move i to move j (rad, in [0, π]).
     """
 
-    index: jnp.ndarray
+    index: jnp.ndarray  # type: ignore[assignment]  # a field named as tuple.index
     valid: jnp.ndarray
     step: jnp.ndarray
     offsets: jnp.ndarray
@@ -108,7 +108,7 @@ def map_tables(grid: GridMap, connectivity: int = 8, vehicle_height: float | Non
         risk=jnp.asarray(np.asarray(grid.risk).ravel(), jnp.float32),
         height=jnp.asarray(np.asarray(grid.height).ravel(), jnp.float32),
         turn_rule=jnp.asarray(np.asarray(grid.turn_rule).ravel() == 1),
-        n_blocked=jnp.asarray(n_blocked.ravel(), jnp.float32),
+        n_blocked=jnp.asarray(np.ravel(n_blocked), jnp.float32),
         boundary=jnp.asarray(boundary.ravel()),
         resolution=jnp.asarray(res, jnp.float32),
         turn_angle=_turn_angle(jnp.asarray(angle, jnp.float32)),
@@ -142,15 +142,7 @@ def goal_tables(
     Raises:
       ValueError: a start or goal outside the map or blocked, or a start equal to its goal.
     """
-    ok = passable(grid, vehicle_height)
-    s = check_cells(grid, starts, "starts", ok)
-    g = check_cells(grid, goals, "goals", ok)
-    if s.shape != g.shape:
-        raise ValueError(f"starts and goals differ in shape: {s.shape} vs {g.shape}")
-    same = (s == g).all(axis=1)
-    if same.any():
-        i = int(np.argmax(same))
-        raise ValueError(f"scenario {i}: start {tuple(s[i].tolist())} equals the goal; nothing to plan")
+    s, g = check_pairs(grid, starts, goals, passable(grid, vehicle_height))
     W = grid.width
     if geodesic:
         fields = {}
@@ -175,8 +167,4 @@ def goal_tables(
 
 def check_one(grid: GridMap, start: ArrayLike, goal: ArrayLike, vehicle_height: float | None) -> None:
     """Validates a single start/goal pair with the single-cell messages."""
-    ok = passable(grid, vehicle_height)
-    s = check_cell(grid, start, "start", ok)
-    g = check_cell(grid, goal, "goal", ok)
-    if s == g:
-        raise ValueError(f"start {s} equals the goal; nothing to plan")
+    check_pair(grid, start, goal, passable(grid, vehicle_height))

@@ -24,8 +24,8 @@ height term, which the ants' cost and pheromone still carry). The η replaces ch
 (its straightness and flatness terms); the colony keeps its move rules (an adjacent goal first, the
 right-hand rule), which the cost-to-go also obeys.
 
-This duplicates the weights of `jaxplan.search.objective_terms` (jaxplan.search imports jaxplan.aco to
-register the colonies, so jaxplan.aco cannot import it back); a test checks that the two agree.
+Each colony's cost as these weights (`cost_weights`) is defined here, once: the exact search
+`jaxplan.search.objective_terms` reads the same function.
 """
 
 from __future__ import annotations
@@ -33,10 +33,12 @@ from __future__ import annotations
 from typing import Any, Mapping, NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from jaxplan.grid import GridMap, clearance_field, neighbour_table, passable, state_cost_to_go
 
-__all__ = ["ETA_COST_FLOOR", "ObjectiveTables", "objective_tables", "objective_variants"]
+__all__ = ["ETA_COST_FLOOR", "CostWeights", "ObjectiveTables", "cost_weights", "objective_tables",
+           "objective_variants"]
 
 ETA_COST_FLOOR = 1e-30
 """The smallest q the heuristic's log(1/q) reads (a move that is free under a colony's weights stays finite)."""
@@ -58,12 +60,39 @@ class ObjectiveTables(NamedTuple):
     variant: np.ndarray
 
 
-def _weights(name: str, grid: GridMap, starts: np.ndarray, goals: np.ndarray, p: Mapping[str, Any]):
-    """``(w_len f64[N], w_angle, w_turn, cell f64[C], goal_first, turn_rule bool[C])`` of colony ``name``'s cost,
-    as `jaxplan.search.objective_terms` (opt_ant: a·L + b·R, its c·H left out)."""
-    N = len(starts)
+class CostWeights(NamedTuple):
+    """A colony's path cost as a sum over moves, turns and cells (docs/guide/planners.md).
+
+    Attributes:
+      w_len: ``f64[N]`` weight per metre, per scenario (iaco's 1/L0 depends on the scenario).
+      w_angle: weight per radian of heading change; w_turn: weight per turn.
+      cell: ``f64[C]`` cost of entering each cell (0 on cells the vehicle cannot pass).
+      goal_first: an adjacent goal must be taken (chu2024); turn_rule: ``bool[C]`` cells with chu2024's forced
+        right turn.
+    """
+
+    w_len: np.ndarray
+    w_angle: float
+    w_turn: float
+    cell: np.ndarray
+    goal_first: bool
+    turn_rule: np.ndarray
+
+
+def cost_weights(name: str, grid: GridMap, starts: ArrayLike, goals: ArrayLike, p: Mapping[str, Any],
+                 what: str = "heuristic='objective'") -> CostWeights:
+    """`CostWeights` of colony ``name``'s own cost (resolved parameters ``p``) for ``starts``/``goals int[N, 2]``:
+    ``aco`` length; ``iaco`` λ1·L/L0 + λ2·Σ|θ|/π + λ3·Σ 1/clearance; ``risk_aco`` u·L + v·risk + w·turns;
+    ``opt_ant`` a·L + b·turns (its c·H is no sum over moves: left out here); ``praco`` ω1·L + ω2·turns.
+
+    Raises:
+      ValueError: an unknown colony, or a cell whose cost is negative or not finite (``what`` starts the message).
+    """
+    s = np.asarray(starts, np.float64).reshape(-1, 2)
+    g = np.asarray(goals, np.float64).reshape(-1, 2)
+    N = len(s)
     res = float(grid.resolution)
-    ok = passable(grid, p["vehicle_height"])
+    ok = passable(grid, p.get("vehicle_height"))
     cell = np.zeros(grid.n_cells)
     w_angle = w_turn = 0.0
     goal_first = False
@@ -72,8 +101,9 @@ def _weights(name: str, grid: GridMap, starts: np.ndarray, goals: np.ndarray, p:
         w_len = np.ones(N)
     elif name == "iaco":
         lam = np.asarray(p["lambdas"], np.float64)
-        l0 = np.hypot(*(starts - goals).astype(np.float64).T) * res
-        w_len = lam[0] / l0
+        l0 = np.hypot(*(s - g).T) * res
+        with np.errstate(divide="ignore"):  # L0 = 0 only for start = goal, which a search may be asked
+            w_len = np.where(l0 > 0, lam[0] / l0, np.inf)
         w_angle = float(lam[1] / np.pi)
         clear = np.maximum(clearance_field(grid), 0.5 * res).astype(np.float32).astype(np.float64).ravel()
         cell = lam[2] / clear
@@ -90,12 +120,13 @@ def _weights(name: str, grid: GridMap, starts: np.ndarray, goals: np.ndarray, p:
         w_len = np.full(N, float(p["omega1"]))
         w_turn = float(p["omega2"])
     else:
-        raise ValueError(f"heuristic='objective': no objective for colony {name!r}")
+        raise ValueError(f"{what}: no objective for colony {name!r}")
     cell = np.where(ok.ravel(), cell, 0.0)
     if (cell < 0).any() or not np.isfinite(cell).all():
-        raise ValueError(f"heuristic='objective': planner {name!r} gives some cell a negative or non-finite path "
-                         "cost (check the risk layer)")
-    return w_len, w_angle, w_turn, cell, goal_first, turn_rule
+        bad = int(np.argmax((cell < 0) | ~np.isfinite(cell)))
+        raise ValueError(f"{what}: planner {name!r} gives cell {(bad % grid.width, bad // grid.width)} the path cost "
+                         f"{cell[bad]}; the cost must be finite and >= 0 on every cell (check the risk layer)")
+    return CostWeights(np.asarray(w_len, np.float64), w_angle, w_turn, cell, goal_first, turn_rule)
 
 
 def _turn_classes(offsets: np.ndarray, w_angle: float, w_turn: float) -> tuple[np.ndarray, np.ndarray]:
@@ -129,7 +160,7 @@ def objective_tables(name: str, grid: GridMap, starts: np.ndarray, goals: np.nda
     conn, vh = int(p["connectivity"]), p["vehicle_height"]
     s = np.asarray(starts, np.int64).reshape(-1, 2)
     g = np.asarray(goals, np.int64).reshape(-1, 2)
-    w_len, w_angle, w_turn, cell, goal_first, turn_rule = _weights(name, grid, s, g, p)
+    w_len, w_angle, w_turn, cell, goal_first, turn_rule = cost_weights(name, grid, s, g, p)
     nb = neighbour_table(grid, conn, vh)
     keys = np.concatenate([g.astype(np.float64), w_len[:, None]], axis=1)
     uniq, inv = np.unique(keys, axis=0, return_inverse=True)

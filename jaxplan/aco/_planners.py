@@ -1,4 +1,5 @@
-"""The papers' ACO planners as presets of the colony engine, and the batch entry point.
+"""The papers' ACO planners as presets of the colony engine, registered with their batch (every scenario × seed
+in one compiled call, what `jaxplan.plan_batch` runs for them).
 
 Defaults are the papers' values. Where a paper is silent jaxplan chooses,
 and says so here:
@@ -31,7 +32,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from typing import Any, Mapping, NamedTuple
+from typing import Any, Callable, Mapping
 
 import jax
 import jax.numpy as jnp
@@ -41,15 +42,15 @@ from jax.sharding import PartitionSpec as P
 from numpy.typing import ArrayLike
 
 from jaxplan.aco import _rules as R
-from jaxplan.aco._colony import HEURISTICS, Colony, RunConfig, run_batch, walk_backend
+from jaxplan.aco._colony import HEURISTICS, Colony, RunConfig, RunOutput, run_batch, walk_backend
 from jaxplan.aco._context import GoalTables, MapTables, check_one, goal_tables, map_tables
 from jaxplan.aco._objective import objective_variants
 from jaxplan.aco._walk_numba import WALK_BACKENDS, sharing_cores
 from jaxplan.core.cache import Built, digest, memoize
 from jaxplan.core.progress import ProgressBar
 from jaxplan.grid import GridMap, passable
-from jaxplan.registry import register_planner, resolve
-from jaxplan.result import PlanResult
+from jaxplan.registry import BatchFn, MemoryFn, Seeds, check_seeds, register_planner, seed_count
+from jaxplan.result import BatchResult, PlanResult
 from jaxplan.scale import (
     BATCH_AXIS,
     Knob,
@@ -60,11 +61,10 @@ from jaxplan.scale import (
     check_mesh,
     pad_leading,
     padded_size,
-    table_memory,
 )
 
-__all__ = ["COLONIES", "BatchResult", "plan_batch", "plan_memory", "aco_defaults", "STATIC_PARAMS", "UNIT_PARAMS",
-           "seed_keys", "split_params", "cached_map_tables"]
+__all__ = ["COLONIES", "aco_defaults", "STATIC_PARAMS", "UNIT_PARAMS", "seed_keys", "split_params",
+           "cached_map_tables"]
 
 COLONIES: dict[str, Colony] = {
     "aco": Colony("aco", R.init_uniform, R.cost_length, (R.deposit_inverse,)),
@@ -127,7 +127,7 @@ def _real(name: str, key: str, value: Any, default: Any) -> np.ndarray:
     return arr.astype(np.float64)
 
 
-def _validate(name: str):
+def _validate(name: str) -> Callable[[Mapping[str, Any]], None]:
     def check(p: Mapping[str, Any]) -> None:
         for k in ("ants", "iterations", "colonies"):
             if k in p and (not isinstance(p[k], (int, np.integer)) or isinstance(p[k], bool) or p[k] < 1):
@@ -211,13 +211,13 @@ def cached_map_tables(grid: GridMap, connectivity: int, vehicle_height: float | 
     return map_tables(grid, connectivity, vehicle_height)
 
 
-def _program_key(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys,
+def _program_key(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys: jax.Array,
                  mesh: Mesh | None) -> tuple:
     sig = jax.tree_util.tree_map(lambda a: (a.shape, a.dtype), (tables, goals, params, keys))
     return colony, cfg, str(jax.tree_util.tree_structure(sig)), str(jax.tree_util.tree_leaves(sig)), mesh
 
 
-def compiled(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys,
+def compiled(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys: jax.Array,
              mesh: Mesh | None = None) -> tuple[Any, float]:
     """The compiled batch program for these shapes, and the seconds spent compiling it now (0 if cached).
 
@@ -231,7 +231,7 @@ def compiled(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTable
 
 
 @memoize(maxsize=32, key=_program_key)
-def _program(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys,
+def _program(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTables, params: dict, keys: jax.Array,
              mesh: Mesh | None) -> Built:
     t0 = time.perf_counter()
     body = lambda t, g, p, k: run_batch(colony, cfg, t, g, p, k)  # noqa: E731
@@ -245,114 +245,14 @@ def _program(colony: Colony, cfg: RunConfig, tables: MapTables, goals: GoalTable
     return Built(fn, time.perf_counter() - t0)
 
 
-def seed_keys(seeds) -> jax.Array:
+def seed_keys(seeds: Seeds) -> jax.Array:
     """``key[R]`` PRNG keys of integer seeds (``jax.random.key(seed)`` each); bad seeds raise ``ValueError``."""
-    s = np.atleast_1d(np.asarray(list(seeds) if not isinstance(seeds, (int, np.integer)) else [seeds]))
-    if s.size == 0:
-        raise ValueError("seeds must hold at least one seed")
-    if not np.issubdtype(s.dtype, np.integer) or (s < 0).any():
-        raise ValueError(f"seeds must be non-negative integers, got {s.tolist()}")
-    if (s >= 2**32).any():
-        raise ValueError(f"seeds must be below 2**32, got {int(s.max())}")
+    s = check_seeds(seeds)
     if jax.random.key_impl(jax.random.key(0)) == jax.random.key_impl(jax.random.key(0, impl="threefry2x32")):
         # jax.random.key(s) is threefry's (0, s): building the data on the host avoids tracing
         # a vmap of jax.random.key on every call (~4 ms).
-        return jax.random.wrap_key_data(np.stack([np.zeros_like(s), s], axis=1).astype(np.uint32))
+        return jax.random.wrap_key_data(jnp.asarray(np.stack([np.zeros_like(s), s], axis=1).astype(np.uint32)))
     return jax.vmap(jax.random.key)(jnp.asarray(s, jnp.uint32))
-
-
-class BatchResult(NamedTuple):
-    """Stacked results of `plan_batch`, leading axes ``[N scenarios, R seeds]`` (numpy).
-
-    paths ``int64[N, R, P, 2]`` cells, padded with −1 after ``n_cells``; n_cells ``[N, R]``;
-    length (m), cost, turns, success, converged ``[N, R]`` (−1 without success);
-    history and diversity ``[N, R, I]`` per iteration; successes ``[N, R, I]`` ants at the
-    goal per iteration; time_s for the whole call without compilation; compile_s;
-    tau ``f32[N, R, S, C, K]`` final pheromone per sub-colony and directed edge (cell
-    ``i = y * W + x``, neighbour slot k of `jaxplan.neighbour_table`), only with
-    ``keep_pheromone=True`` (else None).
-    """
-
-    paths: np.ndarray
-    n_cells: np.ndarray
-    length: np.ndarray
-    cost: np.ndarray
-    turns: np.ndarray
-    success: np.ndarray
-    converged: np.ndarray
-    history: np.ndarray
-    diversity: np.ndarray
-    successes: np.ndarray
-    time_s: float
-    compile_s: float
-    planner: str
-    tau: np.ndarray | None = None
-
-    def result(self, i: int, r: int) -> PlanResult:
-        """One scenario/seed as a `PlanResult`."""
-        n = int(self.n_cells[i, r])
-        extra = {} if self.tau is None else {"tau": self.tau[i, r].copy()}
-        return PlanResult(
-            path=self.paths[i, r, :n].copy(),
-            length=float(self.length[i, r]),
-            turns=int(self.turns[i, r]),
-            cost=float(self.cost[i, r]),
-            history=self.history[i, r].copy(),
-            time_s=self.time_s / (self.length.shape[0] * self.length.shape[1]),
-            success=bool(self.success[i, r]),
-            planner=self.planner,
-            info={"converged_iteration": int(self.converged[i, r]), "diversity": self.diversity[i, r].copy(),
-                  "successes": self.successes[i, r].copy(), "compile_s": self.compile_s, **extra},
-        )
-
-    def to_dict(self) -> dict[str, Any]:
-        """Every field as built-in Python (`jaxplan.core.export.plain`); ``paths`` as nested lists ``[N][R]`` of
-        each run's ``[x, y]`` cells, without the −1 padding (``tau`` only when kept)."""
-        from jaxplan.core.export import plain
-
-        d = plain({k: v for k, v in self._asdict().items() if k != "paths" and (k != "tau" or v is not None)})
-        d["paths"] = [[self.paths[i, r, : self.n_cells[i, r]].tolist() for r in range(self.paths.shape[1])]
-                      for i in range(self.paths.shape[0])]
-        return d
-
-    def to_dataframe(self, what: str = "summary") -> Any:
-        """A long-form `pandas.DataFrame` (pandas: ``pip install 'jaxplan[export]'``); ``scenario`` and ``seed``
-        are indices into the call's scenarios and seeds.
-
-        Args:
-          what: ``"summary"`` one row per run (success, length m, cost, turns, cells, converged iteration);
-            ``"path"`` one row per path cell (``step``, ``x``, ``y``); ``"history"`` one row per iteration
-            (``best_cost``, ``diversity``, ``successes``).
-        """
-        from jaxplan.core.export import check_what, frame
-
-        check_what(what, ("summary", "path", "history"), "BatchResult")
-        N, R = self.length.shape
-        sc, se = np.meshgrid(np.arange(N), np.arange(R), indexing="ij")
-        if what == "summary":
-            return frame({"planner": np.full(N * R, self.planner, object), "scenario": sc.ravel(), "seed": se.ravel(),
-                          "success": self.success.ravel(), "length": self.length.ravel(), "cost": self.cost.ravel(),
-                          "turns": self.turns.ravel(), "cells": self.n_cells.ravel(),
-                          "converged_iteration": self.converged.ravel()})
-        if what == "path":
-            keep = np.arange(self.paths.shape[2])[None, None, :] < self.n_cells[..., None]  # [N, R, P]
-            i, r, k = np.nonzero(keep)
-            return frame({"scenario": i, "seed": r, "step": k, "x": self.paths[i, r, k, 0],
-                          "y": self.paths[i, r, k, 1]})
-        I = self.history.shape[2]
-        i, r, k = (a.ravel() for a in np.meshgrid(np.arange(N), np.arange(R), np.arange(I), indexing="ij"))
-        return frame({"scenario": i, "seed": r, "iteration": k + 1, "best_cost": self.history.ravel(),
-                      "diversity": self.diversity.ravel(), "successes": self.successes.ravel()})
-
-
-def _seed_count(seeds) -> int:
-    """How many seeds ``seeds`` holds, without building a list of a huge range (the memory guard runs first)."""
-    if isinstance(seeds, (int, np.integer)):
-        return 1
-    try:
-        return len(seeds)
-    except TypeError:
-        return len(list(seeds))
 
 
 def _colony_memory(name: str, grid: GridMap, cfg: RunConfig, connectivity: int, runs: int) -> MemoryEstimate:
@@ -374,33 +274,23 @@ def _colony_what(name: str, grid: GridMap, cfg: RunConfig) -> str:
     return f"planner {name!r} with {cfg.colonies * cfg.ants} ants on a {grid.shape[0]}x{grid.shape[1]} map"
 
 
-def plan_memory(grid: GridMap, planner: str, runs: int, **overrides: Any) -> MemoryEstimate:
-    """Estimated working memory (bytes) of `plan_batch` over ``runs`` = scenarios × seeds of ``planner``.
-
-    An ACO planner: `jaxplan.scale.aco_memory` of its colony (pheromone, ant paths, tables). Any other
-    planner: its result table, with paths of at most ``4·(H + W)`` cells (the exact path length is known
-    only after planning; `plan_batch` checks again with it before it allocates the paths).
-    """
-    _, p = resolve(planner, overrides)
-    if planner in COLONIES:
+def _memory(name: str) -> MemoryFn:
+    def memory(grid: GridMap, p: Mapping[str, Any], runs: int) -> MemoryEstimate:
         cfg, _, connectivity, _ = split_params(grid, p)
-        return _colony_memory(planner, grid, cfg, connectivity, runs)
-    return _result_memory(runs, 4 * (grid.shape[0] + grid.shape[1]))
+        return _colony_memory(name, grid, cfg, connectivity, runs)
+
+    return memory
 
 
-def _result_memory(runs: int, path_cells: int) -> MemoryEstimate:
-    """A non-colony `plan_batch`'s results: one reference and five numbers per run, and its padded path."""
-    return table_memory(runs, {"results": 8 + 5 * 8, "paths": path_cells * 2 * 8})
-
-
-def _run_colony(name: str, grid: GridMap, starts: np.ndarray, goals: np.ndarray, seeds, p: Mapping[str, Any],
-                keep_pheromone: bool = False, mesh: Mesh | None = None, bar: ProgressBar | None = None):
+def _run_colony(name: str, grid: GridMap, starts: np.ndarray, goals: np.ndarray, seeds: Seeds, p: Mapping[str, Any],
+                keep_pheromone: bool = False, mesh: Mesh | None = None,
+                bar: ProgressBar | None = None) -> tuple[RunOutput, float, float, int]:
     cfg, params, connectivity, vh = split_params(grid, p)
     if keep_pheromone:
         cfg = RunConfig(**{**cfg.__dict__, "keep_pheromone": True})
     N = len(starts)
     colony = COLONIES[name]
-    runs = (N if mesh is None else padded_size(N, check_mesh(mesh))) * _seed_count(seeds)
+    runs = (N if mesh is None else padded_size(N, check_mesh(mesh))) * seed_count(seeds)
     # Refuse a batch that cannot fit before anything of it is allocated (on a mesh, per device).
     devices = 1 if mesh is None else mesh.devices.size
     check_memory(_colony_memory(name, grid, cfg, connectivity, runs // devices), _colony_what(name, grid, cfg),
@@ -425,7 +315,7 @@ def _run_colony(name: str, grid: GridMap, starts: np.ndarray, goals: np.ndarray,
     return out, time.perf_counter() - t0, compile_s, grid.width
 
 
-def _to_batch(name: str, out, time_s: float, compile_s: float, width: int) -> BatchResult:
+def _to_batch(name: str, out: RunOutput, time_s: float, compile_s: float, width: int) -> BatchResult:
     cells = np.asarray(out.cells, np.int64)
     n_cells = np.asarray(out.n, np.int64) + 1
     success = np.asarray(out.success)
@@ -451,8 +341,8 @@ def _empty_batch(name: str, R: int, iterations: int) -> BatchResult:
                        time_s=0.0, compile_s=0.0, planner=name, tau=None)
 
 
-def _plan_one(name: str):
-    def fn(grid: GridMap, start, goal, seed, **p) -> PlanResult:
+def _plan_one(name: str) -> Callable[..., PlanResult]:
+    def fn(grid: GridMap, start: ArrayLike, goal: ArrayLike, seed: int, **p: Any) -> PlanResult:
         check_one(grid, start, goal, p["vehicle_height"])
         out, dt, compile_s, width = _run_colony(name, grid, np.asarray([start]), np.asarray([goal]), [seed], p)
         return _to_batch(name, out, dt, compile_s, width).result(0, 0)
@@ -460,91 +350,27 @@ def _plan_one(name: str):
     return fn
 
 
-_SEEDLESS = ("astar", "dijkstra", "astar_kng")
+def _batch(name: str) -> BatchFn:
+    def batch(grid: GridMap, starts: np.ndarray, goals: np.ndarray, seeds: Seeds, p: Mapping[str, Any], *,
+              mesh: Mesh | str | None = "auto", progress: bool = False) -> BatchResult:
+        """Every scenario × seed of colony ``name`` in one compiled call (`jaxplan.plan_batch`)."""
+        if len(starts) == 0:  # e.g. a host past the end of a multi-host sweep's scenarios
+            if len(goals) != 0:
+                raise ValueError(f"starts and goals differ in shape: {starts.shape} vs {goals.shape}")
+            one = seeds if isinstance(seeds, (int, np.integer)) else [int(x) for x in seeds]
+            return _empty_batch(name, len(seed_keys(one)), int(p["iterations"]))
+        mesh_ = auto_mesh(mesh, len(starts))
+        with ProgressBar(f"{name}: preparing", None, enabled=progress) as bar:
+            out, dt, compile_s, width = _run_colony(name, grid, starts, goals, seeds, p, mesh=mesh_, bar=bar)
+        return _to_batch(name, out, dt, compile_s, width)
 
-
-def plan_batch(
-    grid: GridMap,
-    starts: ArrayLike,
-    goals: ArrayLike,
-    planner: str = "aco",
-    seeds=range(1),
-    *,
-    mesh: Mesh | str | None = "auto",
-    progress: bool = False,
-    **overrides: Any,
-) -> BatchResult:
-    """Runs ``planner`` on every scenario with every seed in one compiled call.
-
-    Args:
-      grid: the map.
-      starts, goals: ``int[N, 2]`` cells.
-      planner: a registered planner (ACO planners run batched; exact planners solve each
-        scenario once and repeat it across seeds, since they ignore the seed; sampling
-        planners run once per scenario and seed).
-      seeds: iterable of non-negative integer seeds (R of them).
-      mesh: a 1-D device mesh (`jaxplan.scale.batch_mesh`), ``"auto"`` (default: every local
-        device when there are several and each gets at least 8 scenarios — the library's CPU
-        default, `jaxplan.scale.auto_mesh`) or None (one device). An ACO planner's scenarios
-        are split over the mesh's devices (padded to a multiple of the device count with
-        copies of the last scenario, which are dropped again); the results equal the
-        single-device call's. Other planners ignore it.
-      progress: show progress on stderr (`jaxplan.core.progress`; only on a terminal): an ACO batch is one
-        compiled call, so its bar names the stage (compiling, then the call) with the elapsed time and no estimate
-        of time left; the other planners run scenario by scenario, with a bar and time left. The results are the
-        same either way.
-      **overrides: planner parameters, as for `jaxplan.plan`.
-
-    Returns:
-      `BatchResult` with leading axes ``[N, R]``.
-    """
-    spec, p = resolve(planner, overrides)
-    s, g = np.asarray(starts), np.asarray(goals)
-    auto_mesh(mesh, 1)  # a bad mesh argument fails for every planner, before any work
-    if planner in COLONIES:
-        if len(s) == 0:  # e.g. a host past the end of a multi-host sweep's scenarios
-            if len(g) != 0:
-                raise ValueError(f"starts and goals differ in shape: {s.shape} vs {g.shape}")
-            return _empty_batch(planner, len(seed_keys([int(x) for x in seeds])), int(p["iterations"]))
-        mesh = auto_mesh(mesh, len(s))
-        with ProgressBar(f"{planner}: preparing", None, enabled=progress) as bar:
-            out, dt, compile_s, width = _run_colony(planner, grid, s, g, seeds, p, mesh=mesh, bar=bar)
-        return _to_batch(planner, out, dt, compile_s, width)
-    what = f"planner {planner!r} on a {grid.shape[0]}x{grid.shape[1]} map"
-    check_memory(_result_memory(len(s) * _seed_count(seeds), 1), what, unit="runs (scenarios x seeds)")
-    seed_list = [int(x) for x in seeds]
-    R_ = len(seed_keys(seed_list))
-    t0 = time.perf_counter()
-    seedless = planner in _SEEDLESS  # deterministic: one plan per scenario serves every seed
-    with ProgressBar(planner, len(s) * (1 if seedless else R_), unit="plans", enabled=progress) as bar:
-        def one(a, b, seed):
-            r = spec.fn(grid, a, b, seed, **p)
-            bar.update(advance=1)
-            return r
-
-        if seedless:
-            results = [[r] * R_ for r in [one(a, b, 0) for a, b in zip(s, g, strict=True)]]
-        else:  # sampling planners (rrt_star, mrbs_rrt) depend on the seed
-            results = [[one(a, b, seed) for seed in seed_list] for a, b in zip(s, g, strict=True)]
-    dt = time.perf_counter() - t0
-    P = max((len(r.path) for row in results for r in row), default=1)
-    check_memory(_result_memory(len(results) * R_, max(P, 1)), what, unit="runs (scenarios x seeds)")
-    paths = np.full((len(results), R_, max(P, 1), 2), -1, np.int64)
-    for i, row in enumerate(results):
-        for j, r in enumerate(row):
-            paths[i, j, : len(r.path)] = r.path
-    col = lambda f: np.array([[f(r) for r in row] for row in results]).reshape(len(results), R_)  # noqa: E731
-    return BatchResult(
-        paths=paths, n_cells=col(lambda r: len(r.path)), length=col(lambda r: r.length), cost=col(lambda r: r.cost),
-        turns=col(lambda r: r.turns), success=col(lambda r: r.success), converged=col(lambda r: 0),
-        history=np.zeros((len(results), R_, 0)), diversity=np.zeros((len(results), R_, 0)),
-        successes=np.zeros((len(results), R_, 0), np.int64), time_s=dt, compile_s=0.0, planner=planner,
-    )
+    return batch
 
 
 def _register() -> None:
     for name in COLONIES:
-        register_planner(name, _plan_one(name), _DEFAULTS[name], _DESCRIPTIONS[name], _validate(name))
+        register_planner(name, _plan_one(name), _DEFAULTS[name], _DESCRIPTIONS[name], _validate(name),
+                         batch=_batch(name), memory=_memory(name))
 
 
 _register()

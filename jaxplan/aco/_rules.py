@@ -15,7 +15,7 @@ Rule kinds:
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Mapping, NamedTuple
 
 import jax.numpy as jnp
 
@@ -160,12 +160,12 @@ def _inv(costs: jnp.ndarray) -> jnp.ndarray:
     return jnp.where(jnp.isfinite(costs), 1.0 / jnp.maximum(costs, 1e-12), 0.0)
 
 
-def deposit_inverse(costs, bs_cost, params) -> Deposit:
+def deposit_inverse(costs: jnp.ndarray, bs_cost: jnp.ndarray, params: Mapping[str, jnp.ndarray]) -> Deposit:
     """Ant System: every ant that reached the goal lays Q/cost on its edges."""
     return Deposit(own=params["q"] * _inv(costs))
 
 
-def deposit_elite(costs, bs_cost, params) -> Deposit:
+def deposit_elite(costs: jnp.ndarray, bs_cost: jnp.ndarray, params: Mapping[str, jnp.ndarray]) -> Deposit:
     """cui2025, Eq. 3: the iteration-best path gets an extra δ·Q/cost_best."""
     best = jnp.argmin(costs, axis=1)
     onehot = jnp.arange(costs.shape[1])[None, :] == best[:, None]
@@ -178,7 +178,7 @@ def _ranks(costs: jnp.ndarray) -> jnp.ndarray:
     return jnp.argsort(order, axis=1)
 
 
-def deposit_ranked(costs, bs_cost, params) -> Deposit:
+def deposit_ranked(costs: jnp.ndarray, bs_cost: jnp.ndarray, params: Mapping[str, jnp.ndarray]) -> Deposit:
     """yu2020, Eq. 10 (own colony): the w−1 best ants lay (w−r)/Z_r, the best-so-far w/Z_bs."""
     w = params["w_rank"]
     r = _ranks(costs) + 1.0
@@ -186,7 +186,7 @@ def deposit_ranked(costs, bs_cost, params) -> Deposit:
     return Deposit(own=own, bs_own=w * _inv(bs_cost))
 
 
-def deposit_neighbour(costs, bs_cost, params) -> Deposit:
+def deposit_neighbour(costs: jnp.ndarray, bs_cost: jnp.ndarray, params: Mapping[str, jnp.ndarray]) -> Deposit:
     """yu2020, Eq. 10 (exchange): each colony passes its n−1 best ants ((n−q)/Z_q) and its
     best-so-far (n/Z_nbs) to the next colony on a ring."""
     n = params["n_exchange"]
@@ -201,7 +201,7 @@ def without_exchange(dep: Deposit, colonies: int) -> Deposit:
     return dep._replace(nbr=None, bs_nbr=None) if colonies == 1 else dep
 
 
-def combine(deposits: tuple, costs, bs_cost, params) -> Deposit:
+def combine(deposits: tuple, costs: jnp.ndarray, bs_cost: jnp.ndarray, params: Mapping[str, jnp.ndarray]) -> Deposit:
     """Sums the amounts of several deposit rules field by field."""
     out: dict = {}
     for rule in deposits:
@@ -229,7 +229,9 @@ def bound_min_max(tau: jnp.ndarray, params: dict) -> jnp.ndarray:
 # Walk hook: chu2024's state-dependent heuristic and right-hand rule.
 
 
-def hook_opt_ant(tables: MapTables, params, h_flat, pos, prev, nb, ok, logits, goal, cell0):
+def hook_opt_ant(tables: MapTables, params: Mapping[str, jnp.ndarray], h_flat: jnp.ndarray, pos: jnp.ndarray,
+                 prev: jnp.ndarray, nb: jnp.ndarray, ok: jnp.ndarray, logits: jnp.ndarray, goal: jnp.ndarray,
+                 cell0: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:
     """chu2024, Eq. 3: η = l + r + h, and the right-hand rule of its Section 2.3.
 
     ``l`` distance factor ("modified Euclidean distance"): the normalised progress of the
@@ -254,7 +256,8 @@ def hook_opt_ant(tables: MapTables, params, h_flat, pos, prev, nb, ok, logits, g
     return logits, _opt_ant_rules(tables, pos, prev, nb, ok, goal)
 
 
-def _opt_ant_rules(tables: MapTables, pos, prev, nb, ok, goal):
+def _opt_ant_rules(tables: MapTables, pos: jnp.ndarray, prev: jnp.ndarray, nb: jnp.ndarray, ok: jnp.ndarray,
+                   goal: jnp.ndarray) -> jnp.ndarray:
     """chu2024's move rules: the right-hand rule on right-turn cells; an adjacent goal before anything."""
     is_goal = (nb == goal[:, None]) & ok
     # Right-hand rule.
@@ -266,7 +269,9 @@ def _opt_ant_rules(tables: MapTables, pos, prev, nb, ok, goal):
     return jnp.where(jnp.any(is_goal, axis=1, keepdims=True), is_goal, ok)
 
 
-def hook_objective(tables: MapTables, eta, variant, rules: bool, pos, prev, nb, ok, logits, goal, cell0):
+def hook_objective(tables: MapTables, eta: jnp.ndarray, variant: jnp.ndarray, rules: bool, pos: jnp.ndarray,
+                   prev: jnp.ndarray, nb: jnp.ndarray, ok: jnp.ndarray, logits: jnp.ndarray, goal: jnp.ndarray,
+                   cell0: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:
     """``heuristic="objective"`` (`jaxplan.aco._objective`) as a walk hook: adds β·log η of the ant's move
     given its previous move, and, for ``opt_ant`` (``rules``), chu2024's move rules.
 
@@ -283,7 +288,8 @@ def hook_objective(tables: MapTables, eta, variant, rules: bool, pos, prev, nb, 
     return logits, ok
 
 
-def hook_opt_ant_logits(tables: MapTables, params, h_cell, logits):
+def hook_opt_ant_logits(tables: MapTables, params: Mapping[str, jnp.ndarray], h_cell: jnp.ndarray,
+                        logits: jnp.ndarray) -> jnp.ndarray:
     """`hook_opt_ant`'s logits for every colony, cell and move, as a table (for the numba walk).
 
     The hook's η depends on the ant's state only through "does the move keep the previous

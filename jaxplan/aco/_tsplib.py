@@ -318,6 +318,7 @@ def load_tsplib(path: str | Path, metric: str | None = None) -> TSPProblem:
         raise ValueError(f"{p.name}: EDGE_WEIGHT_TYPE {wtype} needs a NODE_COORD_SECTION")
     m = wtype if metric is None else _check_metric(metric)
     _check_matrix(p, n)
+    assert coords is not None  # read from the NODE_COORD_SECTION above
     return TSPProblem(name, coords, tsp_distances(coords, m), m, n)
 
 
@@ -328,8 +329,9 @@ def load_tour(path: str | Path) -> np.ndarray:
       ``int64[n]`` city order, 0-based (the file's nodes minus one).
 
     Raises:
-      FileNotFoundError, or ValueError naming the line when the section is missing, holds a
-      non-integer, or the tour is not a permutation of 1..n (n = DIMENSION when given).
+      FileNotFoundError: the file does not exist.
+      ValueError: naming the line, when the section is missing, holds a non-integer, or the tour is not a
+        permutation of 1..n (n = DIMENSION when given).
     """
     p, lines = _read_lines(path, "tour")
     header, sections = _parse(p, lines)

@@ -9,7 +9,7 @@ stopped or after ``max_steps`` steps. Memory is bounded by the bit-packed tabu
 
 from __future__ import annotations
 
-from typing import Callable, NamedTuple
+from typing import Any, Callable, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -174,7 +174,10 @@ def walk(
     bits = bits.at[ar, start >> 5].set(jnp.left_shift(one, (start & 31).astype(jnp.uint32)))
     cells = jnp.zeros((A, L + 1), jnp.int32).at[:, 0].set(start)
     penalty = jnp.zeros((penalty_size,), jnp.float32) if penalty_size else None
-    marks = jnp.zeros(alert.shape, bool) if dead_end == "alert" else None
+    marks = None
+    if dead_end == "alert":
+        assert alert is not None, "dead_end='alert' needs the alert table"
+        marks = jnp.zeros(alert.shape, bool)
     tiny = jnp.finfo(jnp.float32).tiny
     # Per-ant scalars travel as one [5, A] array (position, previous move, path depth, status,
     # steps walked): XLA then updates them in one fused kernel instead of one per field.
@@ -255,7 +258,7 @@ def walk(
 
         return jax.lax.while_loop(cond, body, carry)
 
-    carry = (jnp.int32(0), st0, bits, cells, (penalty, marks))
+    carry: tuple[Any, ...] = (jnp.int32(0), st0, bits, cells, (penalty, marks))
     small = A // COMPACT_FACTOR
     if A >= COMPACT_MIN_ANTS:
         # Ants that stopped still occupy their slot in every later step. Once no more than

@@ -81,15 +81,15 @@ def _i32(addr):
 
 
 @njit(nogil=True, inline="always")
-def _buffer(lst, i):
-    """``(data address, dims address)`` of the i-th `XLA_FFI_Buffer*` of an args/rets list."""
-    b = _i64(lst + 8 * i)
-    return _i64(b + 24), _i64(b + 40)
+def _data(lst, i):
+    """Data address of the i-th `XLA_FFI_Buffer*` of an args/rets list."""
+    return _i64(_i64(lst + 8 * i) + 24)
 
 
 @njit(nogil=True, inline="always")
-def _dim(dims, i):
-    return _i64(dims + 8 * i)
+def _dim(lst, i, axis):
+    """Size of axis ``axis`` of the i-th buffer of an args/rets list."""
+    return _i64(_i64(_i64(lst + 8 * i) + 40) + 8 * axis)
 
 
 @njit(nogil=True, inline="always")
@@ -113,61 +113,47 @@ def _not_execute(base):
     return _i32(base + 32) != 3
 
 
+@njit(nogil=True, inline="always")
+def _lists(frame):
+    """``(args, rets)``: the addresses of the call frame's argument and result buffer lists; ``(0, 0)`` when the
+    call is not the EXECUTE stage (`_not_execute` has answered it), and the handler returns at once."""
+    base = _address(frame)
+    if _not_execute(base):
+        return np.int64(0), np.int64(0)
+    return _i64(base + 40 + 32), _i64(base + 80 + 32)
+
+
 @njit(nogil=True)
 def _walk_call(frame):
     """``XLA_FFI_Error* handler(XLA_FFI_CallFrame*)`` for `jaxplan.aco._walk_numba.walk`'s call; see `walk` for
     the buffers."""
-    base = _address(frame)
-    if _not_execute(base):
+    args, rets = _lists(frame)
+    if args == 0:
         return _null()
-    args = _i64(base + 40 + 32)
-    rets = _i64(base + 80 + 32)
-    d, s = _buffer(args, 0)
-    C = _dim(s, 0)
-    K = _dim(s, 1)
-    nbr = numba.carray(_I32P(d), (C, K))
-    d, s = _buffer(args, 1)
-    table = numba.carray(_F32P(d), (_dim(s, 0), K))
-    d, s = _buffer(args, 2)
-    hook_l = numba.carray(_F32P(d), (_dim(s, 0), _dim(s, 1), K))
-    d, s = _buffer(args, 3)
-    right_turn = numba.carray(_I32P(d), (K,))
-    d, s = _buffer(args, 4)
-    turn_rule = numba.carray(_U8P(d), (_dim(s, 0),))
-    d, s = _buffer(args, 5)
-    A = _dim(s, 1)
-    ints = numba.carray(_I32P(d), (5, A))
-    d, s = _buffer(args, 6)
-    seed = numba.carray(_U32P(d), (A,))
-    d, s = _buffer(args, 7)
-    lut = numba.carray(_I32P(d), (25,))
-    d, s = _buffer(args, 8)
-    alert = numba.carray(_U8P(d), (_dim(s, 0),))
-    d, s = _buffer(args, 9)
-    cfg = numba.carray(_I32P(d), (6,))
+    C, K = _dim(args, 0, 0), _dim(args, 0, 1)
+    A = _dim(args, 5, 1)
+    nbr = numba.carray(_I32P(_data(args, 0)), (C, K))
+    table = numba.carray(_F32P(_data(args, 1)), (_dim(args, 1, 0), K))
+    hook_l = numba.carray(_F32P(_data(args, 2)), (_dim(args, 2, 0), _dim(args, 2, 1), K))
+    right_turn = numba.carray(_I32P(_data(args, 3)), (K,))
+    turn_rule = numba.carray(_U8P(_data(args, 4)), (_dim(args, 4, 0),))
+    ints = numba.carray(_I32P(_data(args, 5)), (5, A))
+    seed = numba.carray(_U32P(_data(args, 6)), (A,))
+    lut = numba.carray(_I32P(_data(args, 7)), (25,))
+    alert = numba.carray(_U8P(_data(args, 8)), (_dim(args, 8, 0),))
+    cfg = numba.carray(_I32P(_data(args, 9)), (6,))
     L = np.int64(cfg[0])
-    d, s = _buffer(args, 10)
-    movef = numba.carray(_F32P(d), (K + K * K,))
-    d, s = _buffer(args, 11)
-    cellf = numba.carray(_F32P(d), (3, _dim(s, 1)))
-    d, s = _buffer(rets, 0)
-    cells = numba.carray(_I32P(d), (A, L + 1))
-    d, s = _buffer(rets, 1)
-    moves = numba.carray(_I8P(d), (A, L))
-    d, s = _buffer(rets, 2)
-    per_ant = numba.carray(_I32P(d), (3, A))
-    d, s = _buffer(rets, 3)
-    counters = numba.carray(_I32P(d), (2,))
-    d, s = _buffer(rets, 4)
-    penalty = numba.carray(_F32P(d), (_dim(s, 0),))
-    d, s = _buffer(rets, 5)
-    marks = numba.carray(_U8P(d), (_dim(s, 0),))
-    d, s = _buffer(rets, 6)
-    stats = numba.carray(_F32P(d), (N_STATS, A))
-    d, s = _buffer(args, 12)
-    vbits = numba.carray(_U8P(d), (_dim(s, 0),))
-    d, s = _buffer(args, 13)
-    hook_v = numba.carray(_I32P(d), (_dim(s, 0),))
+    movef = numba.carray(_F32P(_data(args, 10)), (K + K * K,))
+    cellf = numba.carray(_F32P(_data(args, 11)), (3, _dim(args, 11, 1)))
+    vbits = numba.carray(_U8P(_data(args, 12)), (_dim(args, 12, 0),))
+    hook_v = numba.carray(_I32P(_data(args, 13)), (_dim(args, 13, 0),))
+    cells = numba.carray(_I32P(_data(rets, 0)), (A, L + 1))
+    moves = numba.carray(_I8P(_data(rets, 1)), (A, L))
+    per_ant = numba.carray(_I32P(_data(rets, 2)), (3, A))
+    counters = numba.carray(_I32P(_data(rets, 3)), (2,))
+    penalty = numba.carray(_F32P(_data(rets, 4)), (_dim(rets, 4, 0),))
+    marks = numba.carray(_U8P(_data(rets, 5)), (_dim(rets, 5, 0),))
+    stats = numba.carray(_F32P(_data(rets, 6)), (N_STATS, A))
     walk_all(nbr, table, hook_l, hook_v, right_turn, turn_rule, ints[0], ints[1], ints[2], ints[3], seed, ints[4],
              alert, vbits, L, np.int64(cfg[1]), lut, np.int64(cfg[2]), np.int64(cfg[3]), cfg[4] != 0,
              np.int64(cfg[5]), movef,
@@ -180,31 +166,21 @@ def _walk_call(frame):
 def _stats_call(frame):
     """The handler of `jaxplan.aco._walk_numba.path_stats`: cells ``i32[A, L + 1]``, moves ``i8[A, L]``,
     n ``i32[A]``, movef, cellf, ``i32[1]`` parallel chunks -> stats ``f32[N_STATS, A]``."""
-    base = _address(frame)
-    if _not_execute(base):
+    args, rets = _lists(frame)
+    if args == 0:
         return _null()
-    args = _i64(base + 40 + 32)
-    rets = _i64(base + 80 + 32)
-    d, s = _buffer(args, 0)
-    A = _dim(s, 0)
-    L1 = _dim(s, 1)
-    cells = numba.carray(_I32P(d), (A, L1))
-    d, s = _buffer(args, 1)
-    moves = numba.carray(_I8P(d), (A, L1 - 1))
-    d, s = _buffer(args, 2)
-    n = numba.carray(_I32P(d), (A,))
-    d, s = _buffer(args, 3)
-    nf = _dim(s, 0)
+    A, L1 = _dim(args, 0, 0), _dim(args, 0, 1)
+    nf = _dim(args, 3, 0)
     K = np.int64(0)
     while K + K * K < nf:
         K += 1
-    movef = numba.carray(_F32P(d), (nf,))
-    d, s = _buffer(args, 4)
-    cellf = numba.carray(_F32P(d), (3, _dim(s, 1)))
-    d, s = _buffer(args, 5)
-    n_chunks = np.int64(numba.carray(_I32P(d), (1,))[0])
-    d, s = _buffer(rets, 0)
-    stats = numba.carray(_F32P(d), (N_STATS, A))
+    cells = numba.carray(_I32P(_data(args, 0)), (A, L1))
+    moves = numba.carray(_I8P(_data(args, 1)), (A, L1 - 1))
+    n = numba.carray(_I32P(_data(args, 2)), (A,))
+    movef = numba.carray(_F32P(_data(args, 3)), (nf,))
+    cellf = numba.carray(_F32P(_data(args, 4)), (3, _dim(args, 4, 1)))
+    n_chunks = np.int64(numba.carray(_I32P(_data(args, 5)), (1,))[0])
+    stats = numba.carray(_F32P(_data(rets, 0)), (N_STATS, A))
     stats_all(cells, moves, n, movef, cellf, K, n_chunks, stats)
     return _null()
 
@@ -215,38 +191,27 @@ def _deposit_call(frame):
     ants and for the best-so-far paths each: cells ``i32[P, L + 1]``, moves ``i8[P, L]``, n ``i32[P]``, amounts
     ``f32[2, P]``, colonies ``i32[2, P]``; then ``i32[2]`` (C·K, K), the retreat counts ``f32[T]`` (or ``[1]``:
     none) and ``f32[1]`` the factor an edge keeps per retreat."""
-    base = _address(frame)
-    if _not_execute(base):
+    args, rets = _lists(frame)
+    if args == 0:
         return _null()
-    args = _i64(base + 40 + 32)
-    rets = _i64(base + 80 + 32)
-    d, s = _buffer(rets, 0)
-    tau = numba.carray(_F32P(d), (_dim(s, 0),))
-    d, s = _buffer(args, 11)
-    sizes = numba.carray(_I32P(d), (2,))
+    tau = numba.carray(_F32P(_data(rets, 0)), (_dim(rets, 0, 0),))
+    sizes = numba.carray(_I32P(_data(args, 11)), (2,))
     CK = np.int64(sizes[0])
     K = np.int64(sizes[1])
     # Own-colony deposits of the ants, their deposits into the next colony, then the best-so-far
     # paths' (own, next): the order `jaxplan.aco._colony._deposit_jax` adds them in.
     for group in range(2):
-        d, s = _buffer(args, 1 + 5 * group)
-        P = _dim(s, 0)
-        L1 = _dim(s, 1)
-        cells = numba.carray(_I32P(d), (P, L1))
-        d, s = _buffer(args, 2 + 5 * group)
-        moves = numba.carray(_I8P(d), (P, L1 - 1))
-        d, s = _buffer(args, 3 + 5 * group)
-        n = numba.carray(_I32P(d), (P,))
-        d, s = _buffer(args, 4 + 5 * group)
-        amounts = numba.carray(_F32P(d), (2, P))
-        d, s = _buffer(args, 5 + 5 * group)
-        colonies = numba.carray(_I32P(d), (2, P))
+        first = 1 + 5 * group
+        P, L1 = _dim(args, first, 0), _dim(args, first, 1)
+        cells = numba.carray(_I32P(_data(args, first)), (P, L1))
+        moves = numba.carray(_I8P(_data(args, first + 1)), (P, L1 - 1))
+        n = numba.carray(_I32P(_data(args, first + 2)), (P,))
+        amounts = numba.carray(_F32P(_data(args, first + 3)), (2, P))
+        colonies = numba.carray(_I32P(_data(args, first + 4)), (2, P))
         for kind in range(2):
             deposit_paths(tau, cells, moves, n, amounts[kind], colonies[kind], CK, K)
-    d, s = _buffer(args, 12)
-    penalty = numba.carray(_F32P(d), (_dim(s, 0),))
-    d, s = _buffer(args, 13)
-    keep = numba.carray(_F32P(d), (1,))
+    penalty = numba.carray(_F32P(_data(args, 12)), (_dim(args, 12, 0),))
+    keep = numba.carray(_F32P(_data(args, 13)), (1,))
     if penalty.shape[0] == tau.shape[0]:
         penalise(tau, penalty, keep[0])
     return _null()
@@ -297,6 +262,6 @@ def register() -> None:
         numba.get_num_threads()
         with compile_notice("the IACO walk", 30):  # ~30 s on 2 cores when not cached; a cached load ~0.3 s
             for target, fn in _handlers(source_fingerprint()).items():
-                handler = numba.cfunc(types.voidptr(types.voidptr), cache=True, nopython=True)(fn)
+                handler = numba.cfunc(types.voidptr(types.voidptr), cache=True, nopython=True)(fn)  # type: ignore[call-arg]
                 jax.ffi.register_ffi_target(target, jax.ffi.pycapsule(handler.ctypes), platform="cpu")
                 _HANDLERS[target] = handler

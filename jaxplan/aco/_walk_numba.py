@@ -38,13 +38,14 @@ import contextlib
 import contextvars
 import functools
 import os
-from typing import NamedTuple
+from typing import Iterator, NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numba
 import numpy as np
 
+from jaxplan.aco._context import MapTables
 from jaxplan.aco._walk import Ants
 from jaxplan.aco._walk_ffi import register
 from jaxplan.aco._walk_numba_kernels import ALERT, HOOK_RULES, HOOK_TABLE, MODES, NO_HOOK
@@ -90,7 +91,7 @@ _SHARERS = contextvars.ContextVar("jaxplan_walk_sharers", default=1)
 
 
 @contextlib.contextmanager
-def sharing_cores(devices: int):
+def sharing_cores(devices: int) -> Iterator[None]:
     """While tracing a program that runs on ``devices`` host devices at once (a sharded batch),
     each device's walk takes only its share of the cores: walks that each launch a thread
     per core oversubscribe the cores and are no faster than one device. The chunk count is a
@@ -138,7 +139,7 @@ class StatTables(NamedTuple):
     cellf: jnp.ndarray
 
 
-def stat_tables(tables) -> StatTables:
+def stat_tables(tables: MapTables) -> StatTables:
     """`StatTables` of a `jaxplan.aco._context.MapTables`."""
     movef = jnp.concatenate([tables.step, tables.turn_angle.reshape(-1)]).astype(jnp.float32)
     cellf = jnp.stack([tables.clearance, tables.risk, tables.height]).astype(jnp.float32)
@@ -244,7 +245,10 @@ def walk(
         hook_l, right_turn, turn_rule = hook.logits, hook.right_turn, hook.turn_rule
         hook_v = jnp.asarray(straight) if hook.variant is None else i32(hook.variant)
         table = jnp.zeros((1, K), jnp.float32)  # unused
-    n_marks = alert.shape[0] if mode == ALERT else 0
+    n_marks = 0
+    if mode == ALERT:
+        assert alert is not None, "dead_end='alert' needs the alert table"
+        n_marks = alert.shape[0]
     if stats is None:
         stats = StatTables(jnp.ones((K + K * K,), jnp.float32), jnp.ones((3, C), jnp.float32))
     hook_mode = NO_HOOK if hook is None else HOOK_RULES if hook.rules else HOOK_TABLE

@@ -9,6 +9,8 @@ the handler that compiles them in is (see `jaxplan.aco._walk_ffi`).
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 from numba import njit, prange
 
@@ -46,7 +48,7 @@ def _finish_ant(a, n, t, status, cells, moves, n_out, status_out, steps_out, mov
             stats[i, a] = _F(0.0)
 
 
-def _walk_ant_for(moves_per_cell: int):
+def _walk_ant_for(moves_per_cell: int) -> Callable:
     """`walk_ant` compiled for ``moves_per_cell`` moves per cell (0: any, read from ``nbr``). With K a
     compile-time constant the move loops unroll, which makes the 8-connected step faster."""
 

@@ -1,6 +1,6 @@
 """Results as plain Python and as pandas DataFrames: the helpers behind every ``to_dict`` / ``to_dataframe``.
 
-`PlanResult`, `jaxplan.aco.BatchResult`, `jaxplan.nav.Episode` / `EpisodeBatch` and a run's trials
+`PlanResult`, `jaxplan.BatchResult`, `jaxplan.nav.Episode` / `EpisodeBatch` and a run's trials
 (`jaxplan.experiments.export`) convert through these, so every export follows one set of rules:
 
 * ``to_dict()`` gives built-in types only (``dict``, ``list``, ``str``, ``int``, ``float``, ``bool``, None):

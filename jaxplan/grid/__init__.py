@@ -30,7 +30,7 @@ from jaxplan.grid._generators import (
     warehouse_yu2020,
 )
 from jaxplan.grid._graph import SearchGraph, distance_from, search_graph, shortest_lengths, shortest_path
-from jaxplan.grid._gridmap import GridMap, check_cell, check_cells, grid_from_array, passable
+from jaxplan.grid._gridmap import GridMap, check_cell, check_cells, check_pair, check_pairs, grid_from_array, passable
 from jaxplan.grid._movingai import (
     Scenarios,
     load_movingai_map,
@@ -49,12 +49,21 @@ from jaxplan.grid._neighbours import (
 )
 from jaxplan.grid._resample import resample, resampled_shape
 from jaxplan.grid._ros import load_ros_map, occupancy_values, read_pgm, read_ros_yaml, save_ros_map
-from jaxplan.grid._search_parts import H_EUCLID, H_MANHATTAN, H_NONE, H_OCTILE, cell_heuristic, heap_pop, heap_push
+from jaxplan.grid._search_parts import (
+    H_EUCLID,
+    H_MANHATTAN,
+    H_NONE,
+    H_OCTILE,
+    cell_heuristic,
+    heap_pop,
+    heap_push,
+    heap_room,
+)
 
 __all__ = [
-    "CONNECTIVITIES", "GridMap", "Neighbours", "Scenarios", "check_cell", "check_cells", "check_connectivity",
-    "clearance_field", "goal_distance_field", "grid_from_array", "load_map", "load_scenarios", "neighbour_table",
-    "offsets", "parse_map", "parse_scenarios", "passable", "save_map", "segment_cells",
+    "CONNECTIVITIES", "GridMap", "Neighbours", "Scenarios", "check_cell", "check_cells", "check_pair", "check_pairs",
+    "check_connectivity", "clearance_field", "goal_distance_field", "grid_from_array", "load_map", "load_scenarios",
+    "neighbour_table", "offsets", "parse_map", "parse_scenarios", "passable", "save_map", "segment_cells",
     "SearchGraph", "distance_from", "search_graph", "shortest_lengths", "shortest_path",
     "PAD", "POINT_WINDOW", "TOUCH", "CollisionMap", "cached_collision_map", "collision_map", "point_clearance",
     "polyline_free", "segment_clearance", "segment_free", "segment_window",
@@ -62,6 +71,6 @@ __all__ = [
     "demo_warehouse", "poisson_risk", "warehouse_chen2023", "warehouse_yu2020",
     "is_ros_map", "load_movingai_map", "save_movingai_map", "load_ros_map", "save_ros_map", "read_ros_yaml",
     "read_pgm", "occupancy_values", "resample", "resampled_shape", "state_cost_to_go",
-    "heap_pop", "heap_push", "cell_heuristic", "H_NONE", "H_MANHATTAN", "H_OCTILE",
+    "heap_pop", "heap_push", "heap_room", "cell_heuristic", "H_NONE", "H_MANHATTAN", "H_OCTILE",
     "H_EUCLID",
 ]

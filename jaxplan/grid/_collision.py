@@ -127,8 +127,8 @@ def segment_window(radius: float, step: float = 1.0) -> int:
     return int(math.floor(radius + step / 2 + 1.0))
 
 
-def segment_clearance(cmap: CollisionMap, p: jnp.ndarray, q: jnp.ndarray, radius, reach: float | None = None,
-                      chunk: int = 8, step: float = 1.0) -> jnp.ndarray:
+def segment_clearance(cmap: CollisionMap, p: jnp.ndarray, q: jnp.ndarray, radius: float | jnp.ndarray,
+                      reach: float | None = None, chunk: int = 8, step: float = 1.0) -> jnp.ndarray:
     """Distance (cells) from the segment ``p``–``q`` (``[2]`` each) to the nearest blocked square.
 
     The walk stops at the first square closer than ``radius`` (cells, at least ``TOUCH``; may
@@ -168,8 +168,8 @@ def segment_clearance(cmap: CollisionMap, p: jnp.ndarray, q: jnp.ndarray, radius
     return jnp.where(thr > max(float(reach), TOUCH), 0.0, best)
 
 
-def segment_free(cmap: CollisionMap, p: jnp.ndarray, q: jnp.ndarray, radius=0.0, reach: float | None = None,
-                 chunk: int = 8, step: float = 1.0) -> jnp.ndarray:
+def segment_free(cmap: CollisionMap, p: jnp.ndarray, q: jnp.ndarray, radius: float | jnp.ndarray = 0.0,
+                 reach: float | None = None, chunk: int = 8, step: float = 1.0) -> jnp.ndarray:
     """True if the segment ``p``–``q`` stays at least ``radius`` cells (and more than touching) from
     every blocked square. Clearance equal to the radius is not a collision (docs/guide/navigation.md).
     ``reach``, ``chunk`` and ``step`` as in `segment_clearance`."""

@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike
 from jaxplan.core.compile_cache import on_first_use
 from jaxplan.grid._gridmap import GridMap, check_cells, passable
 from jaxplan.grid._neighbours import neighbour_table
-from jaxplan.grid._search_parts import heap_pop, heap_push
+from jaxplan.grid._search_parts import heap_pop, heap_push, heap_room
 
 on_first_use()  # jaxplan's cache folders, before numba fixes the cache folder of the kernels below
 
@@ -89,13 +89,7 @@ def _backward(index, valid, offsets, step, angle, right, cell, turn_rule, w_len,
                 cost += w_angle * angle[m, kk] + w_turn
             if cost < out[u, m]:
                 out[u, m] = cost
-                if size == hf.shape[0]:
-                    hf2 = np.empty(2 * size, np.float64)
-                    hv2 = np.empty(2 * size, np.int64)
-                    hf2[:size] = hf
-                    hv2[:size] = hv
-                    hf = hf2
-                    hv = hv2
+                hf, hv = heap_room(hf, hv, size)
                 size = heap_push(hf, hv, size, cost, s)
 
 

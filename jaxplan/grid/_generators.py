@@ -16,6 +16,7 @@ from typing import Any, NamedTuple
 
 import jax
 import numpy as np
+from numpy.typing import ArrayLike
 
 from jaxplan.grid._graph import shortest_lengths
 from jaxplan.grid._gridmap import GridMap, grid_from_array
@@ -65,12 +66,12 @@ def as_rng(key: Any) -> np.random.Generator:
     return np.random.default_rng(words.tolist())
 
 
-def _connected(free: np.ndarray, a, b, connectivity: int = 8) -> bool:
+def _connected(free: np.ndarray, a: tuple[int, ...], b: tuple[int, ...], connectivity: int = 8) -> bool:
     g = grid_from_array(free)
     return bool(np.isfinite(shortest_lengths(g, [a], [b], connectivity=connectivity)[0]))
 
 
-def _cells(*pairs) -> np.ndarray:
+def _cells(*pairs: ArrayLike) -> np.ndarray:
     return np.array(pairs, dtype=np.int64).reshape(-1, 2)
 
 
@@ -234,7 +235,7 @@ class RandomMapGenerator:
         free[rng.choice(candidates, size=min(n_obs, len(candidates)), replace=False)] = False
         return free.reshape(H, W)
 
-    def _corridor(self, rng: np.random.Generator, s, g) -> set[int]:
+    def _corridor(self, rng: np.random.Generator, s: tuple[int, ...], g: tuple[int, ...]) -> set[int]:
         (x, y), (gx, gy) = s, g
         sx, sy = int(np.sign(gx - x)), int(np.sign(gy - y))
         cells = {y * self.width + x}

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike
 
 from jaxplan.core.cache import digest, memoize
 from jaxplan.grid import _kernels as K
-from jaxplan.grid._gridmap import GridMap, check_cell, check_cells, passable
+from jaxplan.grid._gridmap import GridMap, check_cell, check_pairs, passable
 from jaxplan.grid._neighbours import Neighbours, neighbour_table
 from jaxplan.grid._search_parts import H_EUCLID, H_MANHATTAN, H_NONE, H_OCTILE
 
@@ -124,10 +124,7 @@ def shortest_lengths(
       ``f64[N]`` lengths in metres; ``inf`` where the goal cannot be reached.
     """
     graph = search_graph(grid, connectivity, vehicle_height)
-    s = check_cells(grid, starts, "starts", graph.passable)
-    g = check_cells(grid, goals, "goals", graph.passable)
-    if s.shape != g.shape:
-        raise ValueError(f"starts and goals differ in shape: {s.shape} vs {g.shape}")
+    s, g = check_pairs(grid, starts, goals, graph.passable, distinct=False)
     n = len(s)
     if n == 0:
         return np.zeros(0)

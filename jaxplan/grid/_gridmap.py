@@ -14,7 +14,7 @@ subtracted where they enter (`GridMap.cell_at`, `GridMap.to_local`, obstacle rou
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import jax
 import numpy as np
@@ -129,7 +129,7 @@ class GridMap(NamedTuple):
         out[..., 1] -= o[1]
         return out
 
-    def replace(self, **fields) -> "GridMap":
+    def replace(self, **fields: Any) -> "GridMap":
         """A copy with some layers replaced (validated like `grid_from_array`)."""
         d = self._asdict()
         d.update(fields)
@@ -145,18 +145,19 @@ class GridMap(NamedTuple):
         )
 
 
-def _flatten(g: GridMap):
+def _flatten(g: GridMap) -> tuple[tuple, tuple[float, float]]:
     return (g.free, g.height, g.clearance_height, g.risk, g.turn_rule, g.resolution, g.speed_limit), g.origin
 
 
-def _unflatten(origin, leaves) -> GridMap:
-    return GridMap(*leaves[:6], origin=origin, speed_limit=leaves[6])
+def _unflatten(origin: tuple[float, float], leaves: tuple) -> GridMap:
+    free, height, clearance_height, risk, turn_rule, resolution, speed_limit = leaves
+    return GridMap(free, height, clearance_height, risk, turn_rule, resolution, origin=origin, speed_limit=speed_limit)
 
 
 jax.tree_util.register_pytree_node(GridMap, _flatten, _unflatten)
 
 
-def _layer(name: str, value: ArrayLike | None, shape: tuple[int, int], dtype, default,
+def _layer(name: str, value: ArrayLike | None, shape: tuple[int, int], dtype: type, default: float,
            finite: bool = False) -> np.ndarray:
     """The layer as ``dtype[H, W]``; with ``finite``, ±inf is refused too (checked after the cast,
     so a float64 value beyond float32's range is caught as the inf it becomes)."""
@@ -168,7 +169,7 @@ def _layer(name: str, value: ArrayLike | None, shape: tuple[int, int], dtype, de
     if np.issubdtype(dtype, np.floating) and np.isnan(arr.astype(np.float64)).any():
         raise ValueError(f"layer '{name}' contains NaN")
     with np.errstate(over="ignore"):  # an overflow becomes inf, reported below or documented (headroom)
-        out = arr.astype(dtype)
+        out: np.ndarray = arr.astype(dtype)
     if finite and np.issubdtype(dtype, np.floating) and not np.isfinite(out).all():
         y, x = np.argwhere(~np.isfinite(out))[0]
         raise ValueError(f"layer '{name}' must be finite, got {float(arr[y, x])} at cell ({x}, {y})")
@@ -301,3 +302,28 @@ def check_cells(grid: GridMap, cells: ArrayLike, what: str, free: np.ndarray | N
         i = int(np.argmax(blocked))
         raise ValueError(f"{what}[{i}] = {tuple(ci[i].tolist())} is on a blocked cell")
     return ci
+
+
+def check_pair(grid: GridMap, start: ArrayLike, goal: ArrayLike,
+               free: np.ndarray | None = None) -> tuple[tuple[int, int], tuple[int, int]]:
+    """Validates one start/goal pair: each a valid cell (`check_cell`), and different. Returns them as ints."""
+    s = check_cell(grid, start, "start", free)
+    g = check_cell(grid, goal, "goal", free)
+    if s == g:
+        raise ValueError(f"start {s} equals the goal; nothing to plan")
+    return s, g
+
+
+def check_pairs(grid: GridMap, starts: ArrayLike, goals: ArrayLike, free: np.ndarray | None = None, *,
+                distinct: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Validates ``int[N, 2]`` starts and goals (`check_cells` each) of one shape and, with ``distinct``, no start
+    equal to its goal; the error names the first bad row. Returns them as ``int64[N, 2]``."""
+    s = check_cells(grid, starts, "starts", free)
+    g = check_cells(grid, goals, "goals", free)
+    if s.shape != g.shape:
+        raise ValueError(f"starts and goals differ in shape: {s.shape} vs {g.shape}")
+    same = (s == g).all(axis=1)
+    if distinct and same.any():
+        i = int(np.argmax(same))
+        raise ValueError(f"scenario {i}: start {tuple(s[i].tolist())} equals the goal; nothing to plan")
+    return s, g

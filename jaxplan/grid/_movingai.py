@@ -29,6 +29,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from jaxplan.core.io import atomic_write
 from jaxplan.grid._gridmap import GridMap, grid_from_array
@@ -169,15 +170,11 @@ class Scenarios:
     def __len__(self) -> int:
         return len(self.optimal)
 
-    def select(self, mask_or_index) -> "Scenarios":
+    def select(self, mask_or_index: ArrayLike) -> "Scenarios":
         """The subset of rows given by a boolean mask or index array."""
-        return replace(
-            self,
-            starts=self.starts[mask_or_index],
-            goals=self.goals[mask_or_index],
-            optimal=self.optimal[mask_or_index],
-            buckets=self.buckets[mask_or_index],
-        )
+        sel = np.asarray(mask_or_index)
+        return replace(self, starts=self.starts[sel], goals=self.goals[sel], optimal=self.optimal[sel],
+                       buckets=self.buckets[sel])
 
 
 def parse_scenarios(text: str, where: str = "<scen>", grid: GridMap | None = None) -> Scenarios:
@@ -200,7 +197,7 @@ def parse_scenarios(text: str, where: str = "<scen>", grid: GridMap | None = Non
     except ValueError:
         raise ValueError(f"{where}:1: version must be a number, got {_quote(vparts[1])}") from None
     rows: list[tuple] = []
-    map_name, size = "", None
+    map_name, size = "", (0, 0)
     for lineno, line in enumerate(lines[1:], start=2):
         if not line.strip():
             continue
@@ -216,7 +213,7 @@ def parse_scenarios(text: str, where: str = "<scen>", grid: GridMap | None = Non
             raise ValueError(f"{where}:{lineno}: non-numeric field in {_quote(line, 120)}") from None
         if not math.isfinite(opt) or opt < 0:
             raise ValueError(f"{where}:{lineno}: optimal length must be finite and >= 0, got {_quote(f[8])}")
-        if size is None:
+        if not rows:
             size, map_name = (w, h), f[1]
         elif (w, h) != size:
             raise ValueError(f"{where}:{lineno}: map size {w}x{h} differs from the first row's {size[0]}x{size[1]}")

@@ -50,7 +50,7 @@ def offsets(connectivity: int) -> np.ndarray:
     return out
 
 
-def _segment_meets_square(p0, p1, cx: int, cy: int) -> bool:
+def _segment_meets_square(p0: tuple[Fraction, Fraction], p1: tuple[Fraction, Fraction], cx: int, cy: int) -> bool:
     """Exact (rational) closed-segment / closed-unit-square test (Liang–Barsky)."""
     t0, t1 = Fraction(0), Fraction(1)
     for p, d, lo, hi in ((p0[0], p1[0] - p0[0], cx, cx + 1), (p0[1], p1[1] - p0[1], cy, cy + 1)):
@@ -96,7 +96,7 @@ class Neighbours(NamedTuple):
       connectivity: 4, 8 or 16.
     """
 
-    index: np.ndarray
+    index: np.ndarray  # type: ignore[assignment]  # a field named as tuple.index
     valid: np.ndarray
     offsets: np.ndarray
     step: np.ndarray

@@ -38,7 +38,7 @@ def _ranges(n_old: int, n_new: int, ratio: float) -> tuple[np.ndarray, np.ndarra
     return lo, np.maximum(hi, lo + 1)
 
 
-def _reduce(a: np.ndarray, lo: np.ndarray, hi: np.ndarray, axis: int, op: str, outside) -> np.ndarray:
+def _reduce(a: np.ndarray, lo: np.ndarray, hi: np.ndarray, axis: int, op: str, outside: float | None) -> np.ndarray:
     """Reduces ``a`` along ``axis`` over each range ``[lo, hi)`` with ``op`` (any/min/max/mean); indices
     beyond the array read ``outside`` (None: ignored)."""
     n = a.shape[axis]
@@ -66,7 +66,8 @@ def _reduce(a: np.ndarray, lo: np.ndarray, hi: np.ndarray, axis: int, op: str, o
     return (np.sum(np.where(mask, stack, 0.0), axis=0) / np.maximum(mask.sum(axis=0), 1)).astype(a.dtype)
 
 
-def _layer(a: np.ndarray, ranges, op: str, outside=None) -> np.ndarray:
+def _layer(a: np.ndarray, ranges: tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]], op: str,
+           outside: float | None = None) -> np.ndarray:
     (ylo, yhi), (xlo, xhi) = ranges
     return _reduce(_reduce(a, xlo, xhi, 1, op, outside), ylo, yhi, 0, op, outside)
 

@@ -183,7 +183,7 @@ def _pgm_header(data: bytes, where: Any) -> tuple[str, int, int, int, int]:
     magic = data[:2]
     if magic not in (b"P2", b"P5"):
         raise _fail(where, "not a PGM image (expected P2 or P5 at the start)")
-    pos, tokens = 2, []
+    pos, tokens = 2, list[int]()
     n = len(data)
     while len(tokens) < 3:
         while pos < n and data[pos:pos + 1] in (b" ", b"\t", b"\n", b"\r", b"\x0b", b"\x0c"):
@@ -274,9 +274,10 @@ def _read_png(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
             if mode.startswith("I"):  # 16-bit grey (Pillow's I;16 variants, or I for a 16-bit PNG)
                 return np.asarray(im, dtype=np.float64) / 65535.0, None
             if mode in ("P", "PA"):
-                im = im.convert("RGBA")
+                a = np.asarray(im.convert("RGBA"))
                 mode = "RGBA"
-            a = np.asarray(im)
+            else:
+                a = np.asarray(im)
     except (OSError, SyntaxError, Image.DecompressionBombError) as e:
         raise _fail(path, f"not a readable PNG image ({type(e).__name__})") from None
     if a.ndim == 2:
@@ -405,7 +406,7 @@ def save_ros_map(grid: GridMap, path: str | os.PathLike, speed_filter: tuple[int
     if p.suffix.lower() not in (".yaml", ".yml"):
         raise ValueError(f"{p}: a ROS map is saved as a .yaml file (and a .pgm beside it)")
     free = np.asarray(grid.free, dtype=bool)[::-1]  # ROS cell rows (bottom first) -> image rows (top first)
-    origin = tuple(float(v) for v in grid.origin)
+    origin = (float(grid.origin[0]), float(grid.origin[1]))
     stem = p.stem
     written = [atomic_write(p.with_name(stem + ".pgm"), _pgm_bytes(np.where(free, 254, 0)))]
     written.append(atomic_write(p, _yaml_text(stem + ".pgm", "trinary", float(grid.resolution), origin, 0.65, 0.196)))

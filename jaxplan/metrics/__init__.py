@@ -11,7 +11,7 @@ Batched JAX functions over padded arrays (``jit``/``vmap``-able, shapes in the d
   `rmse`, `energy`, `EnergyModel`, `EpisodeTiming`.
 
 The front `path_metrics(path, grid, reference=None, optimal=None, n=None)` returns the
-dict of section-6 path metrics for one path or a batch in one compiled call. One-path
+path metrics (`PathMetrics`, a field per metric) for one path or a batch in one compiled call. One-path
 host versions (numpy, same definitions): `path_length`, `heading_changes`,
 `count_turns`, `count_sharp_turns`, `smoothness`, `max_curvature`.
 """
@@ -27,7 +27,7 @@ from jaxplan.metrics._episode import (
     rmse,
     success,
 )
-from jaxplan.metrics._front import PATH_METRICS, path_metrics
+from jaxplan.metrics._front import path_metrics
 from jaxplan.metrics._host import (
     count_sharp_turns,
     count_turns,
@@ -48,6 +48,7 @@ from jaxplan.metrics._path import (
     vertex_turns,
 )
 from jaxplan.metrics._polyline import HAUSDORFF_SAMPLES, hausdorff, hausdorff_bounds, point_polyline_distance
+from jaxplan.metrics._result import PATH_METRICS, PathMetrics
 from jaxplan.metrics._run import (
     CONVERGED_RTOL,
     CONVERGED_RTOL_STRICT,
@@ -59,7 +60,7 @@ from jaxplan.metrics._run import (
 
 __all__ = [
     "CONVERGED_RTOL", "CONVERGED_RTOL_STRICT", "EnergyModel", "EpisodeTiming", "HAUSDORFF_SAMPLES", "PATH_METRICS",
-    "SHARP_TURN", "TURN_EPS",
+    "PathMetrics", "SHARP_TURN", "TURN_EPS",
     "arrival_time", "clearance_metrics", "collision_steps", "collisions", "converged_iteration",
     "count_sharp_turns", "count_sharp_turns_padded", "count_turns", "count_turns_padded", "diversity", "energy",
     "geometry_metrics", "hausdorff", "hausdorff_bounds", "heading_changes", "max_curvature",

@@ -174,7 +174,7 @@ class EnergyModel:
                 raise ValueError(f"EnergyModel.{f.name} must be a finite number >= 0, got {v!r}")
 
 
-def _abs_integral(y0: jnp.ndarray, y1: jnp.ndarray, dt) -> jnp.ndarray:
+def _abs_integral(y0: jnp.ndarray, y1: jnp.ndarray, dt: float | jnp.ndarray) -> jnp.ndarray:
     """Exact ``∫ |y| dt`` over one period with ``y`` linear from ``y0`` to ``y1``."""
     same = y0 * y1 >= 0
     a0, a1 = jnp.abs(y0), jnp.abs(y1)

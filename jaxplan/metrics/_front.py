@@ -24,14 +24,9 @@ from jaxplan.metrics._clearance import clearance_metrics
 from jaxplan.metrics._exact_clearance import polyline_clearance
 from jaxplan.metrics._path import geometry_metrics
 from jaxplan.metrics._polyline import HAUSDORFF_SAMPLES, hausdorff_bounds
+from jaxplan.metrics._result import PATH_METRICS, PathMetrics
 
-__all__ = ["path_metrics", "PATH_METRICS", "bucket"]
-
-PATH_METRICS = (
-    "length", "turns", "sharp_turns", "smoothness", "min_clearance", "mean_clearance", "max_curvature",
-    "hausdorff", "optimality_gap",
-)
-"""Keys of the dict `path_metrics` returns, in order."""
+__all__ = ["path_metrics", "PATH_METRICS", "PathMetrics", "bucket"]
 
 MIN_BUCKET = 4
 
@@ -52,7 +47,8 @@ def _core(cmap: CollisionMap, paths: jnp.ndarray, n: jnp.ndarray, clearance: boo
 
 
 @functools.partial(jax.jit, static_argnames="samples")
-def _hausdorff_core(paths, n, refs, n_ref, resolution, samples: int):
+def _hausdorff_core(paths: jnp.ndarray, n: jnp.ndarray, refs: jnp.ndarray, n_ref: jnp.ndarray,
+                    resolution: jnp.ndarray, samples: int) -> jnp.ndarray:
     """``[B]`` Hausdorff lower bounds of ``paths [B, L, 2]`` against ``refs [B, R, 2]``."""
     return hausdorff_bounds(paths, n, refs, n_ref, resolution, samples)[0]
 
@@ -152,7 +148,8 @@ def _check_grid_moves(free: np.ndarray, paths: np.ndarray, n: np.ndarray) -> Non
                          f"cell {corner} (no corner cutting); pass optimal= explicitly")
 
 
-def _optimal(grid: GridMap, paths: np.ndarray, n: np.ndarray, optimal: ArrayLike | None, single: bool):
+def _optimal(grid: GridMap, paths: np.ndarray, n: np.ndarray, optimal: ArrayLike | None,
+             single: bool) -> np.ndarray | None:
     """``f64[B]`` optimal lengths (m), or None when there is no sound reference."""
     B = paths.shape[0]
     if optimal is not None:
@@ -199,7 +196,7 @@ def path_metrics(
     hausdorff_samples: int = HAUSDORFF_SAMPLES,
     cost: ArrayLike | None = None,
     objective_optimum: ArrayLike | None = None,
-) -> dict[str, Any]:
+) -> PathMetrics:
     """The path metrics (docs/guide/smoothing-and-metrics.md) for one path or a padded batch of paths.
 
     Args:
@@ -220,8 +217,8 @@ def path_metrics(
         that cost (`jaxplan.search.exact_objective`); the result then also holds ``objective_gap``.
 
     Returns:
-      A dict with the keys of `PATH_METRICS`. For one path the values are Python ``float``
-      / ``int`` (or None), for a batch ``np.ndarray [B]`` (or None):
+      `PathMetrics`, a field per metric (`PATH_METRICS`, then ``objective_gap``). For one path the values are
+      Python ``float`` / ``int`` (or None), for a batch ``np.ndarray [B]`` (or None):
 
       * ``length`` (m), ``turns`` (heading change > 1e-6 rad), ``sharp_turns`` (>= 45°),
         ``smoothness`` (1 − mean|Δheading|/π), ``max_curvature`` (1/m, Menger, at the
@@ -247,7 +244,7 @@ def path_metrics(
         start = goal path has gap 0.
       * ``objective_gap`` (only with ``cost`` and ``objective_optimum``) = cost / objective_optimum − 1:
         how far the path is from the optimum of its planner's own objective (IACO's fitness, the risk
-        cost, ...), beside the length gap; the same 0/0 and empty-path rules.
+        cost, ...), beside the length gap; the same 0/0 and empty-path rules; None without them.
 
       Degenerate paths: with no point or one point, length 0, turns 0, sharp turns 0,
       smoothness 1, curvature 0; with no point, clearances, Hausdorff distance and
@@ -270,7 +267,7 @@ def path_metrics(
       >>> import numpy as np, jaxplan as jp
       >>> grid = jp.grid_from_array(np.ones((4, 4), bool), resolution=0.5)
       >>> m = jp.metrics.path_metrics(np.array([[0, 0], [1, 1], [2, 1]]), grid)
-      >>> round(m["length"], 4), m["turns"], m["sharp_turns"], round(m["optimality_gap"], 6)
+      >>> round(m.length, 4), m.turns, m.sharp_turns, round(m.optimality_gap, 6)
       (1.2071, 1, 1, 0.0)
     """
     paths = _as_points(path, "path")
@@ -303,7 +300,7 @@ def path_metrics(
     padded = jnp.asarray(_pad(paths, bucket(L)))
     n_dev = jnp.asarray(counts, jnp.int32)
     grid_path = np.issubdtype(paths.dtype, np.integer)
-    out = {k: np.asarray(v) for k, v in _core(cmap, padded, n_dev, clearance=grid_path).items()}
+    out: dict[str, Any] = {k: np.asarray(v) for k, v in _core(cmap, padded, n_dev, clearance=grid_path).items()}
     if not grid_path:
         # A continuous path passes obstacles between its vertices: measured along the segments.
         lo, mean = polyline_clearance(np.asarray(grid.free, bool), paths, counts)
@@ -317,7 +314,7 @@ def path_metrics(
             cmap.resolution, samples=int(hausdorff_samples)))
         out["hausdorff"] = np.where(counts == 0, np.inf, out["hausdorff"])
     out["optimality_gap"] = None if opt is None else _gap(out["length"].astype(np.float64), opt, counts)
-    result = {k: out[k] for k in PATH_METRICS}
+    result: dict[str, Any] = {k: out[k] for k in PATH_METRICS}
     if (cost is None) != (objective_optimum is None):
         raise ValueError("cost and objective_optimum go together: pass both for objective_gap, or neither")
     if cost is not None:
@@ -329,4 +326,4 @@ def path_metrics(
         result["objective_gap"] = _gap(c, o, counts)
     if single:
         result = {k: None if v is None else v[0].item() for k, v in result.items()}
-    return result
+    return PathMetrics(**result)

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 from types import ModuleType
+from typing import Any
 
 import jax
 import jax.numpy as jnp
@@ -51,25 +52,28 @@ SHARP_TURN = math.pi / 4
 SHARP_TOL = 1e-9
 """Tolerance (rad) below 45° still counted sharp, so an exact 45° turn is never lost to rounding."""
 
+Arr = Any
+"""A NumPy or a JAX array: the private helpers below run on both (``xp``), for the host twins and the batch."""
+
 # tan of the sharp threshold: `h >= 45° - tol`  <=>  `dot <= 0 or |cross| >= dot * tan(45° - tol)`.
 # In float32 this is exactly 1.0 (the tolerance is below float32 resolution), so a grid
 # path's 45° turn, whose |cross| equals its dot exactly, is always sharp.
 _SHARP_TAN = math.tan(SHARP_TURN - SHARP_TOL)
 
 
-def float_dtype(xp: ModuleType = jnp):
+def float_dtype(xp: ModuleType = jnp) -> Any:
     """The float type of the computation: float64 for numpy; for JAX float32, or float64 with
     ``jax_enable_x64``."""
     return np.float64 if xp is np else jnp.zeros((), float).dtype
 
 
-def _cummax(xp: ModuleType, a):
+def _cummax(xp: ModuleType, a: Arr) -> Arr:
     if xp is np:
         return np.maximum.accumulate(a, axis=-1)
     return jax.lax.cummax(a, axis=a.ndim - 1)
 
 
-def _take(xp: ModuleType, a, idx):
+def _take(xp: ModuleType, a: Arr, idx: Arr) -> Arr:
     """``a[..., idx[..., i]]`` along the last axis (plain indexing for one numpy path: numpy's
     take_along_axis costs several times more than the arithmetic around it)."""
     if xp is np and a.ndim == 1:
@@ -77,7 +81,7 @@ def _take(xp: ModuleType, a, idx):
     return xp.take_along_axis(a, idx, axis=-1)
 
 
-def _segments(path, n, xp: ModuleType):
+def _segments(path: Arr, n: Arr, xp: ModuleType) -> tuple[Arr, ...]:
     """``(dx, dy, length, moving)``, each ``[..., L-1]``: segment vectors (0 on padding), lengths,
     and valid segments of non-zero length. Components rather than ``[..., 2]`` pairs: no
     reductions over a size-2 axis, which cost numpy more than the arithmetic."""
@@ -91,7 +95,7 @@ def _segments(path, n, xp: ModuleType):
     return dx, dy, length, valid & (length > 0)
 
 
-def _turn_terms(dx, dy, moving, xp: ModuleType):
+def _turn_terms(dx: Arr, dy: Arr, moving: Arr, xp: ModuleType) -> tuple[Arr, ...]:
     """Per segment ``i``: the previous moving segment's index and vector, the cross and dot
     products with segment ``i``, the heading change, and ``vertex`` (both segments exist).
     Entries with ``vertex`` False are unspecified (finite); callers mask them."""
@@ -107,7 +111,7 @@ def _turn_terms(dx, dy, moving, xp: ModuleType):
     return at, px, py, cross, dot, xp.arctan2(xp.abs(cross), dot), vertex
 
 
-def _vertex_turns(path, n, xp: ModuleType):
+def _vertex_turns(path: Arr, n: Arr, xp: ModuleType) -> tuple[Arr, ...]:
     dx, dy, length, moving = _segments(path, n, xp)
     at, px, py, cross, dot, heading, vertex = _turn_terms(dx, dy, moving, xp)
     prev_len = _take(xp, length, at)
@@ -117,18 +121,18 @@ def _vertex_turns(path, n, xp: ModuleType):
     return zero(heading), zero(cross), zero(dot), zero(prev_len), zero(length), zero(chord), vertex
 
 
-def _sharp(cross, dot, vertex, xp: ModuleType):
+def _sharp(cross: Arr, dot: Arr, vertex: Arr, xp: ModuleType) -> Arr:
     # Decided on the products rather than the angle: exact for integer paths (see _SHARP_TAN).
     return vertex & ((dot <= 0) | (xp.abs(cross) >= dot * _SHARP_TAN))
 
 
-def _smoothness(heading, vertex, xp: ModuleType):
+def _smoothness(heading: Arr, vertex: Arr, xp: ModuleType) -> Arr:
     count = xp.sum(vertex, axis=-1)
     mean = xp.sum(xp.where(vertex, heading, 0.0), axis=-1) / xp.maximum(count, 1)
     return xp.where(count > 0, 1.0 - mean / math.pi, 1.0)
 
 
-def _menger(cross, prev_len, next_len, chord, vertex, xp: ModuleType):
+def _menger(cross: Arr, prev_len: Arr, next_len: Arr, chord: Arr, vertex: Arr, xp: ModuleType) -> Arr:
     # Menger curvature 4·area/(a·b·c) with area = |cross|/2. The three points are distinct
     # except when the path folds back onto its previous point (chord 0): skipped (0).
     denom = prev_len * next_len * chord
@@ -136,7 +140,7 @@ def _menger(cross, prev_len, next_len, chord, vertex, xp: ModuleType):
     return xp.where(ok, 2.0 * xp.abs(cross) / xp.where(ok, denom, 1.0), 0.0)
 
 
-def _turn_metrics(cross, dot, heading, vertex, which: tuple[str, ...], xp: ModuleType) -> dict:
+def _turn_metrics(cross: Arr, dot: Arr, heading: Arr, vertex: Arr, which: tuple[str, ...], xp: ModuleType) -> dict:
     rules = {
         "turns": lambda: xp.sum(vertex & (heading > TURN_EPS), axis=-1, dtype=xp.int32),
         "sharp_turns": lambda: xp.sum(_sharp(cross, dot, vertex, xp), axis=-1, dtype=xp.int32),
@@ -148,7 +152,7 @@ def _turn_metrics(cross, dot, heading, vertex, which: tuple[str, ...], xp: Modul
 TURN_METRICS = ("turns", "sharp_turns", "smoothness")
 
 
-def _turn_counts(path, n, xp: ModuleType, which: tuple[str, ...] = TURN_METRICS) -> dict:
+def _turn_counts(path: Arr, n: Arr, xp: ModuleType, which: tuple[str, ...] = TURN_METRICS) -> dict:
     """The turn metrics named in ``which`` only (a planner filling `PlanResult.turns` on the
     host wants just one of them, and numpy pays per operation)."""
     dx, dy, _, moving = _segments(path, n, xp)
@@ -156,7 +160,7 @@ def _turn_counts(path, n, xp: ModuleType, which: tuple[str, ...] = TURN_METRICS)
     return _turn_metrics(cross, dot, heading, vertex, which, xp)
 
 
-def _geometry(path, n, resolution, xp: ModuleType) -> dict:
+def _geometry(path: Arr, n: Arr, resolution: float | Arr, xp: ModuleType) -> dict:
     dx, dy, length, moving = _segments(path, n, xp)
     at, px, py, cross, dot, heading, vertex = _turn_terms(dx, dy, moving, xp)
     sx, sy = px + dx, py + dy

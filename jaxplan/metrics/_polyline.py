@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+from jax.typing import ArrayLike
 
 from jaxplan.metrics._path import float_dtype
 
@@ -53,7 +54,8 @@ def _segment_ends(poly: jnp.ndarray, n: jnp.ndarray) -> tuple[jnp.ndarray, jnp.n
     return p, q, valid
 
 
-def _nearest(points: jnp.ndarray, poly: jnp.ndarray, n: jnp.ndarray, with_segment: bool):
+def _nearest(points: jnp.ndarray, poly: jnp.ndarray, n: jnp.ndarray,
+             with_segment: bool) -> tuple[jnp.ndarray, jnp.ndarray | None]:
     """Squared distance from ``points [..., M, 2]`` to the polyline, and a nearest segment.
 
     A `lax.scan` over the polyline's segments keeps a running minimum over all points at
@@ -129,7 +131,8 @@ def _point_segment(x: jnp.ndarray, p: jnp.ndarray, q: jnp.ndarray) -> jnp.ndarra
     return jnp.sqrt(jnp.sum(e * e, axis=-1))
 
 
-def _directed(a, na, b, nb, k: int, with_upper: bool) -> tuple[jnp.ndarray, jnp.ndarray | None]:
+def _directed(a: jnp.ndarray, na: jnp.ndarray, b: jnp.ndarray, nb: jnp.ndarray, k: int,
+              with_upper: bool) -> tuple[jnp.ndarray, jnp.ndarray | None]:
     """Bounds ``(lo, hi)`` on ``sup_{x∈A} d(x, B)`` (``hi`` only ``with_upper``); ``-inf`` when A is empty."""
     pts, valid, sub_valid, sub_len = _samples(a, na, k)
     f2, seg = _nearest(pts, b, nb, with_upper)
@@ -141,6 +144,7 @@ def _directed(a, na, b, nb, k: int, with_upper: bool) -> tuple[jnp.ndarray, jnp.
     # always exists when sub_valid[s]. d(., B) <= d(., seg j) and each d(., seg j) is convex
     # along the sub-segment, so its maximum there is at most max(d(s, j), d(s+1, j)) for
     # j = j0 and for j = j1 (which is exact when j0 == j1); d(., B) is also 1-Lipschitz.
+    assert seg is not None  # _nearest gives it with_upper
     p, q, _ = _segment_ends(b, nb)
     batch = pts.shape[:-2]
     p, q = (jnp.broadcast_to(e, batch + e.shape[-2:]) for e in (p, q))
@@ -154,7 +158,8 @@ def _directed(a, na, b, nb, k: int, with_upper: bool) -> tuple[jnp.ndarray, jnp.
     return lo, hi
 
 
-def _hausdorff(path, n, reference, n_ref, resolution, samples: int, with_upper: bool):
+def _hausdorff(path: ArrayLike, n: ArrayLike, reference: ArrayLike, n_ref: ArrayLike, resolution: float | jnp.ndarray,
+               samples: int, with_upper: bool) -> tuple[jnp.ndarray, jnp.ndarray | None]:
     if samples < 1:
         raise ValueError(f"samples must be >= 1, got {samples}")
     path = jnp.asarray(path, float_dtype())
@@ -166,6 +171,7 @@ def _hausdorff(path, n, reference, n_ref, resolution, samples: int, with_upper: 
     lo = jnp.where(empty, jnp.inf, jnp.maximum(lo_ab, lo_ba)) * resolution
     if not with_upper:
         return lo, None
+    assert hi_ab is not None and hi_ba is not None  # _directed gives them with_upper
     return lo, jnp.where(empty, jnp.inf, jnp.maximum(hi_ab, hi_ba)) * resolution
 
 
@@ -188,7 +194,9 @@ def hausdorff_bounds(
       either polyline is empty. Cost: ``O(k·L·R)`` per pair; the upper bound tracks the
       nearest segment, which roughly doubles the cost of `hausdorff`.
     """
-    return _hausdorff(path, n, reference, n_ref, resolution, samples, True)
+    lo, hi = _hausdorff(path, n, reference, n_ref, resolution, samples, True)
+    assert hi is not None  # with_upper
+    return lo, hi
 
 
 def hausdorff(

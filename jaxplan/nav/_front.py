@@ -12,7 +12,7 @@ The steps of every episode (docs/guide/navigation.md):
    robot's own radius plus nothing — which is why the MovingAI maps run at 1.0 m.
 2. **Global plan** with the pipeline's planner on the planning map (`plan_batch`: every
    scenario × seed in one compiled call for the ACO planners).
-3. **Waypoints**: the pipeline's smoothers (`jaxplan.smooth`, clearance d_safe) reduce
+3. **Waypoints**: the pipeline's smoothers (`jaxplan.smoothing`, clearance d_safe) reduce
    the path; the start is dropped, the goal is the last waypoint.
 4. **Episode**: `jaxplan.nav._episode.run_episodes`, one compiled call for the batch.
 5. **Metrics** (docs/guide/smoothing-and-metrics.md) from the trajectories: success (goal within tolerance, no
@@ -37,6 +37,7 @@ from jax.sharding import PartitionSpec as P
 from numpy.typing import ArrayLike
 
 from jaxplan.core.cache import Built, memoize
+from jaxplan.core.deprecation import keyword_only
 from jaxplan.core.progress import ProgressBar
 from jaxplan.dwa import DWAParams, table_of
 from jaxplan.grid import GridMap, clearance_field, shortest_lengths
@@ -110,21 +111,17 @@ _ENERGY = jax.jit(lambda v, w, dt, n: energy(v, w, dt, EnergyModel(), n))
 # ---------------------------------------------------------------------------------------------
 # The run
 
-_SEEDLESS = ("astar", "dijkstra", "astar_kng")  # deterministic planners: one plan per scenario serves every seed
-
-
 def _global_plans(plan_grid: GridMap, starts: np.ndarray, goals: np.ndarray, ok: np.ndarray, pipe: Pipeline,
                   seeds: list[int], overrides: Mapping[str, Any], mesh: Mesh | str | None = "auto",
                   bar: ProgressBar | None = None) -> tuple[np.ndarray, np.ndarray, float]:
     """Plans ``f64[S, R, P, 2]`` (cell coordinates, −1 padded), valid points ``[S, R]`` (0: failed) and the
     planning wall time (s, compilation excluded) for the ``ok`` rows of ``starts``/``goals [S, 2]``.
 
-    The ACO planners run every scenario × seed in one compiled call (`plan_batch`); the
-    others are called per scenario (and per seed unless deterministic), and an any-angle
+    A planner with its own batch (the ACO planners) runs every scenario × seed in one compiled call
+    (`plan_batch`); the others are called per scenario (and per seed unless deterministic), and an any-angle
     planner's exact polyline (``info["points"]``) is used rather than its rasterised cells.
     """
-    from jaxplan.aco import COLONIES, plan_batch
-    from jaxplan.planning import plan
+    from jaxplan.planning import plan, plan_batch, planners
 
     S, R = len(starts), len(seeds)
     params = {**pipe.planner_overrides, **overrides}
@@ -133,7 +130,8 @@ def _global_plans(plan_grid: GridMap, starts: np.ndarray, goals: np.ndarray, ok:
         return np.full((S, R, 2, 2), -1.0), np.zeros((S, R), np.int64), 0.0
     if bar is not None:
         bar.stage(f"{pipe.name}: global plans ({pipe.global_planner}, compiled on first use)")
-    if pipe.global_planner in COLONIES:
+    spec = planners().get(pipe.global_planner)  # None: plan() below names the unknown planner
+    if spec is not None and spec.batch is not None:
         br = plan_batch(plan_grid, starts[idx], goals[idx], planner=pipe.global_planner, seeds=seeds, mesh=mesh,
                         **params)
         plans = np.full((S, R) + br.paths.shape[2:], -1.0)
@@ -143,9 +141,9 @@ def _global_plans(plan_grid: GridMap, starts: np.ndarray, goals: np.ndarray, ok:
         return plans, n, float(br.time_s)
     results: dict[tuple[int, int], Any] = {}
     t0 = time.perf_counter()
-    for i in idx:  # per-scenario host planners (A*, RRT*): nothing to batch
+    for i in idx.tolist():  # per-scenario host planners (A*, RRT*): nothing to batch
         for r, seed in enumerate(seeds):
-            if pipe.global_planner in _SEEDLESS and r > 0:
+            if spec is not None and spec.deterministic and r > 0:
                 results[i, r] = results[i, 0]
                 continue
             res = plan(plan_grid, starts[i], goals[i], planner=pipe.global_planner, seed=seed, **params)
@@ -186,7 +184,7 @@ def _waypoints(grid: GridMap, pipe: Pipeline, plans: np.ndarray, n_plan: np.ndar
                start_xy: np.ndarray, d_safe: float) -> tuple[np.ndarray, np.ndarray]:
     """Step 3: waypoints ``f32[S, R, K, 2]`` (m) and their counts ``[S, R]``, the start dropped; a robot that
     does not run (``run [S, R]`` False) has its start (``start_xy [S, 2]``) as its only waypoint."""
-    from jaxplan.smooth import smooth
+    from jaxplan.smoothing import smooth
 
     res = float(grid.resolution)
     S, R = run.shape
@@ -327,7 +325,7 @@ def _episode_batch(out: Any, E: int, R: int, N: int, active: np.ndarray, reason:
     length = np.sum(np.where(live, seg, 0.0), axis=-1)
     robot_steps = max(int(np.sum(n_steps)), 1)
     nan = np.where(active_e, 1.0, np.nan)
-    return EpisodeBatch(
+    return EpisodeBatch(  # type: ignore[call-arg]  # mypy reads EpisodeBatch.METRICS as a field
         states=states, steps=n_steps, controls=controls, recovery=recovery, reason=reason_txt,
         feasible=back(to_b(~np.isin(reason, (INFEASIBLE_START, INFEASIBLE_GOAL, UNREACHABLE)))),
         success=success, collisions=coll, active_contacts=back(out.active_contacts),
@@ -448,9 +446,10 @@ def _prepare(grid: GridMap, starts: np.ndarray, goals: np.ndarray, pipeline: str
     return run_args, pf, inputs, active, reason, plans, n_plan, wp_m, n_wp, obs, plan_time, origin
 
 
-def prepare_episodes(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline: str | None = "iaco_dwa",
-                     seeds: Sequence[int] = range(1), obstacles: Any = None, *, global_planner: str | None = None,
-                     local_planner: str | None = None, config: NavConfig | None = None,
+@keyword_only("pipeline", "seeds", "obstacles")
+def prepare_episodes(grid: GridMap, starts: ArrayLike, goals: ArrayLike, *, pipeline: str | None = "iaco_dwa",
+                     global_planner: str | None = None, local_planner: str | None = None,
+                     seeds: Sequence[int] = range(1), obstacles: Any = None, config: NavConfig | None = None,
                      params: DWAParams | MPPIParams | Mapping[str, float] | None = None,
                      time_limit: float | None = None, mesh: Mesh | str | None = "auto",
                      **overrides: Any) -> PreparedEpisodes:
@@ -459,7 +458,8 @@ def prepare_episodes(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipelin
 
     ``run_episodes(p.config, p.steps, p.table, p.free, p.params, p.inputs)`` then gives exactly the
     episodes `navigate_batch` runs (on one device). Tuning reuses the global plans — they do not depend on the
-    local planner's weights — for every weight vector (`jaxplan.tune.nav_objective`).
+    local planner's weights — for every weight vector (`jaxplan.tune.nav_objective`). The previous release's
+    positional ``pipeline, seeds, obstacles`` still work for one release, with a `DeprecationWarning`.
     """
     s, g = np.asarray(starts), np.asarray(goals)
     if s.ndim != 2 or s.shape[-1] != 2 or g.shape != s.shape:
@@ -515,9 +515,10 @@ def _batch_to_world(batch: EpisodeBatch, origin: np.ndarray) -> EpisodeBatch:
 # Fronts
 
 
-def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: str | None = None,
-             local_planner: str | None = None, seed: int = 0, obstacles: MovingObstacles | None = None, *,
-             pipeline: str | None = None, config: NavConfig | None = None,
+@keyword_only("global_planner", "local_planner", "seed", "obstacles")
+def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, *, pipeline: str | None = None,
+             global_planner: str | None = None, local_planner: str | None = None, seed: int = 0,
+             obstacles: MovingObstacles | None = None, config: NavConfig | None = None,
              params: DWAParams | MPPIParams | Mapping[str, float] | None = None, time_limit: float | None = None,
              progress: bool = False, **overrides: Any) -> Episode:
     """One two-level navigation episode (docs/guide/navigation.md).
@@ -525,8 +526,10 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: s
     Args:
       grid: the map.
       start, goal: cells ``(x, y)``.
-      global_planner: a registry planner (default ``"iaco"``), tracked through key nodes by a
-        weighted DWA — or give ``pipeline`` (e.g. ``"iaco_dwa"``) for a seed's system.
+      pipeline: a named pipeline (`jaxplan.nav.pipelines()`, e.g. ``"iaco_dwa"``) for a paper's system; giving it
+        and ``global_planner`` both is an error.
+      global_planner: without a pipeline, a registry planner (default ``"iaco"``), tracked through key nodes by a
+        weighted DWA.
       local_planner: ``"dwa"`` (default), ``"mppi"`` or ``"follow"``.
       seed: the global planner's seed.
       obstacles: `MovingObstacles` (e.g. `jaxplan.random_obstacles`).
@@ -538,10 +541,16 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: s
       progress: the stages on stderr (as `navigate_batch`).
       **overrides: the global planner's parameters (as for `jaxplan.plan`).
 
+    Returns:
+      The `Episode`.
+
     Raises:
       ValueError: start/goal outside the map or blocked, start == goal, a moving obstacle
         starting inside the robot, unknown names, bad numbers. An infeasible or
         unreachable goal is an `Episode` with ``success=False`` and the reason.
+
+    The previous release's positional form ``navigate(grid, start, goal, global_planner, local_planner, seed,
+    obstacles)`` still works for one release, with a `DeprecationWarning`.
     """
     cfg = config
     b = _run(grid, np.asarray(start)[None, None], np.asarray(goal)[None, None], pipeline, global_planner,
@@ -549,16 +558,20 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, global_planner: s
     return b.episode(0, 0, 0)
 
 
-def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline: str | None = "iaco_dwa",
-                   seeds: Sequence[int] = range(1), obstacles: Any = None, *, global_planner: str | None = None,
-                   local_planner: str | None = None, config: NavConfig | None = None,
+@keyword_only("pipeline", "seeds", "obstacles")
+def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, *, pipeline: str | None = "iaco_dwa",
+                   global_planner: str | None = None, local_planner: str | None = None,
+                   seeds: Sequence[int] = range(1), obstacles: Any = None, config: NavConfig | None = None,
                    params: DWAParams | MPPIParams | Mapping[str, float] | None = None, time_limit: float | None = None,
                    mesh: Mesh | str | None = "auto", progress: bool = False, **overrides: Any) -> EpisodeBatch:
     """Scenarios × seeds single-robot episodes in one compiled global-planning call and one episode call.
 
     Args:
+      grid: the map.
       starts, goals: ``int[E, 2]`` cells.
-      pipeline: a named pipeline (`jaxplan.nav.pipelines()`), or None with ``global_planner``.
+      pipeline: a named pipeline (`jaxplan.nav.pipelines()`; default ``"iaco_dwa"``); a ``global_planner``
+        replaces it (as in `navigate`).
+      global_planner, local_planner: as in `navigate`.
       seeds: R seeds (global planner's seed; obstacle callables receive it too).
       obstacles: None, one `MovingObstacles` for all, an ``[E][R]`` nested list, or a callable
         ``f(scenario_index, seed) -> MovingObstacles``.
@@ -572,10 +585,13 @@ def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline:
       progress: show the stages on stderr (global plans, compiling, the episodes; `jaxplan.core.progress`, only
         on a terminal): the episodes are one compiled call, so the bar names the stage with the elapsed time and
         gives no time left for it. The results are the same either way.
-      Others as in `navigate`.
+      config, params, time_limit, **overrides: as in `navigate`.
 
     Returns:
       `EpisodeBatch` with axes ``[E, R, 1]``.
+
+    The previous release's positional form ``navigate_batch(grid, starts, goals, pipeline, seeds, obstacles)``
+    still works for one release, with a `DeprecationWarning`.
     """
     s, g = np.asarray(starts), np.asarray(goals)
     if s.ndim != 2 or s.shape[-1] != 2 or g.shape != s.shape:
@@ -587,9 +603,10 @@ def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline:
                 params, time_limit, overrides, mesh, progress)
 
 
-def navigate_multi(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline: str | None = "iaco_dwa",
-                   seeds: Sequence[int] = range(1), obstacles: Any = None, *, global_planner: str | None = None,
-                   local_planner: str | None = None, config: NavConfig | None = None,
+@keyword_only("pipeline", "seeds", "obstacles")
+def navigate_multi(grid: GridMap, starts: ArrayLike, goals: ArrayLike, *, pipeline: str | None = "iaco_dwa",
+                   global_planner: str | None = None, local_planner: str | None = None,
+                   seeds: Sequence[int] = range(1), obstacles: Any = None, config: NavConfig | None = None,
                    params: DWAParams | MPPIParams | Mapping[str, float] | None = None, time_limit: float | None = None,
                    mesh: Mesh | str | None = "auto", progress: bool = False, **overrides: Any) -> EpisodeBatch:
     """Multi-robot episodes: ``starts, goals int[N, 2]`` (one team) or ``[E, N, 2]`` (E teams).
@@ -597,7 +614,19 @@ def navigate_multi(grid: GridMap, starts: ArrayLike, goals: ArrayLike, pipeline:
     Each robot plans its own global path and runs its own DWA, treating the other robots
     (at their current positions and velocities) and the moving obstacles as moving discs;
     robots that arrive stay where they are. Collisions are counted per robot and per pair
-    (``pair_collisions``). Returns axes ``[E, R, N]``.
+    (``pair_collisions``).
+
+    Arguments other than ``starts, goals`` are as in `navigate_batch` (the same keywords, the same defaults).
+
+    Args:
+      grid: the map.
+      starts, goals: ``int[N, 2]`` or ``int[E, N, 2]`` cells.
+
+    Returns:
+      `EpisodeBatch` with axes ``[E, R, N]``.
+
+    The previous release's positional form ``navigate_multi(grid, starts, goals, pipeline, seeds, obstacles)``
+    still works for one release, with a `DeprecationWarning`.
     """
     s, g = np.asarray(starts), np.asarray(goals)
     if s.ndim == 2:

@@ -97,8 +97,9 @@ def host_devices_setting(value: str | None = None) -> int | None:
 def _chosen_elsewhere() -> int | None:
     """The CPU device count chosen outside jaxplan's default (``jax.config``, then the environment), or None;
     -1 when ``XLA_FLAGS`` forces a count (XLA reads it when the backend starts)."""
-    if jax.config.jax_num_cpu_devices != -1:
-        return int(jax.config.jax_num_cpu_devices)
+    chosen = jax.config.jax_num_cpu_devices  # type: ignore[attr-defined]  # an option, set at run time
+    if chosen != -1:
+        return int(chosen)
     env = os.environ.get("JAX_NUM_CPU_DEVICES", "").strip()
     if env:
         return int(env) if env.lstrip("-").isdigit() else -1

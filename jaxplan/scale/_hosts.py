@@ -77,7 +77,7 @@ def write_shard(out_dir: str | Path, name: str, arrays: Mapping[str, np.ndarray]
     path = shard_path(out_dir, name, process_id, num_processes)
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_file(path) as f:
-        np.savez(f, **{k: np.asarray(v) for k, v in arrays.items()})
+        np.savez(f, **{k: np.asarray(v) for k, v in arrays.items()})  # type: ignore[arg-type]  # stub: allow_pickle
     return path
 
 

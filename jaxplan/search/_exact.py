@@ -8,6 +8,7 @@ distance fields) live in `jaxplan.grid` (`search_graph`, `shortest_path`, `short
 from __future__ import annotations
 
 import time
+from typing import Any, Callable, Mapping
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -28,23 +29,14 @@ def path_cost(path: ArrayLike, resolution: float = 1.0) -> float:
     return float(np.hypot(*np.diff(p, axis=0).T).sum() * resolution)
 
 
-def _exact(name: str, heuristic: bool, grid: GridMap, start, goal, connectivity: int, vehicle_height) -> PlanResult:
+def _exact(name: str, heuristic: bool, grid: GridMap, start: ArrayLike, goal: ArrayLike, connectivity: int,
+           vehicle_height: float | None) -> PlanResult:
     t0 = time.perf_counter()
     graph = search_graph(grid, connectivity, vehicle_height)
     path, length, expanded = shortest_path(graph, start, goal, heuristic)
     if path is None:
         return PlanResult.failure(name, time.perf_counter() - t0, expanded=expanded)
-    return PlanResult(
-        path=path,
-        length=length,
-        turns=count_turns(path),
-        cost=length,
-        history=np.zeros(0),
-        time_s=time.perf_counter() - t0,
-        success=True,
-        planner=name,
-        info={"expanded": expanded},
-    )
+    return PlanResult.found(name, path, length, count_turns(path), time.perf_counter() - t0, expanded=expanded)
 
 
 def astar(
@@ -71,29 +63,25 @@ def dijkstra(
     return _exact("dijkstra", False, grid, start, goal, connectivity, vehicle_height)
 
 
-def _validate_exact(params) -> None:
+def _validate_exact(params: Mapping[str, Any]) -> None:
     check_connectivity(params["connectivity"])
     vh = params["vehicle_height"]
     if vh is not None and (not np.isfinite(vh) or vh < 0):
         raise ValueError(f"vehicle_height must be a finite height >= 0 in metres, got {vh!r}")
 
 
+def _ignoring_seed(search: Callable[..., PlanResult]) -> Callable[..., PlanResult]:
+    """``search(grid, start, goal, **params)`` as a registered planner ``fn(grid, start, goal, seed, **params)``."""
+    return lambda grid, start, goal, seed, **p: search(grid, start, goal, **p)
+
+
 def _register() -> None:
     defaults = {"connectivity": 8, "vehicle_height": None}
-    register_planner(
-        "astar",
-        lambda grid, start, goal, seed, **p: astar(grid, start, goal, **p),
-        defaults,
-        "A*: exact shortest path (octile/Manhattan/Euclidean heuristic), no corner cutting",
-        _validate_exact,
-    )
-    register_planner(
-        "dijkstra",
-        lambda grid, start, goal, seed, **p: dijkstra(grid, start, goal, **p),
-        defaults,
-        "Dijkstra: exact shortest path without heuristic (reference for A*)",
-        _validate_exact,
-    )
+    for name, search, description in (
+        ("astar", astar, "A*: exact shortest path (octile/Manhattan/Euclidean heuristic), no corner cutting"),
+        ("dijkstra", dijkstra, "Dijkstra: exact shortest path without heuristic (reference for A*)"),
+    ):
+        register_planner(name, _ignoring_seed(search), defaults, description, _validate_exact, deterministic=True)
 
 
 _register()

@@ -3,7 +3,7 @@
 li2026 computes the direction of each path segment (Eq. 13–14), the angle difference
 between adjacent segments (Eq. 15), deletes the nodes whose angle difference is under
 20° and hands the remaining key nodes to DWA as sub-goals. jaxplan applies the rule of
-`jaxplan.smooth.key_nodes` to the A* path: the heading change of a
+`jaxplan.smoothing.key_nodes` to the A* path: the heading change of a
 vertex is measured from the last *kept* node (so slow drifts add up instead of being
 dropped one small step at a time), a vertex is also kept when dropping it would make
 the straight segment from the last key node collide, and if the result had more sharp
@@ -53,7 +53,7 @@ def _key_node_mask(blocked, pts, min_turn, thr):
     Vertex j is dropped when its heading change, from the direction (last key node → j) to
     the direction (j → j + 1), is under ``min_turn`` (rad; undefined = 0 for repeated
     points) and the segment from the last key node to j + 1 is free (`_clear`, threshold
-    ``thr`` cells). The same rule as `jaxplan.smooth.key_nodes`.
+    ``thr`` cells). The same rule as `jaxplan.smoothing.key_nodes`.
     """
     L = pts.shape[0]
     keep = np.ones(L, np.bool_)
@@ -126,23 +126,9 @@ def astar_kng(
     nodes, fallback = key_node_path(passable(grid, vehicle_height), exact.path, float(threshold_deg))
     res = float(grid.resolution)
     length = path_length(nodes, res)
-    return PlanResult(
-        path=nodes,
-        length=length,
-        turns=count_turns(nodes),
-        cost=length,
-        history=np.zeros(0),
-        time_s=time.perf_counter() - t0,
-        success=True,
-        planner="astar_kng",
-        info={
-            "grid_path": exact.path,
-            "grid_length": exact.length,
-            "expanded": exact.info["expanded"],
-            "removed": len(exact.path) - len(nodes),
-            "fallback": fallback,
-        },
-    )
+    return PlanResult.found("astar_kng", nodes, length, count_turns(nodes), time.perf_counter() - t0,
+                            grid_path=exact.path, grid_length=exact.length, expanded=exact.info["expanded"],
+                            removed=len(exact.path) - len(nodes), fallback=fallback)
 
 
 def _register() -> None:
@@ -154,6 +140,7 @@ def _register() -> None:
         {"threshold_deg": 20.0, "connectivity": 8, "vehicle_height": None},
         "KNG-A* (li2026): A* path reduced to key nodes (heading change >= 20 deg, line of sight kept)",
         _check_kng,
+        deterministic=True,
     )
 
 

@@ -55,9 +55,8 @@ from jaxplan.grid import (
     H_MANHATTAN,
     H_OCTILE,
     GridMap,
-    check_cell,
-    check_cells,
-    clearance_field,
+    check_pair,
+    check_pairs,
     neighbour_table,
     passable,
     state_cost_to_go,
@@ -135,60 +134,27 @@ def objective_terms(grid: GridMap, starts: ArrayLike, goals: ArrayLike, planner:
         says why), or ``opt_ant`` with ``c > 0`` on a map whose passable cells differ in height.
       ValueError: a planner jaxplan does not know, an unknown or bad parameter.
     """
+    from jaxplan.aco import cost_weights  # imported here, as in _check_planner
+
     _check_planner(planner)
     _, p = resolve(planner, weights)
     conn, vh = int(p["connectivity"]), p.get("vehicle_height")
-    ok = passable(grid, vh)
-    C = grid.n_cells
-    s = np.asarray(starts, np.float64).reshape(-1, 2)
-    g = np.asarray(goals, np.float64).reshape(-1, 2)
-    N = len(s)
-    res = float(grid.resolution)
-    zero = np.zeros(C)
-    turn_rule = np.zeros(C, bool)
-    goal_first = False
-    w_angle = w_turn = 0.0
-    cell = zero
-    if planner in ("aco", "astar", "dijkstra"):
-        w_len = np.ones(N)
-    elif planner == "iaco":
-        lam = np.asarray(p["lambdas"], np.float64)
-        l0 = np.hypot(*(s - g).T) * res
-        with np.errstate(divide="ignore"):
-            w_len = np.where(l0 > 0, lam[0] / l0, np.inf)
-        w_angle = float(lam[1] / np.pi)
-        clear = np.maximum(clearance_field(grid), 0.5 * res).astype(np.float32).astype(np.float64).ravel()
-        cell = lam[2] / clear
-    elif planner == "risk_aco":
-        w_len = np.full(N, float(p["u"]))
-        w_turn = float(p["w"])
-        cell = float(p["v"]) * np.asarray(grid.risk, np.float32).astype(np.float64).ravel()
-    elif planner == "opt_ant":
-        h = np.asarray(grid.height, np.float32)[ok]
+    if planner == "opt_ant":
+        h = np.asarray(grid.height, np.float32)[passable(grid, vh)]
         if float(p["c"]) > 0 and h.size and not np.all(h == h[0]):
             raise NonAdditiveCost(
                 "exact_objective: opt_ant's cost a·L + b·R + c·H has H = the mean square deviation of the path "
                 "cells' heights, which is not a sum over moves and turns (it depends on the whole path); this map's "
                 "passable cells differ in height, so its exact minimum is not computed. Pass c=0 for the exact "
                 "minimum of a·L + b·R, a lower bound of the full cost (H >= 0)")
-        w_len = np.full(N, float(p["a"]))
-        w_turn = float(p["b"])
-        goal_first = True
-        turn_rule = np.asarray(grid.turn_rule).ravel() == 1
-    else:  # praco
-        w_len = np.full(N, float(p["omega1"]))
-        w_turn = float(p["omega2"])
-    cell = np.where(ok.ravel(), cell, 0.0)
-    if (cell < 0).any() or not np.isfinite(cell).all():
-        bad = int(np.argmax((cell < 0) | ~np.isfinite(cell)))
-        raise ValueError(f"exact_objective: planner {planner!r} gives cell {(bad % grid.width, bad // grid.width)} "
-                         f"the path cost {cell[bad]}; an exact search needs finite costs >= 0 (check the risk layer)")
-    return ObjectiveTerms(planner, conn, vh, np.asarray(w_len, np.float64), w_angle, w_turn, cell, goal_first,
-                          turn_rule)
+    # A* and Dijkstra minimise length: the Ant System's cost.
+    w = cost_weights("aco" if planner in ("astar", "dijkstra") else planner, grid, starts, goals, p,
+                     what="exact_objective")
+    return ObjectiveTerms(planner, conn, vh, w.w_len, w.w_angle, w.w_turn, w.cell, w.goal_first, w.turn_rule)
 
 
 class _Moves(NamedTuple):
-    index: np.ndarray
+    index: np.ndarray  # type: ignore[assignment]  # a field named as tuple.index
     valid: np.ndarray
     step: np.ndarray  # f64[K] metres
     angle: np.ndarray  # f64[K, K] |heading change|
@@ -206,16 +172,9 @@ def _moves(grid: GridMap, connectivity: int, vehicle_height: float | None) -> _M
                   (np.arange(K) + K // 4) % K, nb.offsets)
 
 
-def _pairs(grid: GridMap, starts, goals, vehicle_height) -> tuple[np.ndarray, np.ndarray]:
-    ok = passable(grid, vehicle_height)
-    s = check_cells(grid, starts, "starts", ok)
-    g = check_cells(grid, goals, "goals", ok)
-    if s.shape != g.shape:
-        raise ValueError(f"starts and goals differ in shape: {s.shape} vs {g.shape}")
-    same = (s == g).all(axis=1)
-    if same.any():
-        i = int(np.argmax(same))
-        raise ValueError(f"scenario {i}: start {tuple(s[i].tolist())} equals the goal; nothing to plan")
+def _pairs(grid: GridMap, starts: ArrayLike, goals: ArrayLike,
+           vehicle_height: float | None) -> tuple[np.ndarray, np.ndarray]:
+    s, g = check_pairs(grid, starts, goals, passable(grid, vehicle_height))
     W = grid.width
     return s[:, 1] * W + s[:, 0], g[:, 1] * W + g[:, 0]
 
@@ -253,11 +212,7 @@ def exact_objective(grid: GridMap, start: ArrayLike, goal: ArrayLike, planner: s
     """
     t0 = time.perf_counter()
     _check_planner(planner)
-    ok = passable(grid, resolve(planner, weights)[1].get("vehicle_height"))
-    s = check_cell(grid, start, "start", ok)
-    g = check_cell(grid, goal, "goal", ok)
-    if s == g:
-        raise ValueError(f"start {s} equals the goal; nothing to plan")
+    s, g = check_pair(grid, start, goal, passable(grid, resolve(planner, weights)[1].get("vehicle_height")))
     terms = objective_terms(grid, np.asarray([s]), np.asarray([g]), planner, **weights)
     mv = _moves(grid, terms.connectivity, terms.vehicle_height)
     W = grid.width
@@ -272,9 +227,8 @@ def exact_objective(grid: GridMap, start: ArrayLike, goal: ArrayLike, planner: s
         return PlanResult.failure(name, dt, expanded=int(expanded), objective=planner)
     path = np.stack([cells % W, cells // W], axis=1).astype(np.int64)
     moves = _move_indices(path[None], np.array([len(path)]), mv.offsets)[0]
-    return PlanResult(path=path, length=float(mv.step[moves].sum()), turns=int((moves[1:] != moves[:-1]).sum()),
-                      cost=float(cost), history=np.zeros(0), time_s=dt, success=True, planner=name,
-                      info={"expanded": int(expanded), "objective": planner})
+    return PlanResult.found(name, path, float(mv.step[moves].sum()), int((moves[1:] != moves[:-1]).sum()), dt,
+                            cost=float(cost), expanded=int(expanded), objective=planner)
 
 
 def exact_objectives(grid: GridMap, starts: ArrayLike, goals: ArrayLike, planner: str = "aco",

@@ -31,7 +31,7 @@ import numpy as np
 from numba import njit
 
 from jaxplan.core.compile_cache import on_first_use
-from jaxplan.grid import cell_heuristic, heap_pop, heap_push
+from jaxplan.grid import cell_heuristic, heap_pop, heap_push, heap_room
 
 on_first_use()  # jaxplan's cache folders, before numba fixes the cache folder of the kernels below
 
@@ -99,13 +99,7 @@ def state_search(index, valid, step, angle, right, cell, turn_rule, w_len, w_ang
             if parent[t] == -2 or cost < g[t]:
                 g[t] = cost
                 parent[t] = s
-                if size == hf.shape[0]:
-                    hf2 = np.empty(2 * size, np.float64)
-                    hv2 = np.empty(2 * size, np.int64)
-                    hf2[:size] = hf
-                    hv2[:size] = hv
-                    hf = hf2
-                    hv = hv2
+                hf, hv = heap_room(hf, hv, size)
                 size = heap_push(hf, hv, size, cost + h_scale * cell_heuristic(hkind, v % width, v // width, tx, ty), t)
     return np.inf, -1, expanded
 
@@ -153,8 +147,10 @@ def _chunk(index, valid, step, angle, right, cell, turn_rule, w_len, w_angle, w_
                               goal_first, width, hkind, h_scale[i], sources[i], targets[i], g, parent, closed)[0]
 
 
-def many_searches(index, valid, step, angle, right, cell, turn_rule, w_len, w_angle, w_turn, goal_first, width, hkind,
-                  h_scale, sources, targets) -> np.ndarray:
+def many_searches(index: np.ndarray, valid: np.ndarray, step: np.ndarray, angle: np.ndarray, right: np.ndarray,
+                  cell: np.ndarray, turn_rule: np.ndarray, w_len: np.ndarray, w_angle: float, w_turn: float,
+                  goal_first: bool, width: int, hkind: int, h_scale: np.ndarray, sources: np.ndarray,
+                  targets: np.ndarray) -> np.ndarray:
     """Optimal costs ``f64[N]`` of N pairs, on `numba.get_num_threads` Python threads (the kernel releases the GIL)."""
     n = len(sources)
     out = np.empty(n, np.float64)

@@ -596,8 +596,9 @@ def _check_mrbs(params: Mapping[str, Any]) -> None:
     _positive_or_none("obs_band", params["obs_band"], "metres")
 
 
-def _plan(name: str, grid: GridMap, start, goal, seed, probabilities: np.ndarray, iterations: int,
-          step, radius, robot_radius: float, obs_band) -> PlanResult:
+def _plan(name: str, grid: GridMap, start: ArrayLike, goal: ArrayLike, seed: int, probabilities: np.ndarray,
+          iterations: int, step: float | None, radius: float | None, robot_radius: float,
+          obs_band: float | None) -> PlanResult:
     t0 = time.perf_counter()
     res = float(grid.resolution)
     s = check_cell(grid, start, "start")
@@ -641,22 +642,9 @@ def _plan(name: str, grid: GridMap, start, goal, seed, probabilities: np.ndarray
     cells = polyline_cells(grid, pts)
     length = path_length(pts, res)
     finite = np.flatnonzero(np.isfinite(history))
-    return PlanResult(
-        path=cells,
-        length=length,
-        turns=count_turns(pts),
-        cost=length,
-        history=history,
-        time_s=time.perf_counter() - t0,
-        success=True,
-        planner=name,
-        info={
-            "points": pts,
-            "grid_length": path_length(cells, res),
-            "nodes": int(n),
-            "first_solution": int(finite[0]) if len(finite) else -1,
-        },
-    )
+    return PlanResult.found(name, cells, length, count_turns(pts), time.perf_counter() - t0, history=history,
+                            points=pts, grid_length=path_length(cells, res), nodes=int(n),
+                            first_solution=int(finite[0]) if len(finite) else -1)
 
 
 def rrt_star(

@@ -19,7 +19,7 @@ import numpy as np
 
 from jaxplan.grid import CollisionMap, polyline_free, segment_free
 from jaxplan.metrics import count_sharp_turns_padded as sharp_turn_count
-from jaxplan.smooth._result import Smoothed, compact, drop_repeats
+from jaxplan.smoothing._result import Smoothed, compact, drop_repeats
 
 __all__ = ["bspline"]
 
@@ -29,7 +29,8 @@ _REACH = 0.5  # cells of chord-deviation margin the window covers
 _TO_BEZIER = np.array([[1, 4, 1, 0], [0, 4, 2, 0], [0, 2, 4, 0], [0, 1, 4, 1]], np.float32) / np.float32(6.0)
 
 
-def _curve(points, n, mult, spacing, K: int):
+def _curve(points: jnp.ndarray, n: jnp.ndarray, mult: jnp.ndarray, spacing: float | jnp.ndarray,
+           K: int) -> tuple[jnp.ndarray, ...]:
     """Samples the spline of control multiplicities ``mult [L]``.
 
     Returns samples ``[S·K + 1, 2]`` with a keep mask, the span of each sample, each

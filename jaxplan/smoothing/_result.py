@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import jax.numpy as jnp
+from jax.typing import ArrayLike
 
 __all__ = ["Smoothed", "compact", "drop_repeats"]
 
@@ -27,12 +28,13 @@ class Smoothed(NamedTuple):
         when it did not, the input is returned unchanged.
     """
 
-    points: jnp.ndarray
-    n: jnp.ndarray
-    removed: jnp.ndarray
-    fallbacks: jnp.ndarray
-    max_curvature: jnp.ndarray
-    input_free: jnp.ndarray
+    # ArrayLike: JAX arrays from the smoothers, NumPy arrays (a batch) or Python numbers (one path) from `smooth`.
+    points: ArrayLike
+    n: ArrayLike
+    removed: ArrayLike
+    fallbacks: ArrayLike
+    max_curvature: ArrayLike
+    input_free: ArrayLike
 
 
 def compact(points: jnp.ndarray, keep: jnp.ndarray, size: int | None = None) -> tuple[jnp.ndarray, jnp.ndarray]:

@@ -12,10 +12,10 @@ from numpy.typing import ArrayLike
 
 from jaxplan.core.cache import lru_cache
 from jaxplan.grid import GridMap, cached_collision_map
-from jaxplan.smooth._bspline import bspline
-from jaxplan.smooth._corners import bezier_corners, fillet
-from jaxplan.smooth._prune import key_nodes, los_prune
-from jaxplan.smooth._result import Smoothed
+from jaxplan.smoothing._bspline import bspline
+from jaxplan.smoothing._corners import bezier_corners, fillet
+from jaxplan.smoothing._prune import key_nodes, los_prune
+from jaxplan.smoothing._result import Smoothed
 
 __all__ = ["SMOOTHERS", "smooth"]
 
@@ -34,7 +34,7 @@ _STATIC_ALWAYS = {"threshold"}  # used to pick branches at trace time
 _AT_MOST = {"kappa": 1.0}
 
 @lru_cache(maxsize=None)
-def _compiled(name: str, radius: float, static: tuple):
+def _compiled(name: str, radius: float, static: tuple) -> Callable[..., Smoothed]:
     """The jitted, vmapped smoother ``name`` for this radius and these static options (one per combination)."""
     fn, _ = SMOOTHERS[name]
     st = dict(static)
@@ -56,7 +56,8 @@ def _options(name: str, res: float, given: dict) -> tuple[tuple, dict]:
     unknown = set(given) - set(spec)
     if unknown:
         raise ValueError(f"smoother {name!r}: unknown option(s) {sorted(unknown)}; it takes {sorted(spec)}")
-    static, traced = [], {}
+    static: list[tuple[str, Any]] = []
+    traced: dict[str, Any] = {}
     for k, (default, unit) in spec.items():
         v = given.get(k, default)
         if unit == "static":
@@ -143,8 +144,8 @@ def smooth(path: ArrayLike, grid: GridMap, method: str | Sequence[str] = "los", 
     removed = np.zeros(B, np.int64)
     fallbacks = np.zeros(B, np.int64)
     kmax = np.zeros(B, np.float32)
-    input_free = None
-    for m in methods:
+    input_free = np.ones(B, bool)  # replaced by the first smoother's check
+    for i, m in enumerate(methods):
         static, traced = _options(m, res, {k: v for k, v in options.items() if k in SMOOTHERS[m][1]})
         size = _bucket(int(cur_n.max()))
         cur = cur[:, :size] if cur.shape[1] >= size else np.concatenate(
@@ -155,7 +156,7 @@ def smooth(path: ArrayLike, grid: GridMap, method: str | Sequence[str] = "los", 
         fallbacks += np.asarray(out.fallbacks)
         if m in ("fillet", "bezier", "bspline"):
             kmax = np.asarray(out.max_curvature)
-        if input_free is None:
+        if i == 0:
             input_free = np.asarray(out.input_free)
     res_ = Smoothed(cur, cur_n, removed, fallbacks, kmax, input_free)
     if single:

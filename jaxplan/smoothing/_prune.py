@@ -16,7 +16,7 @@ import jax.numpy as jnp
 
 from jaxplan.grid import CollisionMap, polyline_free, segment_free
 from jaxplan.metrics import count_sharp_turns_padded as sharp_turn_count
-from jaxplan.smooth._result import Smoothed, compact
+from jaxplan.smoothing._result import Smoothed, compact
 
 __all__ = ["los_prune", "key_nodes"]
 

@@ -22,11 +22,13 @@ no smoothed corner is a sharp turn and the count of sharp turns never grows.
 
 from __future__ import annotations
 
+from typing import Callable
+
 import jax
 import jax.numpy as jnp
 
 from jaxplan.grid import CollisionMap, polyline_free, segment_free
-from jaxplan.smooth._result import Smoothed, compact, drop_repeats
+from jaxplan.smoothing._result import Smoothed, compact, drop_repeats
 
 __all__ = ["fillet", "bezier_corners"]
 
@@ -35,7 +37,7 @@ _EPS = 1e-6
 _REACH = 0.5  # cells of chord-deviation margin the window covers
 
 
-def _corner_frames(points: jnp.ndarray, n: jnp.ndarray):
+def _corner_frames(points: jnp.ndarray, n: jnp.ndarray) -> tuple[jnp.ndarray, ...]:
     """Per vertex ``[L]``: unit directions in/out, segment lengths, heading change, whether a corner."""
     L = points.shape[0]
     prev = points[jnp.maximum(jnp.arange(L) - 1, 0)]
@@ -51,7 +53,8 @@ def _corner_frames(points: jnp.ndarray, n: jnp.ndarray):
     return u1, u2, l1, l2, theta, corner
 
 
-def _arc(v, u1, u2, theta, t, K: int):
+def _arc(v: jnp.ndarray, u1: jnp.ndarray, u2: jnp.ndarray, theta: jnp.ndarray, t: jnp.ndarray,
+         K: int) -> tuple[jnp.ndarray, jnp.ndarray, jnp.ndarray]:
     """``[K, 2]`` samples of the arc tangent at ``v − t·u1`` and ``v + t·u2``; analytic curvature (1/cells)."""
     R = t / jnp.tan(theta / 2)
     left = (u1[0] * u2[1] - u1[1] * u2[0]) > 0
@@ -66,7 +69,8 @@ def _arc(v, u1, u2, theta, t, K: int):
     return pts, sagitta, 1.0 / jnp.maximum(R, 1e-30)
 
 
-def _bezier(v, u1, u2, theta, t, K: int, kappa: float):
+def _bezier(v: jnp.ndarray, u1: jnp.ndarray, u2: jnp.ndarray, theta: jnp.ndarray, t: jnp.ndarray, K: int,
+            kappa: float | jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray, jnp.ndarray]:
     """``[K, 2]`` samples of the cubic corner Bezier; a chord-deviation bound; max curvature (1/cells)."""
     c0, c3 = v - t * u1, v + t * u2
     c1, c2 = c0 + kappa * (v - c0), c3 + kappa * (v - c3)
@@ -88,8 +92,8 @@ def _bezier(v, u1, u2, theta, t, K: int, kappa: float):
     return pts, dev, kmax
 
 
-def _corners(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, radius: float, K: int, size_of,
-             curve) -> Smoothed:
+def _corners(cmap: CollisionMap, points: jnp.ndarray, n: jnp.ndarray, radius: float, K: int,
+             size_of: Callable[..., jnp.ndarray], curve: Callable[..., tuple]) -> Smoothed:
     if K < 6:
         raise ValueError(f"corner samples must be >= 6 (so no smoothed corner is a sharp turn), got {K}")
     given, n_given = jnp.asarray(points, jnp.float32), n
