@@ -1,14 +1,18 @@
-"""Shared fixtures: the benchmark data folder and small maps."""
+"""Shared fixtures: the benchmark data folder, small maps, and small configs written as TOML (`config_toml`,
+`write_config`)."""
 
 from __future__ import annotations
 
+import copy
 import os
 from pathlib import Path
+from typing import Any, Callable
 
 import numpy as np
 import pytest
 
 import jaxplan as jp
+from jaxplan.core.toml import dumps
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -102,3 +106,77 @@ def unlabelled_marks(ax) -> list[str]:
         named = not (a.get_label() or "_").startswith("_")
         kinds[key] = kinds.get(key, False) or named
     return [str(k) for k, named in kinds.items() if not named]
+
+
+# ---------------------------------------------------------------------------------------------
+# Small configs: one builder for the experiment, tuning and study configs of the tests
+
+
+TINY_WAREHOUSE = {"name": "wh", "generator": "warehouse", "seed": 0,
+                  "params": {"width": 14, "height": 10, "shelf_length": 4, "shelf_depth": 2, "aisle": 1,
+                             "cross_aisle": 2}}
+"""A 14x10 generated warehouse: the ``[[maps]]`` entry of most small experiments."""
+
+RANDOM_MAP = {"name": "r", "generator": "random", "seed": 2,
+              "params": {"width": 12, "height": 12, "obstacle_ratio": 0.15},
+              "scenarios": {"source": "random", "count": 4, "seed": 0, "min_distance": 5.0}}
+"""A 12x12 random map with four random scenarios of its own: the ``[[maps]]`` entry of the small tuning configs."""
+
+SMALL_ACO = {"label": "AS", "kind": "plan", "name": "aco", "overrides": {"ants": 4, "iterations": 3,
+                                                                         "dead_end": "retreat"}}
+"""A small Ant System planner (4 ants, 3 iterations)."""
+
+ASTAR = {"label": "A*", "kind": "plan", "name": "astar"}
+
+_TUNE = {"name": "t", "kind": "aco", "planner": "iaco", "strategy": "issa", "population": 4, "generations": 3,
+         "checkpoint_every": 2, "train_count": 2, "train_seeds": 2, "test_seeds": [50, 51],
+         "overrides": {"ants": 4, "iterations": 2}, "space": {"beta": [1.0, 10.0]}}
+
+BASE_CONFIGS: dict[str, dict[str, Any]] = {
+    "experiment": {"experiment": {"name": "tiny", "seeds": 2, "chunk": 2}, "maps": [TINY_WAREHOUSE],
+                   "scenarios": {"source": "random", "count": 2, "seed": 3, "min_distance": 5.0},
+                   "planners": [SMALL_ACO]},
+    "tune": {"tune": _TUNE, "maps": [RANDOM_MAP]},
+    "study": {"tune": {k: v for k, v in _TUNE.items() if k not in ("strategy", "population", "generations",
+                                                                  "checkpoint_every")},
+              "study": {"methods": ["random", "cma_es"], "tuner_seeds": 2, "budget": 8, "population": 4,
+                        "confirm_seeds": [70], "confirm_count": 1},
+              "maps": [RANDOM_MAP]},
+}
+"""The smallest config of each kind that loads (and runs in seconds): `config_toml` starts from these."""
+
+
+def merged(base: dict[str, Any], changes: dict[str, Any]) -> dict[str, Any]:
+    """``base`` with ``changes``: a table (dict) merges key by key into the base's table, any other value (a list of
+    tables too) replaces it, None removes the key. ``base`` is not changed."""
+    out = copy.deepcopy(base)
+    for k, v in changes.items():
+        if v is None:
+            out.pop(k, None)
+        elif isinstance(v, dict) and isinstance(out.get(k), dict):
+            out[k] = merged(out[k], v)
+        else:
+            out[k] = copy.deepcopy(v)
+    return out
+
+
+def config_toml(kind: str = "experiment", **changes: Any) -> str:
+    """The TOML text of a small config of ``kind`` (``"experiment"``, ``"tune"``, ``"study"``): `BASE_CONFIGS`
+    with ``changes`` (`merged`), written by the package's TOML writer.
+
+    ``config_toml(experiment={"name": "x"}, planners=[ASTAR, SMALL_ACO], stats={"pairwise": True})``
+    """
+    return dumps(merged(BASE_CONFIGS[kind], changes))
+
+
+@pytest.fixture
+def write_config(tmp_path: Path) -> Callable[..., Path]:
+    """``write_config(kind="experiment", name=None, **changes)``: `config_toml` written to ``tmp_path/NAME``
+    (default ``KIND.toml``); returns the file."""
+
+    def write(kind: str = "experiment", name: str | None = None, **changes: Any) -> Path:
+        path = tmp_path / (name or f"{kind}.toml")
+        path.write_text(config_toml(kind, **changes))
+        return path
+
+    return write

@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jaxplan.cli import _literal, _parse_sets, main
+from jaxplan.cli import main
+from jaxplan.cli.args import literal, parse_sets
 
 MAP = "type octile\nheight 8\nwidth 10\nmap\n..........\n..........\n..@@@@....\n.....@....\n.....@....\n" \
       "..........\n..........\n..........\n"
@@ -25,11 +26,11 @@ def small_map(tmp_path):
 
 
 def test_set_values_are_read_as_python_literals():
-    assert _literal("64") == 64 and _literal("0.5") == 0.5 and _literal("geodesic") == "geodesic"
-    assert _literal("true") is True and _literal("None") is None and _literal("0.6,0.3,0.1") == (0.6, 0.3, 0.1)
-    assert _parse_sets(["ants=64", "heuristic=geodesic", "ants=8"]) == {"ants": 8, "heuristic": "geodesic"}
+    assert literal("64") == 64 and literal("0.5") == 0.5 and literal("geodesic") == "geodesic"
+    assert literal("true") is True and literal("None") is None and literal("0.6,0.3,0.1") == (0.6, 0.3, 0.1)
+    assert parse_sets(["ants=64", "heuristic=geodesic", "ants=8"]) == {"ants": 8, "heuristic": "geodesic"}
     with pytest.raises(ValueError, match="KEY=VALUE"):
-        _parse_sets(["ants"])
+        parse_sets(["ants"])
 
 
 @pytest.mark.parametrize("argv, words", [

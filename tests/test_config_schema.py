@@ -168,6 +168,84 @@ def test_markdown_and_json_schema_of_a_section():
 
 
 # ---------------------------------------------------------------------------------------------
+# Quick tables as an overlay declared in the schema
+
+
+@dataclasses.dataclass(frozen=True)
+class _Site:
+    name: str
+    count: int | None
+
+
+@dataclasses.dataclass(frozen=True)
+class _Run:
+    label: str
+    kind: str
+    overrides: object = dataclasses.field(default_factory=lambda: schema.frozen({}))
+
+
+@dataclasses.dataclass(frozen=True)
+class _Cfg:
+    seeds: tuple
+    chunk: int
+    sites: tuple
+    runs: tuple
+
+
+@schema.declaration
+class _Quick:
+    """A quick table using every overlay."""
+
+    seeds: object = setting("seeds", None, "seeds", overlay="set")
+    chunk: int = setting("int", None, "chunk", ge=1, overlay="set")
+    count: int = setting("int", None, "at most this many", ge=1, overlay="cap sites[].count")
+    overrides: object = setting("table", doc="merged into the runs that take the key", overlay="merge runs[].overrides")
+    runs: tuple = setting("strings", None, "only these runs", overlay="keep runs[].label")
+    note: str = setting("str", None, "not an overlay: ignored by it")
+
+
+def _cfg():
+    return _Cfg((0, 1, 2), 16, (_Site("a", None), _Site("b", 5), _Site("c", 1)),
+                (_Run("A", "plan", schema.frozen({"x": 1})), _Run("B", "navigate"), _Run("C", "plan")))
+
+
+def test_overlay_sets_caps_merges_and_keeps_as_declared():
+    cfg = _cfg()
+    q = Reader().section({"seeds": 2, "count": 3, "overrides": {"y": [1, 2]}, "runs": ["A", "B"], "note": "n"},
+                         "quick", _Quick)
+    got = schema.overlay(cfg, q, _Quick, where={"overrides": lambda run, k: run.kind == "plan"})
+    assert got.seeds == (0, 1) and got.chunk == 16
+    assert [s.count for s in got.sites] == [3, 3, 1]  # unset takes the cap; only larger counts are lowered
+    assert [r.label for r in got.runs] == ["A", "B"]  # C filtered out after the merge
+    assert dict(got.runs[0].overrides) == {"x": 1, "y": (1, 2)} and dict(got.runs[1].overrides) == {}
+    assert cfg == _cfg()  # the original is not changed
+
+
+def test_overlay_skips_absent_and_empty_keys_and_reads_attributes():
+    cfg = _cfg()
+    assert schema.overlay(cfg, {"seeds": None, "overrides": {}, "runs": []}, _Quick) == cfg
+
+    @dataclasses.dataclass(frozen=True)
+    class Values:
+        chunk: int = 4
+        runs: tuple = ("C",)
+
+    got = schema.overlay(cfg, Values(), _Quick)
+    assert got.chunk == 4 and [r.label for r in got.runs] == ["C"] and got.sites == cfg.sites
+
+
+def test_an_overlay_must_name_a_known_operation():
+    with pytest.raises(ValueError, match="overlay must start with one of set, merge, cap, keep"):
+        schema.Setting("int", overlay="add count")
+
+
+def test_every_quick_table_declares_an_overlay_for_each_key():
+    for section in _sections(ExperimentFile):
+        if section.__name__.endswith(("Quick", "QuickSpec", "QuickTable")):
+            assert all(s.overlay is not None for s in settings(section)), section
+
+
+# ---------------------------------------------------------------------------------------------
 # Deprecated generator names (renamed after the papers' authors in this release)
 
 

@@ -11,7 +11,7 @@ import numpy as np
 from PIL import Image
 
 from jaxplan.cli import main
-from jaxplan.experiments.demo import ROWS, min_clearance
+from jaxplan.cli.demo import ROWS, min_clearance
 
 
 def test_quick_demo_prints_the_table_and_writes_png_and_gif(tmp_path, capsys):

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ASTAR, SMALL_ACO, config_toml, merged
 from scipy import stats as sps
 
 from jaxplan.cli import main
@@ -25,54 +26,23 @@ from jaxplan.experiments.config import ConfigError, apply_quick, load_config, pa
 
 ROOT = Path(__file__).resolve().parents[1]
 
-TINY = """
-metrics = ["success", "length", "optimality_gap", "turns", "smoothness", "converged_iteration", "plan_time_s"]
+TINY_ACO = {**SMALL_ACO, "overrides": {"ants": 6, "iterations": 4, "dead_end": "retreat"}}
 
-[experiment]
-name = "tiny"
-description = "harness test"
-seeds = 3
-chunk = 2
 
-[experiment.quick]
-seeds = 2
-count = 2
-overrides = { iterations = 2 }
+def _tiny(**changes) -> str:
+    """The tiny experiment (A* and a small Ant System on the 14x10 warehouse, 5 scenarios x 3 seeds, a paper value)
+    with ``changes`` (`conftest.config_toml`)."""
+    base = dict(
+        metrics=["success", "length", "optimality_gap", "turns", "smoothness", "converged_iteration", "plan_time_s"],
+        experiment={"name": "tiny", "description": "harness test", "seeds": 3, "chunk": 2,
+                    "quick": {"seeds": 2, "count": 2, "overrides": {"iterations": 2}}},
+        scenarios={"count": 5}, planners=[ASTAR, TINY_ACO],
+        stats={"anova": True, "pairwise": True, "metrics": ["length", "smoothness"]},
+        paper={"source": "made-up numbers for the test", "values": [{"planner": "AS", "length": [99.5, 1.5]}]})
+    return config_toml(**merged(base, changes))
 
-[[maps]]
-name = "wh"
-generator = "warehouse"
-seed = 0
-params = { width = 14, height = 10, shelf_length = 4, shelf_depth = 2, aisle = 1, cross_aisle = 2 }
 
-[scenarios]
-source = "random"
-count = 5
-seed = 3
-min_distance = 5.0
-
-[[planners]]
-label = "A*"
-kind = "plan"
-name = "astar"
-
-[[planners]]
-label = "AS"
-kind = "plan"
-name = "aco"
-overrides = { ants = 6, iterations = 4, dead_end = "retreat" }
-
-[stats]
-anova = true
-pairwise = true
-metrics = ["length", "smoothness"]
-
-[paper]
-source = "made-up numbers for the test"
-[[paper.values]]
-planner = "AS"
-length = [99.5, 1.5]
-"""
+TINY = _tiny()
 
 
 def _write(path: Path, text: str) -> Path:
@@ -209,51 +179,42 @@ def test_single_problems(text, problem, tmp_path):
 
 
 @pytest.mark.parametrize("override, problem", [
-    ("alpha = [1.0, 2.0]", "parameter 'alpha' must be a single number, got (1.0, 2.0)"),
-    ("rho = [0.1]", "parameter 'rho' must be a single number, got (0.1,)"),
-    ("alpha = true", "parameter 'alpha' must be a real number (not a bool or a string), got True"),
-    ("alpha = '1.0'", "parameter 'alpha' must be a real number (not a bool or a string), got '1.0'"),
-    ("lambdas = [0.5, true, 0.2]", "parameter 'lambdas' must be a real number (not a bool or a string) per component"),
-    ("lambdas = [0.5, 0.3]", "lambdas must be three weights"),
+    ({"alpha": [1.0, 2.0]}, "parameter 'alpha' must be a single number, got (1.0, 2.0)"),
+    ({"rho": [0.1]}, "parameter 'rho' must be a single number, got (0.1,)"),
+    ({"alpha": True}, "parameter 'alpha' must be a real number (not a bool or a string), got True"),
+    ({"alpha": "1.0"}, "parameter 'alpha' must be a real number (not a bool or a string), got '1.0'"),
+    ({"lambdas": [0.5, True, 0.2]}, "parameter 'lambdas' must be a real number (not a bool or a string) per "
+                                    "component"),
+    ({"lambdas": [0.5, 0.3]}, "lambdas must be three weights"),
 ])
 def test_planner_weights_need_their_default_shape_and_real_numbers(override, problem, tmp_path):
-    text = TINY.replace('name = "aco"\noverrides = { ants = 6,', f'name = "iaco"\noverrides = {{ {override}, ants = 6,')
+    text = _tiny(planners=[ASTAR, {**TINY_ACO, "name": "iaco", "overrides": {**override, **TINY_ACO["overrides"]}}])
     with pytest.raises(ConfigError) as ei:
         parse_config(text, data_dir=tmp_path)
     assert len(ei.value.problems) == 1 and ei.value.problems[0].startswith("planners[1].overrides: planner 'iaco': ")
     assert problem in ei.value.problems[0], ei.value.problems
 
 
-NAV = """
-[experiment]
-name = "quicknav"
-seeds = 2
-[experiment.quick]
-seeds = 1
-nav = { max_time = %s }
-[[maps]]
-name = "g"
-generator = "random"
-params = { width = 12, height = 12, obstacle_ratio = 0.1 }
-scenarios = { source = "random", count = 1, min_distance = 4.0 }
-[[planners]]
-label = "nav"
-kind = "navigate"
-name = "iaco_dwa"
-overrides = { ants = 8, iterations = 3 }
-"""
+def _quick_nav(max_time) -> str:
+    """A navigate experiment whose ``[experiment.quick]`` sets ``nav.max_time``."""
+    return config_toml(
+        experiment={"name": "quicknav", "seeds": 2, "chunk": None,
+                    "quick": {"seeds": 1, "nav": {"max_time": max_time}}},
+        maps=[{"name": "g", "generator": "random", "params": {"width": 12, "height": 12, "obstacle_ratio": 0.1},
+               "scenarios": {"source": "random", "count": 1, "min_distance": 4.0}}], scenarios=None,
+        planners=[{"label": "nav", "kind": "navigate", "name": "iaco_dwa", "overrides": {"ants": 8, "iterations": 3}}])
 
 
-@pytest.mark.parametrize("value", ["-5.0", "nan", "'x'"])
+@pytest.mark.parametrize("value", [-5.0, float("nan"), "x"])
 def test_quick_nav_values_are_checked_at_load_time(value, tmp_path):
     with pytest.raises(ConfigError) as ei:
-        parse_config(NAV % value, data_dir=tmp_path)
+        parse_config(_quick_nav(value), data_dir=tmp_path)
     assert len(ei.value.problems) == 1, ei.value.problems
     assert ei.value.problems[0].startswith("experiment.quick.nav.max_time: for 'nav': NavConfig.max_time must be")
 
 
 def test_good_quick_nav_values_pass(tmp_path):
-    assert dict(apply_quick(parse_config(NAV % "7.5", data_dir=tmp_path)).planners[0].nav) == {"max_time": 7.5}
+    assert dict(apply_quick(parse_config(_quick_nav(7.5), data_dir=tmp_path)).planners[0].nav) == {"max_time": 7.5}
 
 
 def test_quick_changes_seeds_counts_and_overrides(tiny_config):
@@ -292,23 +253,11 @@ def test_same_config_twice_gives_identical_trials(reference, tiny_config, tmp_pa
     assert (again / "trials.csv").read_bytes() == (reference / "trials.csv").read_bytes()
 
 
-CHUNK_BITS = """
-metrics = ["success", "length", "optimality_gap"]
-[experiment]
-name = "chunkbits"
-seeds = 2
-[[maps]]
-name = "r"
-generator = "random"
-seed = 1
-params = { width = 30, height = 30, obstacle_ratio = 0.2 }
-scenarios = { source = "random", count = 5, seed = 3, min_distance = 20.0 }
-[[planners]]
-label = "AS"
-kind = "plan"
-name = "aco"
-overrides = { ants = 6, iterations = 3, dead_end = "retreat", max_steps = 600 }
-"""
+CHUNK_BITS = config_toml(
+    metrics=["success", "length", "optimality_gap"], experiment={"name": "chunkbits", "chunk": None},
+    maps=[{"name": "r", "generator": "random", "seed": 1, "params": {"width": 30, "height": 30, "obstacle_ratio": 0.2},
+           "scenarios": {"source": "random", "count": 5, "seed": 3, "min_distance": 20.0}}], scenarios=None,
+    planners=[{**SMALL_ACO, "overrides": {"ants": 6, "iterations": 3, "dead_end": "retreat", "max_steps": 600}}])
 
 
 def test_chunk_size_does_not_change_lengths_or_gaps(tmp_path):
@@ -478,29 +427,13 @@ def test_resume_after_sigkill_gives_identical_trials(reference, tiny_config, tmp
 # ---------------------------------------------------------------------------------------------
 # Figures whose scenario the run does not have
 
-SCENARIO_FIGURES = """
-[[figures]]
-kind = "paths"
-name = "paths_sc3"
-scenario = 3
-
-[[figures]]
-kind = "convergence"
-name = "conv_sc3"
-scenario = 3
-
-[[figures]]
-kind = "box"
-metric = "length"
-
-[[figures]]
-kind = "bar"
-metric = "length"
-"""
+SCENARIO_FIGURES = [{"kind": "paths", "name": "paths_sc3", "scenario": 3},
+                    {"kind": "convergence", "name": "conv_sc3", "scenario": 3},
+                    {"kind": "box", "metric": "length"}, {"kind": "bar", "metric": "length"}]
 
 
 def test_figure_scenario_past_the_configured_count_is_a_config_error(tmp_path):
-    text = TINY + "[[figures]]\nkind = 'paths'\nscenario = 5\n[[figures]]\nkind = 'convergence'\nscenario = 4\n"
+    text = _tiny(figures=[{"kind": "paths", "scenario": 5}, {"kind": "convergence", "scenario": 4}])
     with pytest.raises(ConfigError) as ei:
         parse_config(text, data_dir=tmp_path)
     assert ei.value.problems == ("figures[0].scenario: figure 'paths': scenario 5 is past map 'wh''s 5 scenarios "
@@ -510,7 +443,7 @@ def test_figure_scenario_past_the_configured_count_is_a_config_error(tmp_path):
 def test_figure_scenario_past_a_quick_run_is_reported_and_the_other_figures_drawn(tmp_path, monkeypatch, capsys):
     from jaxplan.experiments import figures
 
-    cfg = _write(tmp_path / "f.toml", TINY.replace('name = "tiny"', 'name = "tinyfig"') + SCENARIO_FIGURES)
+    cfg = _write(tmp_path / "f.toml", _tiny(experiment={"name": "tinyfig"}, figures=SCENARIO_FIGURES))
     run = run_experiment(cfg, tmp_path / "runs", quick=True, progress=False)  # 2 scenarios: 3 is valid only in full
 
     def boom(run, spec):

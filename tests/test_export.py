@@ -7,44 +7,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import SMALL_ACO, config_toml
 
 import jaxplan as jp
 from jaxplan.cli import main
 from jaxplan.core.export import json_text, plain, require_pandas
 
-RUN = """
-metrics = ["success", "length", "collisions", "time_s"]
-
-[experiment]
-name = "exp"
-seeds = 2
-chunk = 2
-
-[[maps]]
-name = "wh"
-generator = "warehouse"
-seed = 0
-params = { width = 14, height = 10, shelf_length = 4, shelf_depth = 2, aisle = 1, cross_aisle = 2 }
-
-[scenarios]
-source = "random"
-count = 2
-seed = 3
-min_distance = 5.0
-
-[[planners]]
-label = "AS"
-kind = "plan"
-name = "aco"
-overrides = { ants = 4, iterations = 3, dead_end = "retreat" }
-
-[[planners]]
-label = "KNG"
-kind = "navigate"
-name = "astar_kng_dwa"
-nav = { max_time = 20.0, replan = false }
-dwa = { n_v = 4, n_omega = 5 }
-"""
+RUN = config_toml(  # the small Ant System and a navigate planner on the tiny warehouse, 2 scenarios x 2 seeds
+    metrics=["success", "length", "collisions", "time_s"], experiment={"name": "exp"},
+    planners=[SMALL_ACO, {"label": "KNG", "kind": "navigate", "name": "astar_kng_dwa",
+                          "nav": {"max_time": 20.0, "replan": False}, "dwa": {"n_v": 4, "n_omega": 5}}])
 
 
 def _is_plain(x) -> bool:

@@ -11,151 +11,70 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import unlabelled_marks
+from conftest import ASTAR, SMALL_ACO, config_toml, merged, unlabelled_marks
 
 from jaxplan.cli import main
 from jaxplan.experiments import run_experiment
 from jaxplan.experiments.config import ConfigError, parse_config
 from jaxplan.experiments.figures import draw_figures
 
-PLAN = """
-metrics = ["success", "length", "turns", "smoothness", "plan_time_s"]
+PLAN_FIGURES = [
+    {"kind": "convergence", "band": "iqr"}, {"kind": "diversity", "band": "sd"}, {"kind": "box", "metric": "length"},
+    {"kind": "bar", "metric": "turns"}, {"kind": "bar", "name": "success_bar", "metric": "success"},
+    {"kind": "sweep", "metric": "turns", "x": "obstacle_ratio", "xlabel": "obstacle ratio"},
+    {"kind": "paths", "maps": ["r10"], "scenario": 1, "seed": 1},
+    {"kind": "pheromone", "maps": ["r10"], "planners": ["AS"]},
+]
 
-[experiment]
-name = "figplan"
-description = "figures test: plan planners against obstacle ratio"
-seeds = 2
-chunk = 2
 
-{maps}
+def _random_map(name: str, ratio: float, size: int = 14) -> dict:
+    return {"name": name, "generator": "random", "seed": 1,
+            "params": {"width": size, "height": size, "obstacle_ratio": ratio}}
 
-[scenarios]
-source = "random"
-count = 2
-seed = 0
-min_distance = 6.0
 
-[[planners]]
-label = "A*"
-kind = "plan"
-name = "astar"
+def _plan(**changes) -> str:
+    """A* and a small Ant System on three random maps (obstacle ratio 0.1, 0.2, 0.3), with every plan figure kind
+    (`conftest.config_toml` with ``changes``)."""
+    base = dict(
+        metrics=["success", "length", "turns", "smoothness", "plan_time_s"],
+        experiment={"name": "figplan", "description": "figures test: plan planners against obstacle ratio"},
+        maps=[_random_map(f"r{int(r * 100)}", r) for r in (0.1, 0.2, 0.3)],
+        scenarios={"count": 2, "seed": 0, "min_distance": 6.0},
+        planners=[ASTAR, {**SMALL_ACO, "overrides": {"ants": 6, "iterations": 4, "dead_end": "retreat"}}],
+        figures=PLAN_FIGURES,
+        paper={"source": "made-up numbers for the test", "values": [
+            {"planner": "AS", "map": "r20", "turns": [7.0, 1.0], "success": [0.9, 0.05]}]})
+    return config_toml(**merged(base, changes))
 
-[[planners]]
-label = "AS"
-kind = "plan"
-name = "aco"
-overrides = { ants = 6, iterations = 4, dead_end = "retreat" }
 
-[[figures]]
-kind = "convergence"
-band = "iqr"
+NAV_FIGURES = [{"kind": "trajectories"}, {"kind": "controls", "seed": 1}, {"kind": "fan", "steps": [5]},
+               {"kind": "paths"}]
 
-[[figures]]
-kind = "diversity"
-band = "sd"
 
-[[figures]]
-kind = "box"
-metric = "length"
-
-[[figures]]
-kind = "bar"
-metric = "turns"
-
-[[figures]]
-kind = "bar"
-name = "success_bar"
-metric = "success"
-
-[[figures]]
-kind = "sweep"
-metric = "turns"
-x = "obstacle_ratio"
-xlabel = "obstacle ratio"
-
-[[figures]]
-kind = "paths"
-maps = ["r10"]
-scenario = 1
-seed = 1
-
-[[figures]]
-kind = "pheromone"
-maps = ["r10"]
-planners = ["AS"]
-
-[paper]
-source = "made-up numbers for the test"
-[[paper.values]]
-planner = "AS"
-map = "r20"
-turns = [7.0, 1.0]
-success = [0.9, 0.05]
-"""
-
-MAPS = "\n".join(f"""
-[[maps]]
-name = "r{int(r * 100)}"
-generator = "random"
-seed = 1
-params = {{ width = 14, height = 14, obstacle_ratio = {r} }}
-""" for r in (0.1, 0.2, 0.3))
-
-NAV = """
-metrics = ["success", "collisions", "time_s", "energy"]
-
-[experiment]
-name = "fignav"
-seeds = 2
-chunk = 1
-
-[[maps]]
-name = "wh"
-generator = "warehouse"
-seed = 0
-params = { width = 14, height = 10, shelf_length = 4, shelf_depth = 2, aisle = 1, cross_aisle = 2 }
-
-[scenarios]
-source = "random"
-count = 1
-seed = 3
-min_distance = 6.0
-
-[[planners]]
-label = "KNG-DWA"
-kind = "navigate"
-name = "astar_kng_dwa"
-nav = { max_time = 12.0, replan = false }
-dwa = { n_v = 5, n_omega = 9 }
-obstacles = { n = 2, speed = 0.4, radius = 0.2, seed = 0 }
-
-[[figures]]
-kind = "trajectories"
-
-[[figures]]
-kind = "controls"
-seed = 1
-
-[[figures]]
-kind = "fan"
-steps = [5]
-
-[[figures]]
-kind = "paths"
-"""
+def _nav(**changes) -> str:
+    """A KNG-DWA robot among two moving discs on the tiny warehouse, one scenario, with every navigate figure
+    kind (`conftest.config_toml` with ``changes``)."""
+    base = dict(
+        metrics=["success", "collisions", "time_s", "energy"], experiment={"name": "fignav", "chunk": 1},
+        scenarios={"count": 1, "min_distance": 6.0},
+        planners=[{"label": "KNG-DWA", "kind": "navigate", "name": "astar_kng_dwa",
+                   "nav": {"max_time": 12.0, "replan": False}, "dwa": {"n_v": 5, "n_omega": 9},
+                   "obstacles": {"n": 2, "speed": 0.4, "radius": 0.2, "seed": 0}}],
+        figures=NAV_FIGURES)
+    return config_toml(**merged(base, changes))
 
 
 @pytest.fixture(scope="module")
 def plan_run(tmp_path_factory) -> Path:
     cfg = tmp_path_factory.mktemp("cfg") / "figplan.toml"
-    cfg.write_text(PLAN.replace("{maps}", MAPS))
+    cfg.write_text(_plan())
     return run_experiment(cfg, tmp_path_factory.mktemp("runs"), progress=False)
 
 
 @pytest.fixture(scope="module")
 def nav_run(tmp_path_factory) -> Path:
     cfg = tmp_path_factory.mktemp("cfg") / "fignav.toml"
-    cfg.write_text(NAV)
+    cfg.write_text(_nav())
     return run_experiment(cfg, tmp_path_factory.mktemp("runs"), progress=False)
 
 
@@ -202,9 +121,7 @@ def test_paths_figure_with_a_smoother(plan_run, tmp_path):
 
 
 def test_an_unknown_smoother_of_a_paths_figure_is_a_config_problem():
-    text = PLAN.replace("{maps}", MAPS).replace('[[figures]]\nkind = "pheromone"',
-                                                '[[figures]]\nkind = "paths"\nsmoothing = "lso"\n\n'
-                                                '[[figures]]\nkind = "pheromone"')
+    text = _plan(figures=PLAN_FIGURES[:-1] + [{"kind": "paths", "smoothing": "lso"}, PLAN_FIGURES[-1]])
     with pytest.raises(ConfigError) as e:
         parse_config(text)
     assert any(p.startswith("figures[") and ".smoothing: must be one of" in p and "did you mean 'los'" in p
@@ -225,8 +142,7 @@ def test_figures_of_a_missing_run_folder(tmp_path, capsys):
 
 
 def test_bad_figure_entries_are_config_problems():
-    text = NAV.replace('kind = "fan"\nsteps = [5]', 'kind = "fan"\nsteps = [-1]').replace(
-        '[[figures]]\nkind = "paths"', '[[figures]]\nkind = "sweep"\nx = [1, 2]')
+    text = _nav(figures=NAV_FIGURES[:2] + [{"kind": "fan", "steps": [-1]}, {"kind": "sweep", "x": [1, 2]}])
     with pytest.raises(ConfigError) as e:
         parse_config(text)
     msg = str(e.value)
@@ -266,18 +182,12 @@ def test_sweeps_over_orders_of_magnitude_use_a_log_axis_and_fractions_read_in_pe
     from jaxplan.experiments.plots import plt
     from jaxplan.experiments.run_data import load_run
 
-    maps = "\n".join(f"""
-[[maps]]
-name = "r{i}"
-generator = "random"
-seed = 1
-params = {{ width = 12, height = 12, obstacle_ratio = 0.1 }}
-""" for i in range(3))
-    text = (PLAN.replace("{maps}", maps).replace('x = "obstacle_ratio"', "x = [0.01, 0.1, 10.0]")
-            .replace('metric = "turns"\nx =', 'metric = "success"\nx =').replace('map = "r20"', 'map = "r1"')
-            .replace('maps = ["r10"]', 'maps = ["r0"]'))
+    sweep = {"kind": "sweep", "metric": "success", "x": [0.01, 0.1, 10.0], "xlabel": "obstacle ratio"}
+    figures = [sweep if f["kind"] == "sweep" else {**f, "maps": ["r0"]} if "maps" in f else f for f in PLAN_FIGURES]
     cfg = tmp_path / "figlog.toml"
-    cfg.write_text(text.replace('name = "figplan"', 'name = "figlog"'))
+    cfg.write_text(_plan(experiment={"name": "figlog"}, maps=[_random_map(f"r{i}", 0.1, 12) for i in range(3)],
+                         figures=figures, paper={"values": [{"planner": "AS", "map": "r1", "turns": [7.0, 1.0],
+                                                             "success": [0.9, 0.05]}]}))
     run = load_run(run_experiment(cfg, tmp_path / "runs", progress=False))
     spec = next(f for f in run.config.figures if f.kind == "sweep")
     fig, caption = DRAW["sweep"](run, spec)

@@ -670,8 +670,8 @@ def test_gif_frames_keep_the_maps_aspect_the_robots_size_and_a_time_stamp(tmp_pa
 
 
 def test_navigate_png_shows_trajectory_start_goal_and_walkers(tmp_path, grid):
+    from jaxplan.cli.outputs import write_episode
     from jaxplan.experiments import pictures
-    from jaxplan.experiments.outputs import write_episode
 
     ep = _walk(grid)
     out = write_episode(tmp_path / "e.png", ep, grid, {"map": "m.map", "pipeline": "iaco_dwa"}, footprint=0.25)

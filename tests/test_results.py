@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import config_toml, merged
 from scipy import stats as sps
 
 from jaxplan.experiments.claims import Claim, Claims
@@ -31,48 +32,26 @@ from jaxplan.experiments.verdicts import Margin
 
 ROOT = Path(__file__).resolve().parents[1]
 
-CONFIG = """
-metrics = ["success", "length", "optimality_gap", "plan_time_s"]
+MAP = {"name": "m", "generator": "random", "seed": 0, "params": {"width": 10, "height": 10, "obstacle_ratio": 0.1},
+       "scenarios": {"source": "random", "count": 2}}
 
-[experiment]
-name = "demo2020_table9"
-description = "a made-up table"
-seeds = 6
 
-[[maps]]
-name = "m"
-generator = "random"
-seed = 0
-params = { width = 10, height = 10, obstacle_ratio = 0.1 }
+def _config(**changes) -> str:
+    """A made-up paper table: Ours-ACO against the exact planner on one random map, with the paper's numbers
+    (`conftest.config_toml` with ``changes``)."""
+    base = dict(
+        metrics=["success", "length", "optimality_gap", "plan_time_s"],
+        experiment={"name": "demo2020_table9", "description": "a made-up table", "seeds": 6, "chunk": None},
+        maps=[MAP], scenarios=None, planners=[{"label": "Ours-ACO", "kind": "plan", "name": "aco"},
+                                              {"label": "Exact", "kind": "plan", "name": "astar"}],
+        stats={"pairwise": True, "metrics": ["length"]},
+        paper={"source": "Demo (2020), Table 9", "n": 30, "values": [{
+            "planner": "Ours-ACO", "success": [0.876, 0.0123], "length": [987.654, 4.321],
+            "optimality_gap": [0.2345, 0.0111], "plan_time_s": 0.0321}]})
+    return config_toml(**merged(base, changes))
 
-[scenarios]
-source = "random"
-count = 2
 
-[[planners]]
-label = "Ours-ACO"
-kind = "plan"
-name = "aco"
-
-[[planners]]
-label = "Exact"
-kind = "plan"
-name = "astar"
-
-[stats]
-pairwise = true
-metrics = ["length"]
-
-[paper]
-source = "Demo (2020), Table 9"
-n = 30
-[[paper.values]]
-planner = "Ours-ACO"
-success = [0.876, 0.0123]
-length = [987.654, 4.321]
-optimality_gap = [0.2345, 0.0111]
-plan_time_s = 0.0321
-"""
+CONFIG = _config()
 
 MARGINS = {"success": Margin(0.05, False), "optimality_gap": Margin(0.1, True), "length": Margin(0.03, True)}
 
@@ -203,11 +182,11 @@ def test_the_comparability_rule_on_a_stand_in_and_on_the_papers_own_map(cfg):
     own = cfg.replace(maps=tuple(dataclasses.replace(m, paper_map=True) for m in cfg.maps))
     assert comparability_reason(own, Notes(), "m", "length") == ""
     with pytest.raises(ConfigError, match="never the paper's own"):
-        parse_config(CONFIG.replace('seed = 0\n', 'seed = 0\npaper_map = true\n', 1))
+        parse_config(_config(maps=[{**MAP, "paper_map": True}]))
 
 
 def test_a_drawn_map_is_judged_once_with_the_draws_as_units(tmp_path):
-    cfg = parse_config(CONFIG.replace('seed = 0\n', 'seed = 0\ndraws = 3\n', 1))
+    cfg = parse_config(_config(maps=[{**MAP, "draws": 3}]))
     assert [(m.name, m.seed, m.map_family) for m in cfg.maps] == [("m", 0, "m"), ("m~1", 1, "m"), ("m~2", 2, "m")]
     a, ev = _evidence(tmp_path, cfg)
     u = units(ev, "m", "Exact", "length")  # per-draw means: 500 + draw
@@ -219,8 +198,7 @@ def test_a_drawn_map_is_judged_once_with_the_draws_as_units(tmp_path):
     assert "Map draws: m (3)" in page and "### m~1" not in page
     assert parse_config(CONFIG).maps[0].draw == 0
     with pytest.raises(ConfigError, match="only a generated map has draws"):
-        parse_config(CONFIG.replace('generator = "random"', 'path = "movingai/x.map"').replace(
-            'seed = 0\n', 'draws = 2\n', 1).replace('params = { width = 10, height = 10, obstacle_ratio = 0.1 }', ''))
+        parse_config(_config(maps=[{"name": "m", "path": "movingai/x.map", "draws": 2, "scenarios": MAP["scenarios"]}]))
 
 
 def _claim(**kw) -> Claim:
@@ -249,7 +227,7 @@ def test_claims_are_judged_as_paired_contrasts_and_reach_the_index(cfg, tmp_path
 
 
 def test_page_warns_of_few_units_and_labels_quick_runs(tmp_path):
-    cfg = parse_config(CONFIG.replace("seeds = 6", "seeds = 3"))
+    cfg = parse_config(_config(experiment={"seeds": 3}))
     page = _page(tmp_path, cfg)
     assert "Few units" in page and "⚠" in page  # 3 seeds < 5
     assert "QUICK" not in page
@@ -277,7 +255,7 @@ def test_notes_refuse_the_retired_hand_written_verdicts(tmp_path):
 
 def test_the_project_notes_load_and_name_known_configs():
     notes = load_notes(ROOT / "configs" / "results" / "notes.toml")
-    from jaxplan.benchmark_functions import NAME as STUDY
+    from jaxplan.studies.benchmark_functions import NAME as STUDY
 
     configs = {p.stem for p in (ROOT / "configs").glob("*_*.toml")} | {STUDY}
     assert set(notes.not_reproduced) <= configs and set(notes.highlights) <= configs
@@ -301,12 +279,12 @@ def test_hedges_g():
 
 
 def test_optimiser_study_curves_and_page(tmp_path):
-    """li2026 Fig. 7 (jaxplan.benchmark_functions): best-so-far curves never rise; the page puts the paper's one
-    number in its paper column, marked not comparable (no dimension published), and is found by the index."""
+    """li2026 Fig. 7 (jaxplan.studies.benchmark_functions): best-so-far curves never rise; the page puts the paper's
+    one number in its paper column, marked not comparable (no dimension published), and is found by the index."""
     import dataclasses
 
-    from jaxplan import benchmark_functions as F
     from jaxplan.experiments.results import write_index_page
+    from jaxplan.studies import benchmark_functions as F
 
     for name, (f, _) in F.FUNCTIONS.items():
         assert float(f(np.zeros((1, 3), np.float32))[0]) == pytest.approx(0.0, abs=1e-5), name
@@ -323,6 +301,18 @@ def test_optimiser_study_curves_and_page(tmp_path):
     assert "[li2026_fig7](li2026/fig7-quick.md)" in index
     timed = write_index_page(tmp_path / "results", Notes(), quick=True, wall_s=90.0, cache=False).read_text()
     assert "wall time of the call that wrote this index: 1.5 min (no compilation cache)" in timed
+
+
+def test_the_old_study_path_still_works_with_a_deprecation_warning():
+    import importlib
+    import sys
+
+    from jaxplan.studies import benchmark_functions as new
+
+    sys.modules.pop("jaxplan.benchmark_functions", None)
+    with pytest.warns(DeprecationWarning, match="moved to jaxplan.studies.benchmark_functions"):
+        old = importlib.import_module("jaxplan.benchmark_functions")
+    assert old.write_study is new.write_study and old.FUNCTIONS is new.FUNCTIONS and old.NAME == "li2026_fig7"
 
 
 def test_notes_highlight_renders_a_table_and_refuses_stray_keys(cfg, tmp_path):

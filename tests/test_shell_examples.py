@@ -297,7 +297,7 @@ def _map_path(path: str) -> Path:
 def test_start_and_goal_are_free_cells_of_their_map():
     """Fast: a documented ``plan``/``navigate`` names a map that exists from the repository root and start and goal
     cells inside it and free (the README once took a .scen row's width and height columns for a start)."""
-    import jaxplan.cli as cli
+    from jaxplan.cli.args import load_map_args
 
     cmds = [c for c in documented_commands() if c.argv[:2] in (("jaxplan", "plan"), ("jaxplan", "navigate"))]
     assert cmds
@@ -316,7 +316,7 @@ def test_start_and_goal_are_free_cells_of_their_map():
         if not Path(args.map).is_file():
             bad.append(f"{cmd.where}: map {shown!r} does not exist from the repository root")
             continue
-        grid, _ = cli._load_map_args(args)
+        grid, _ = load_map_args(args)
         H, W = grid.free.shape
         for name in ("start", "goal"):
             cell, metres = getattr(args, name), getattr(args, f"{name}_m", None)

@@ -22,6 +22,7 @@ from jaxplan.experiments.verdicts import (
     mean_interval,
     parse_margin,
     prediction_interval,
+    t_quantile,
     tost_from_stats,
     welch_from_stats,
     wilson_interval,
@@ -113,6 +114,16 @@ def test_mean_interval_hand():
     assert lo == pytest.approx(3 - 1.963243, abs=1e-5) and hi == pytest.approx(3 + 1.963243, abs=1e-5)
     assert all(math.isnan(x) for x in mean_interval([2.0]))
     assert mean_interval([2.0, 2.0]) == (2.0, 2.0)
+
+
+def test_t_quantile_table_values_and_undefined_df():
+    assert t_quantile(0.95, 4) == pytest.approx(T975_4, abs=1e-6)
+    assert t_quantile(0.90, 4) == pytest.approx(T95_4, abs=1e-6)
+    assert t_quantile(0.95, 3) == pytest.approx(T975_3, abs=1e-6)
+    assert math.isnan(t_quantile(0.95, 0)) and math.isnan(t_quantile(0.95, math.nan))
+    # mean_interval is mean ± t_quantile · sd / sqrt(n)
+    lo, hi = mean_interval(ONE_TO_FIVE)
+    assert (hi - lo) / 2 == pytest.approx(t_quantile(0.95, 4) * math.sqrt(2.5 / 5), rel=1e-12)
 
 
 # ---------------------------------------------------------------------------------------------- Welch and TOST

@@ -15,23 +15,34 @@ helper does not pull in JAX or numba with another:
   on a terminal).
 * `jaxplan.core.export`: results as plain Python (``to_dict``) and pandas DataFrames (``to_dataframe``).
 * `jaxplan.core.xla`: compiler options for small programs stepped from Python (no XLA:CPU loop split).
+* `jaxplan.core.run_folder`: the one run folder of `run`, `tune` and `study` (lock, manifest of entries with
+  SHA-256, atomic writes, rebuild from records, sessions; `Payload`: what a unit of work returns for the folder's
+  holder to commit).
+* `jaxplan.core.markdown`: the one Markdown toolkit of the page writers (numbers, mean ± sd, intervals, tables,
+  links).
+* `jaxplan.core.deprecation`: the previous release's positional arguments for one release (`keyword_only`),
+  `warn_deprecated`.
+* `jaxplan.core.toml`: the one TOML writer (tomli-w for documents, `literal` for one inline value).
+* `jaxplan.core.executor`: where independent work units run — in this process, or as Ray tasks on a cluster
+  (Ray imported only there).
 
 Layers. Imports flow strictly downward through these layers: a module may import from its own
 package and from any lower layer, never from a higher one, and there is no import cycle::
 
     cli                                   command line
+    studies                               paper studies that are programs of their own (li2026 Fig. 7)
     tune                                  objectives and optimisers over scenario batches
     experiments                           configs, runner, statistics, reports, figures
     nav                                   two-level navigation (global plan -> DWA or MPPI episodes)
-    planning                              the front door `plan`/`planners` over every shipped planner
+    planning                              the front door `plan`/`plan_batch`/`planners` over every shipped planner
     mppi                                  the MPPI local planner (on the DWA's robot models and clearance)
-    aco, smooth, dwa                      colonies (+ TSP), path post-processing, the DWA local planner
+    aco, smoothing, dwa                   colonies (+ TSP), path post-processing, the DWA local planner
     search                                A*/Dijkstra planners, key-node A*, RRT*/MRBS-RRT*
-    registry                              the planner registry (`register_planner`, `resolve`)
+    registry                              the planner registry (`register_planner`, `resolve`, `run_planner_batch`)
     metrics                               path, run and episode metrics (numpy host twins included)
     grid                                  maps, move graph and exact distances, fields, collision geometry,
                                           generators
-    core, papers, result, scale           shared helpers, paper keys, `PlanResult`, device meshes and
+    core, papers, result, scale           shared helpers, paper keys, `PlanResult`/`BatchResult`, device meshes and
                                           memory estimates (each imports nothing from the layers above;
                                           `scale` imports only `core` from jaxplan)
 

@@ -63,8 +63,9 @@ def _pad(idx: np.ndarray, size: int) -> np.ndarray:
 def _run_plan(mw: MapWork, pc: PlannerConfig, idx: np.ndarray, seeds: tuple[int, ...], chunk: int,
               metrics: Sequence[str]) -> tuple[dict, dict, dict]:
     """Metric arrays ``[n, R]``, arrays to keep, and timings of one plan chunk (one `plan_batch` call)."""
-    from jaxplan.aco import COLONIES, plan_batch
+    from jaxplan.aco import COLONIES
     from jaxplan.metrics import path_metrics
+    from jaxplan.planning import plan_batch
 
     batched = pc.name in COLONIES
     run_idx = _pad(idx, chunk) if batched else idx  # equal shapes: one compilation per (map, planner)
@@ -78,7 +79,7 @@ def _run_plan(mw: MapWork, pc: PlannerConfig, idx: np.ndarray, seeds: tuple[int,
         P = br.paths.shape[2]
         pm = path_metrics(br.paths[:n].reshape(n * R, P, 2), mw.grid, optimal=np.repeat(mw.optimal[idx], R),
                           n=br.n_cells[:n].reshape(-1))
-        raw = {k: np.where(ok, np.asarray(pm[k], np.float64).reshape(n, R), np.nan) for k in PATH_KEYS}
+        raw = {k: np.where(ok, np.asarray(getattr(pm, k), np.float64).reshape(n, R), np.nan) for k in PATH_KEYS}
         # The device's float32 sums depend on the batch's layout, so a --chunk change moved the last bits of a
         # stored path's length; the same seed gives the same result: recompute from the integer cells.
         length = grid_path_lengths(br.paths[:n].reshape(n * R, P, 2), br.n_cells[:n].reshape(-1),

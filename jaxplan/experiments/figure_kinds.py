@@ -434,7 +434,7 @@ def _map_view(mw) -> dict:
 
 
 def _paths(run, spec):
-    from jaxplan.smooth import smooth
+    from jaxplan.smoothing import smooth
 
     mi, pi = selected(run, spec, ("plan", "navigate"))
     sc, seed, r = scenario_seed(run, spec, mi)
@@ -477,7 +477,7 @@ def _paths(run, spec):
     cap = (f"Global paths of each planner at scenario {sc}, seed {seed} (cell centres; start green circle, goal "
            "red star)")
     if smoother:
-        cap += f"; dashed: the same path after the {smoother!r} smoother (jaxplan.smooth)"
+        cap += f"; dashed: the same path after the {smoother!r} smoother (jaxplan.smoothing)"
     if "turn" in marks:
         cap += ("; purple squares: right-turn cells (chu2024's right-hand rule: opt_ant's ants entering one must "
                 "turn right; the other planners ignore it)")

@@ -21,7 +21,7 @@ Kinds (keys besides ``kind name title maps planners format``):
     sweep        ``metric`` against ``x`` (a generator parameter, e.g. ``obstacle_ratio``, or one number
                  per map): mean ± sd over seeds per planner, the paper's values as open markers
     paths        global paths over the map at (``scenario``, ``seed``) (plan and navigate planners);
-                 ``smoothing`` (a `jaxplan.smooth` smoother, e.g. "los") adds each path after it, dashed
+                 ``smoothing`` (a `jaxplan.smoothing` smoother, e.g. "los") adds each path after it, dashed
     pheromone    final pheromone per cell of each colony planner at (``scenario``, ``seed``)
     trajectories executed robot paths with the moving discs' tracks (navigate planners)
     controls     v (m/s) and omega (rad/s) against time (navigate planners), chu2024 Figs 8/11

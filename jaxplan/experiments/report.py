@@ -9,6 +9,8 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any
 
+from jaxplan.core import markdown as md
+from jaxplan.core.markdown import fmt
 from jaxplan.experiments.config import METRICS, ExperimentConfig, applies
 from jaxplan.experiments.stats import PER_CHUNK, PER_SEED, Analysis, SummaryRow, TestRow, significant, spread_note
 
@@ -18,32 +20,11 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["summary_markdown", "report_markdown", "fmt", "p_cell"]
 
 
-def fmt(x: float | None, digits: int = 4) -> str:
-    """A number for a table: 4 significant digits, ``–`` for missing."""
-    if x is None or (isinstance(x, float) and math.isnan(x)):
-        return "–"
-    if isinstance(x, float) and math.isinf(x):
-        return "∞" if x > 0 else "−∞"
-    return f"{x:.{digits}g}"
-
-
-def _pm(mean: float, sd: float) -> str:
-    return fmt(mean) if (sd is None or math.isnan(sd)) and not math.isnan(mean) else f"{fmt(mean)} ± {fmt(sd)}"
-
-
 def _range(lo: float | None, hi: float | None) -> str:
     """`` [min, max]`` for a cell, or nothing when neither is known."""
     if (lo is None or math.isnan(lo)) and (hi is None or math.isnan(hi)):
         return ""
-    return f" [{fmt(lo)}, {fmt(hi)}]"
-
-
-def _table(head: list[str], rows: list[list[str]], text: int = 1) -> str:
-    """A Markdown table; the first ``text`` columns left-aligned, numbers right-aligned."""
-    align = ["---"] * text + ["---:"] * (len(head) - text)
-    lines = ["| " + " | ".join(head) + " |", "| " + " | ".join(align) + " |"]
-    lines += ["| " + " | ".join(r) + " |" for r in rows]
-    return "\n".join(lines)
+    return f" {md.interval(lo, hi)}"
 
 
 def _label(metric: str) -> str:
@@ -68,13 +49,12 @@ def _map_table(a: Analysis, cfg: ExperimentConfig, map_: str) -> str:
         row = [pc.label]
         for m in metrics:
             r: SummaryRow | None = rows_by.get((pc.label, m))
-            row.append("n/a" if r is None else _pm(r.mean, r.sd) + (_range(r.min, r.max) if ext else ""))
+            row.append("n/a" if r is None else md.pm(r.mean, r.sd) + (_range(r.min, r.max) if ext else ""))
             if m in with_paper:
-                row.append("" if r is None or r.paper_mean is None else _pm(r.paper_mean, r.paper_sd if r.paper_sd
-                                                                            is not None else math.nan)
+                row.append("" if r is None or r.paper_mean is None else md.pm(r.paper_mean, r.paper_sd)
                            + (_range(r.paper_min, r.paper_max) if ext else ""))
         body.append(row)
-    return _table(head, body)
+    return md.table(head, body)
 
 
 def p_cell(t: TestRow, p: float, alpha: float) -> str:
@@ -92,14 +72,14 @@ def _tests_markdown(a: Analysis, cfg: ExperimentConfig) -> str:
     anova = [t for t in a.tests if t.test == "anova"]
     if anova:
         out += ["One-way ANOVA across planners:", "",
-                _table(["map", "metric", "F", "p", "groups"], text=2, rows=
+                md.table(["map", "metric", "F", "p", "groups"], text=2, rows=
                        [[t.map, t.metric, fmt(t.statistic), p_cell(t, t.p_value, alpha), str(t.n_b)]
                         for t in anova]), ""]
     pairs = [t for t in a.tests if t.test == "welch_t"]
     if pairs:
         adj = "Holm-adjusted p" if cfg.stats.correction == "holm" else "p (unadjusted)"
         out += ["Pairwise Welch t-tests:", "",
-                _table(["map", "metric", "A", "B", "t", "p", adj], text=4, rows=
+                md.table(["map", "metric", "A", "B", "t", "p", adj], text=4, rows=
                        [[t.map, t.metric, t.planner_a, t.planner_b, fmt(t.statistic), fmt(t.p_value, 3),
                          p_cell(t, t.p_adjusted, alpha)] for t in pairs]), ""]
     return "\n".join(out)

@@ -11,7 +11,10 @@ Everything else derives from these declarations:
   value for a misspelt one ("did you mean 'chunk'?"); `ConfigError` lists them all at once;
 * defaults: a section's dataclass defaults are its settings' defaults;
 * the reference page: `markdown` renders a tree of sections as tables (``docs/guide/config.md``);
-* editor support: `json_schema` renders it as a JSON Schema, draft-07 (``configs/schema/*.schema.json``).
+* editor support: `json_schema` renders it as a JSON Schema, draft-07 (``configs/schema/*.schema.json``);
+* quick runs: a quick table's settings (``[experiment.quick]``, ``[tune.quick]``, ``[study.quick]``) declare
+  which part of the resolved config each changes and how (``overlay``, one of `OVERLAYS`), and the one
+  function `overlay` applies any of them.
 
 Checks that need more than one value or a registry (a planner's overrides, files on disk, which metrics
 apply) stay in the code that reads each section and report to the same `Reader`.
@@ -27,8 +30,8 @@ Example::
     values = r.section({"n": -1, "sped": 2.0}, "obstacles", Obstacles)
     r.problems  # ["obstacles.sped: unknown key; did you mean 'speed'?", "obstacles.n: must be >= 0, got -1"]
 
-This module imports nothing from jaxplan but `jaxplan.core.names` (`did_you_mean`, the package's one
-did-you-mean, re-exported here): experiment and tuning configs both build on it.
+This module imports nothing from jaxplan but `jaxplan.core` (`did_you_mean`, the package's one did-you-mean,
+re-exported here; the Markdown toolkit and the TOML writer): experiment and tuning configs both build on it.
 """
 
 from __future__ import annotations
@@ -42,13 +45,15 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, Callable, Iterator, Mapping, Sequence
 
+from jaxplan.core import markdown as md
 from jaxplan.core.names import did_you_mean
+from jaxplan.core.toml import literal
 
 __all__ = [
     "TYPES", "UNSET", "MAX_SEED", "MAX_SEED_COUNT", "ConfigError", "Setting", "setting", "declaration", "settings",
     "setting_of",
     "extra_setting", "Reader", "check", "frozen", "describe", "did_you_mean", "join", "toml_literal", "markdown",
-    "json_schema",
+    "json_schema", "OVERLAYS", "overlay",
 ]
 
 TYPES = ("int", "float", "str", "bool", "seeds", "strings", "table", "section", "tables", "custom")
@@ -57,6 +62,14 @@ TYPES = ("int", "float", "str", "bool", "seeds", "strings", "table", "section", 
 ``strings`` a list of strings; ``table`` a free-form inline table (its keys optionally restricted);
 ``section`` a nested table and ``tables`` an array of tables, both described by another section; ``custom`` a
 value the section's own code checks (the setting gives its doc, Markdown type and JSON Schema)."""
+
+
+OVERLAYS = ("set", "merge", "cap", "keep")
+"""How a quick table's key changes the resolved config (`overlay`): ``set`` replaces the target field; ``merge``
+merges the key's table into the target mapping; ``cap`` lowers the target number to at most the value (an unset
+one takes it); ``keep`` keeps the items of the target sequence whose attribute (the path's last name) is listed.
+A TARGET path names dataclass fields with dots; ``name[]`` goes into every item of the tuple ``name``
+(``"cap maps[].scenarios.count"``, ``"keep planners[].label"``)."""
 
 
 class _Unset:
@@ -110,6 +123,8 @@ class Setting:
       nonempty: ``tables``/``strings``: at least one entry.
       json: ``custom``: its JSON Schema.
       type_text: ``custom``: its type in words.
+      overlay: a quick table's key: ``"OP"`` or ``"OP TARGET"``, how `overlay` applies its value to the
+        resolved config (OP one of `OVERLAYS`; TARGET a field path, default the key's own name).
     """
 
     type: str
@@ -132,10 +147,13 @@ class Setting:
     nonempty: bool = False
     json: Mapping[str, Any] | None = None
     type_text: str = ""
+    overlay: str | None = None
 
     def __post_init__(self) -> None:
         if self.type not in TYPES:
             raise ValueError(f"setting type must be one of {', '.join(TYPES)}, got {self.type!r}")
+        if self.overlay is not None and self.overlay.split(" ")[0] not in OVERLAYS:
+            raise ValueError(f"overlay must start with one of {', '.join(OVERLAYS)}, got {self.overlay!r}")
         if self.type in ("section", "tables") and self.section is None:
             raise ValueError(f"a {self.type!r} setting needs its section dataclass")
 
@@ -431,20 +449,84 @@ def check(s: Setting, v: Any) -> str | None:
 
 
 # ---------------------------------------------------------------------------------------------
+# Quick runs: a quick table as an overlay on the resolved config
+
+
+def _quick_value(values: Any, name: str) -> Any:
+    return values.get(name) if isinstance(values, Mapping) else getattr(values, name, None)
+
+
+def _replace_at(obj: Any, path: Sequence[str], fn: Callable[[Any, Any], Any], item: Any = None) -> Any:
+    """``obj`` with the field at ``path`` replaced by ``fn(current, item)`` (``item``: the innermost tuple entry
+    on the way, for a `overlay` ``where`` rule); ``name[]`` goes into every entry of tuple ``name``."""
+    head, rest = path[0], path[1:]
+    name = head.removesuffix("[]")
+    cur = getattr(obj, name)
+    if head.endswith("[]") and rest:
+        new = tuple(_replace_at(x, rest, fn, x) for x in cur)
+    elif rest:
+        new = _replace_at(cur, rest, fn, item)
+    else:
+        new = fn(cur, item)
+    return dataclasses.replace(obj, **{name: new})
+
+
+def overlay(obj: Any, values: Any, section: type, *,
+            where: Mapping[str, Callable[[Any, str], bool]] | None = None) -> Any:
+    """Frozen dataclass ``obj`` (a resolved config) with the quick table ``values`` applied as ``section``'s
+    settings declare (`Setting.overlay`, in declaration order). A key that is absent, None or empty changes
+    nothing.
+
+    Args:
+      obj: the resolved config (a dataclass; nested dataclasses are replaced along each target path).
+      values: the quick table as read (a mapping, or a dataclass with the keys as attributes).
+      section: the quick table's section, whose settings carry ``overlay``.
+      where: key -> rule ``(item, subkey) -> bool``: a ``merge`` into every entry of a tuple takes, per entry,
+        only the subkeys the rule admits (e.g. the overrides a planner accepts).
+
+    Returns:
+      The changed copy of ``obj`` (``obj`` itself is not changed).
+
+    Example::
+
+        @declaration
+        class Quick:
+            seeds: Any = setting("seeds", None, "the quick run's seeds", overlay="set")
+            count: int = setting("int", None, "at most this many scenarios", overlay="cap maps[].count")
+
+        overlay(cfg, {"seeds": (0, 1), "count": 2}, Quick)  # cfg with seeds (0, 1), every map's count <= 2
+    """
+    where = where or {}
+    for s in settings(section):
+        if s.overlay is None:
+            continue
+        v = _quick_value(values, s.name)
+        if v is None or (isinstance(v, (Mapping, list, tuple)) and not v):
+            continue
+        op, _, target = s.overlay.partition(" ")
+        path = (target or s.name).split(".")
+        if op == "set":
+            obj = _replace_at(obj, path, lambda cur, item, v=v: tuple(v) if isinstance(v, list) else v)
+        elif op == "cap":
+            obj = _replace_at(obj, path, lambda cur, item, v=v: v if cur is None else min(v, cur))
+        elif op == "merge":
+            rule = where.get(s.name)
+            obj = _replace_at(obj, path, lambda cur, item, v=v, rule=rule: frozen(
+                {**dict(cur), **{k: x for k, x in v.items() if rule is None or rule(item, k)}}))
+        else:  # keep
+            *seq, attr = path
+            seq[-1] = seq[-1].removesuffix("[]")  # the sequence itself, not its entries
+            obj = _replace_at(obj, seq, lambda cur, item, v=v, attr=attr: tuple(x for x in cur
+                                                                                 if getattr(x, attr) in v))
+    return obj
+
+
+# ---------------------------------------------------------------------------------------------
 # Rendering: the reference page and the JSON Schema
 
 
-def toml_literal(v: Any) -> str:
-    """``v`` as written in TOML (``true``, ``"even"``, ``[1, 2]``, ``{ a = 1 }``)."""
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(toml_literal(x) for x in v) + "]"
-    if isinstance(v, Mapping):
-        return "{ " + ", ".join(f"{k} = {toml_literal(x)}" for k, x in v.items()) + " }" if v else "{}"
-    return repr(v)
+toml_literal = literal
+"""``v`` as written in TOML (``true``, ``"even"``, ``[1, 2]``, ``{ a = 1 }``): `jaxplan.core.toml.literal`."""
 
 
 @dataclass(frozen=True)
@@ -498,18 +580,9 @@ def _tree(root: type) -> list[_Node]:
     return out
 
 
-def _slug(heading: str) -> str:
-    """The anchor GitHub gives a Markdown heading."""
-    return re.sub(r"[^a-z0-9 _-]", "", heading.lower()).replace(" ", "-")
-
-
 def _first_paragraph(cls: type) -> str:
     doc = (cls.__doc__ or "").strip().split("\n\n")[0]
     return " ".join(doc.split())
-
-
-def _cell(text: str) -> str:
-    return text.replace("|", "\\|").replace("\n", " ")
 
 
 def _md_type(s: Setting, anchors: Mapping[type, str]) -> str:
@@ -572,7 +645,7 @@ def markdown(root: type, heading: str, *, level: int = 2, anchors: Mapping[type,
     nodes = [n for n in _tree(root) if n.section not in anchors]
     for n in nodes:
         title = heading if n.path == "" else f"`{n.header}`"
-        anchors[n.section] = _slug(title)
+        anchors[n.section] = md.slug(title)
     lines = []
     for n in nodes:
         title = heading if n.path == "" else f"`{n.header}`"
@@ -585,14 +658,11 @@ def markdown(root: type, heading: str, *, level: int = 2, anchors: Mapping[type,
             intro = (intro + " " + root_header).strip()
         if intro:
             lines += [intro, ""]
-        lines += ["| key | type | default | bounds, choices | description |", "|---|---|---|---|---|"]
         rows = list(settings(n.section))
         extra = extra_setting(n.section)
-        for s in rows + ([extra] if extra is not None else []):
-            key = f"`{s.name}`" if s is not extra else f"*{s.name}*"
-            lines.append("| " + " | ".join(_cell(x) for x in (key, _md_type(s, anchors), _md_default(s),
-                                                                   _md_bounds(s), s.doc)) + " |")
-        lines.append("")
+        lines += [md.table(["key", "type", "default", "bounds, choices", "description"], [
+            [f"`{s.name}`" if s is not extra else f"*{s.name}*", _md_type(s, anchors), _md_default(s), _md_bounds(s),
+             s.doc] for s in rows + ([extra] if extra is not None else [])], text=5), ""]
     return "\n".join(lines), anchors
 
 

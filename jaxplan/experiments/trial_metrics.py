@@ -68,7 +68,7 @@ def los_metrics(grid, paths: np.ndarray, n: np.ndarray, ok: np.ndarray, fill: np
       ``{"los_length": f64[B], "los_turns": f64[B]}``.
     """
     from jaxplan.metrics import path_metrics
-    from jaxplan.smooth import smooth
+    from jaxplan.smoothing import smooth
 
     B, P = paths.shape[:2]
     valid = ok[:, None] & (np.arange(P)[None, :] < n[:, None])
@@ -76,8 +76,8 @@ def los_metrics(grid, paths: np.ndarray, n: np.ndarray, ok: np.ndarray, fill: np
     pts = np.where(valid[..., None], paths, np.asarray(fill)[:, None, :]).astype(np.float64)
     sm = smooth(pts, grid, "los", n=np.where(ok, np.maximum(n, 1), 1))
     pm = path_metrics(np.asarray(sm.points, np.float64), grid, n=np.asarray(sm.n))
-    return {"los_length": np.where(ok, np.asarray(pm["length"], np.float64), np.nan),
-            "los_turns": np.where(ok, np.asarray(pm["turns"], np.float64), np.nan)}
+    return {"los_length": np.where(ok, np.asarray(pm.length, np.float64), np.nan),
+            "los_turns": np.where(ok, np.asarray(pm.turns, np.float64), np.nan)}
 
 
 def grid_path_lengths(paths: np.ndarray, n: np.ndarray, resolution: float) -> np.ndarray:
@@ -133,8 +133,8 @@ def objective_gaps(grid, starts: np.ndarray, goals: np.ndarray, planner: str, ov
 def hausdorff(mw: MapWork, idx: np.ndarray, paths: np.ndarray, n_cells: np.ndarray) -> np.ndarray:
     """``f64[n, R]`` Hausdorff distance (m) of each trial's global path ``[n, R, P, 2]`` (cells, ``n_cells``
     valid points) to the scenario's exact A* path (deterministic; nan where a path is empty)."""
-    from jaxplan.aco import plan_batch
     from jaxplan.metrics import path_metrics
+    from jaxplan.planning import plan_batch
 
     ref = plan_batch(mw.grid, mw.starts[idx], mw.goals[idx], planner="astar", seeds=[0])
     n, R, P = paths.shape[:3]
@@ -144,7 +144,7 @@ def hausdorff(mw: MapWork, idx: np.ndarray, paths: np.ndarray, n_cells: np.ndarr
     ok = (nc > 0) & (rn > 0)
     pm = path_metrics(np.asarray(paths, np.float64).reshape(n * R, P, 2), mw.grid, reference=rp.astype(np.float64),
                       n=np.maximum(nc, 1), reference_n=np.maximum(rn, 1))
-    return np.where(ok, np.asarray(pm["hausdorff"], np.float64), np.nan).reshape(n, R)
+    return np.where(ok, np.asarray(pm.hausdorff, np.float64), np.nan).reshape(n, R)
 
 
 def executed_optimum(mw: MapWork, pc: PlannerConfig, idx: np.ndarray) -> np.ndarray:
@@ -153,11 +153,11 @@ def executed_optimum(mw: MapWork, pc: PlannerConfig, idx: np.ndarray) -> np.ndar
     smoothing the pipelines apply (clearance d_safe) — the metrics guide's "the same smoothing applied to the exact
     path".
     nan where the robot does not fit (start or goal closed, or not connected)."""
-    from jaxplan.aco import plan_batch
     from jaxplan.metrics import path_metrics
     from jaxplan.nav import planning_grid
+    from jaxplan.planning import plan_batch
     from jaxplan.search import shortest_lengths
-    from jaxplan.smooth import smooth
+    from jaxplan.smoothing import smooth
 
     d_safe = float(nav_config(pc)[0].dwa.d_safe)
     pg = planning_grid(mw.grid, d_safe)
@@ -171,7 +171,7 @@ def executed_optimum(mw: MapWork, pc: PlannerConfig, idx: np.ndarray) -> np.ndar
         ref = plan_batch(pg, s[ok], g[ok], planner="astar", seeds=[0])
         sm = smooth(np.asarray(ref.paths[:, 0], np.float64), mw.grid, "los", n=np.asarray(ref.n_cells[:, 0]),
                     radius=d_safe)
-        out[ok] = np.asarray(path_metrics(np.asarray(sm.points, np.float64), mw.grid, n=np.asarray(sm.n))["length"],
+        out[ok] = np.asarray(path_metrics(np.asarray(sm.points, np.float64), mw.grid, n=np.asarray(sm.n)).length,
                              np.float64)
     return out
 
@@ -252,5 +252,5 @@ def executed_shape(grid, positions: np.ndarray, steps: np.ndarray) -> dict[str, 
     pts, count = _resample(flat, np.asarray(steps).reshape(-1), res)
     cells = np.asarray(grid.to_local(pts), np.float64) / res - 0.5  # cell coordinates: centres at integers
     pm = path_metrics(cells, grid, n=count)
-    return {k: np.where(count >= 3 if k == "smoothness" else count >= 1, np.asarray(pm[k], np.float64),
+    return {k: np.where(count >= 3 if k == "smoothness" else count >= 1, np.asarray(getattr(pm, k), np.float64),
                         np.nan).reshape(lead) for k in ("smoothness", "mean_clearance")}

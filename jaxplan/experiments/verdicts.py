@@ -52,7 +52,8 @@ from typing import Iterable, Mapping, NamedTuple, Sequence
 import numpy as np
 from scipy import stats as sps
 
-__all__ = ["Margin", "parse_margin", "wilson_interval", "prediction_interval", "mean_interval", "welch_from_stats",
+__all__ = ["Margin", "parse_margin", "t_quantile", "wilson_interval", "prediction_interval", "mean_interval",
+           "welch_from_stats",
            "tost_from_stats", "NumberVerdict", "judge_number", "ContrastVerdict", "judge_contrast", "judge_trend",
            "count", "NUMBER_VERDICTS", "CLAIM_VERDICTS"]
 
@@ -132,6 +133,13 @@ def _check_confidence(confidence: float) -> None:
         raise ValueError(f"confidence must be in (0, 1), got {confidence!r}")
 
 
+def t_quantile(confidence: float, df: float) -> float:
+    """The two-sided Student-t quantile t_{(1+c)/2, df}: the half-width of a ``confidence`` interval in standard
+    errors. The one place the package asks scipy for it (every t interval goes through here or `mean_interval`);
+    ``df <= 0`` or NaN gives NaN (as does a confidence outside [0, 1]: callers check theirs)."""
+    return float(sps.t.ppf(0.5 + confidence / 2.0, df))
+
+
 def wilson_interval(k: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
     """Wilson score interval of a proportion k / n: (lo, hi), always inside [0, 1].
 
@@ -167,7 +175,7 @@ def _prediction_interval(values, confidence: float, runs: float) -> tuple[float,
     m, sd = _mean_sd(v)
     if sd == 0.0:
         return m, m
-    half = float(sps.t.ppf(0.5 + confidence / 2.0, v.size - 1)) * sd * math.sqrt(1.0 / runs + 1.0 / v.size)
+    half = t_quantile(confidence, v.size - 1) * sd * math.sqrt(1.0 / runs + 1.0 / v.size)
     return m - half, m + half
 
 
@@ -425,7 +433,7 @@ def _relative(effect: float, base: float) -> float:
 def _interval_from_se(effect: float, se: float, df: float, confidence: float) -> tuple[float, float]:
     if se == 0.0:
         return effect, effect
-    half = float(sps.t.ppf(0.5 + confidence / 2.0, df)) * se
+    half = t_quantile(confidence, df) * se
     return effect - half, effect + half
 
 

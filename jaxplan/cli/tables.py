@@ -41,9 +41,12 @@ def path_column(res: Any, grid: Any) -> list[str]:
     from jaxplan.metrics import path_metrics
 
     # The table shows no gap: the planner's own length as `optimal` skips a second exact search.
-    m = path_metrics(res.path, grid, optimal=res.length) if res.success else {
-        "sharp_turns": 0, "smoothness": 1.0, "min_clearance": float("nan"), "mean_clearance": float("nan")}
+    if res.success:
+        m = path_metrics(res.path, grid, optimal=res.length)
+        sharp, smoothness, low, mean = m.sharp_turns, m.smoothness, m.min_clearance, m.mean_clearance
+    else:
+        sharp, smoothness, low, mean = 0, 1.0, float("nan"), float("nan")
     return [
-        str(res.success), f"{res.length:.3f}", str(len(res.path)), str(res.turns), str(m["sharp_turns"]),
-        f"{m['smoothness']:.3f}", f"{m['min_clearance']:.3f}", f"{m['mean_clearance']:.3f}", f"{res.time_s * 1e3:.2f}",
+        str(res.success), f"{res.length:.3f}", str(len(res.path)), str(res.turns), str(sharp), f"{smoothness:.3f}",
+        f"{low:.3f}", f"{mean:.3f}", f"{res.time_s * 1e3:.2f}",
     ]

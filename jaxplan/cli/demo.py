@@ -36,9 +36,9 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from jaxplan.cli.tables import text_table
 from jaxplan.core.progress import ProgressBar
 from jaxplan.experiments import plots
-from jaxplan.experiments.tables import text_table
 
 __all__ = ["DemoResult", "run_demo", "demo_table", "animate_episodes", "ROWS", "PIPELINES"]
 
