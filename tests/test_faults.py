@@ -460,7 +460,7 @@ if what == "navigate":
     free = np.argwhere(np.asarray(grid.free))[:, ::-1]
     idx = np.random.default_rng(0).choice(len(free), (16, 2))
     cfg = NavConfig(max_time=60.0)
-    out = [peak(lambda: navigate_batch(grid, free[idx[:, 0]], free[idx[:, 1]], "astar_kng_dwa", seeds=range(4),
+    out = [peak(lambda: navigate_batch(grid, free[idx[:, 0]], free[idx[:, 1]], pipeline="astar_kng_dwa", seeds=range(4),
                                        config=cfg, mesh=None)),
            episode_memory(64, cfg.steps, cfg.dwa.samples, rollout_steps=cfg.dwa.steps, map_cells=grid.n_cells).total]
 else:
@@ -736,9 +736,9 @@ def test_a_truncated_tuning_checkpoint_falls_back_to_the_intact_one_before(tmp_p
     capsys.readouterr()
     res = tune_loop(obj, make_strategy("cma_es", 8, 6), 6, tmp_path / "a", checkpoint_every=2, progress=False)
     err = capsys.readouterr().err
-    assert res["resumed_from"] == 4  # generations 5 and 6 recomputed from the intact checkpoint of 4
+    assert res.resumed_from == 4  # generations 5 and 6 recomputed from the intact checkpoint of 4
     assert (tmp_path / "a" / "generations.csv").read_bytes() == (tmp_path / "ref" / "generations.csv").read_bytes()
-    assert (res["best_x"] == ref["best_x"]).all()
+    assert (res.best_x == ref.best_x).all()
     _record("tune-checkpoint", "-", err.strip().splitlines()[0])
 
 

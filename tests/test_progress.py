@@ -184,7 +184,7 @@ def test_plan_batch_with_progress_gives_the_same_results(monkeypatch):
 
 
 def test_tune_bar_counts_generations(monkeypatch):
-    from jaxplan.tune._workflow import _Progress
+    from jaxplan.tune._loop import _Progress
 
     stream = TTY()
     monkeypatch.setattr(sys, "stderr", stream)

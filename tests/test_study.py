@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import json
+import shutil
 
 import jax
 import jax.numpy as jnp
@@ -151,7 +152,7 @@ def test_own_objective_path_costs_match_exact_search():
 
 @pytest.mark.slow  # ~1 min on 2 shared cores: three studies of a tiny colony (one compilation each) and one run
 def test_study_log_budget_best_toml_and_resume(tmp_path, monkeypatch):
-    import jaxplan.tune._study as study
+    import jaxplan.tune.study.run as study
     from jaxplan.experiments.config import load_config
 
     cfg = _write(tmp_path)
@@ -182,9 +183,25 @@ def test_study_log_budget_best_toml_and_resume(tmp_path, monkeypatch):
     # same seeds: the same log (wall times aside)
     b = run_study(cfg, out=tmp_path / "b", progress=False)
     assert _log(b) == rows
+    man = json.loads((b / "checkpoints" / "manifest.json").read_text())
+    assert sorted(man["runs"]) == ["cma_es-s0", "cma_es-s1", "grid-s0", "random-s0", "random-s1"]
+
+    # the committed runs are read back (checked against their SHA-256), not run again
+    real = study.tune_loop
+
+    def never(*args, **kw):
+        raise AssertionError("a committed run ran again")
+
+    monkeypatch.setattr(study, "tune_loop", never)
+    assert _log(run_study(cfg, out=tmp_path / "b", progress=False)) == rows
+    monkeypatch.setattr(study, "tune_loop", real)
+
+    # a folder of an earlier version (no commit log: its runs are in runs/ alone) resumes from those runs
+    shutil.rmtree(b / "checkpoints")
+    assert _log(run_study(cfg, out=tmp_path / "b", progress=False)) == rows
+    assert len(json.loads((b / "sessions.json").read_text())) == 3
 
     # interrupted after the first generation of the second run, then resumed: the same log
-    real = study.tune_loop
     calls = {"n": 0}
 
     def interrupted(*args, callback=None, **kw):
@@ -220,7 +237,7 @@ def test_study_log_budget_best_toml_and_resume(tmp_path, monkeypatch):
 
     def finished(*args, **kw):
         res = real(*args, **kw)
-        assert res["resumed_from"] == args[2]  # every generation was done by a worker
+        assert res.resumed_from == args[2]  # every generation was done by a worker
         return res
 
     monkeypatch.setattr(study._HeldOut, "scores", counted_scores)

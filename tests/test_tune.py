@@ -272,13 +272,14 @@ def test_killed_and_resumed_run_follows_the_uninterrupted_trajectory(name, box, 
         tune_loop(obj, strategy, 7, tmp_path / "cut", seed=3, checkpoint_every=2, progress=False,
                   callback=kill)
     man = json.loads((tmp_path / "cut" / "checkpoints" / "manifest.json").read_text())
-    assert man["generation"] == 4  # the last checkpoint before the kill
+    # the last two checkpoints before the kill
+    assert sorted(e["generation"] for e in man["generations"].values()) == [2, 4]
     resumed = tune_loop(obj, strategy, 7, tmp_path / "cut", seed=3, checkpoint_every=2,
                         progress=False)
-    assert resumed["resumed_from"] == 4
-    assert resumed["rows"] == full["rows"]
-    np.testing.assert_array_equal(resumed["best_x"], full["best_x"])
-    for a, b in zip(jax.tree_util.tree_leaves(resumed["state"]), jax.tree_util.tree_leaves(full["state"]), strict=True):
+    assert resumed.resumed_from == 4
+    assert resumed.rows == full.rows
+    np.testing.assert_array_equal(resumed.best_x, full.best_x)
+    for a, b in zip(jax.tree_util.tree_leaves(resumed.state), jax.tree_util.tree_leaves(full.state), strict=True):
         a, b = jnp.asarray(a), jnp.asarray(b)
         if jnp.issubdtype(a.dtype, jax.dtypes.prng_key):
             a, b = jax.random.key_data(a), jax.random.key_data(b)
@@ -286,11 +287,81 @@ def test_killed_and_resumed_run_follows_the_uninterrupted_trajectory(name, box, 
     assert (tmp_path / "cut" / "generations.csv").read_bytes() == (tmp_path / "full" / "generations.csv").read_bytes()
 
 
+def _as_earlier_folder(run_dir) -> None:
+    """Rewrites a tuning folder as jaxplan before the one run folder left it: the manifest held the fingerprint, the
+    last checkpointed generation, the rows, the timing lines and, per kept checkpoint, the SHA-256 of its state's
+    leaves (names, dtypes, shapes and bytes); the states themselves were already in checkpoints/gen_NNNNN/."""
+    import hashlib
+    import shutil
+
+    import orbax.checkpoint as ocp
+
+    ck = run_dir / "checkpoints"
+    man = json.loads((ck / "manifest.json").read_text())
+    entries = man["generations"]
+    last = max(e["generation"] for e in entries.values())
+    digests = {}
+    for name, e in entries.items():
+        data = ocp.PyTreeCheckpointer().restore((ck / name).resolve())
+        h = hashlib.sha256()
+        for k in sorted(data):
+            a = np.ascontiguousarray(np.asarray(data[k]))
+            h.update(f"{k}|{a.dtype.str}|{a.shape}|".encode())
+            h.update(a.tobytes())
+        digests[str(e["generation"])] = h.hexdigest()
+    lines = (ck / "generations" / f"gen_{last:05d}.csv").read_text().splitlines()
+    cols = lines[0].split(",")
+    rows = [{c: int(v) if c in ("generation", "evaluations", "n_bad") else float(v)
+             for c, v in zip(cols, ln.split(","), strict=True)} for ln in lines[1:]]
+    old = {"fingerprint": man["fingerprint"], "generation": last, "rows": rows,
+           "times": entries[f"gen_{last:05d}"]["times"], "digests": digests}
+    shutil.rmtree(ck / "generations")
+    (ck / "manifest.json").write_text(json.dumps(old, indent=1))
+
+
+@pytest.mark.parametrize("damaged", [False, True])
+def test_a_tuning_folder_of_an_earlier_version_resumes_exactly(box, tmp_path, capsys, damaged):
+    obj = function_objective(toy, box, train_seeds=(0, 1), test_seeds=(5,))
+    strategy = make_strategy("cma_es", 8, 7)
+    full = tune_loop(obj, strategy, 7, tmp_path / "full", seed=3, checkpoint_every=2, progress=False)
+
+    def kill(g, row):
+        if g == 5:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        tune_loop(obj, strategy, 7, tmp_path / "old", seed=3, checkpoint_every=2, progress=False, callback=kill)
+    _as_earlier_folder(tmp_path / "old")
+    if damaged:  # the newest state changed: its digest fails, the one before is used
+        for p in (tmp_path / "old" / "checkpoints" / "gen_00004").rglob("*"):
+            if p.is_file() and p.stat().st_size > 64:
+                p.write_bytes(p.read_bytes()[:-8] + b"\0" * 8)
+    capsys.readouterr()
+    res = tune_loop(obj, strategy, 7, tmp_path / "old", seed=3, checkpoint_every=2, progress=False)
+    err = capsys.readouterr().err
+    assert res.resumed_from == (2 if damaged else 4)
+    assert f"converted {1 if damaged else 2} checkpoint" in err and "of an earlier jaxplan" in err
+    assert res.rows == full.rows
+    assert (tmp_path / "old" / "generations.csv").read_bytes() == (tmp_path / "full" / "generations.csv").read_bytes()
+    man = json.loads((tmp_path / "old" / "checkpoints" / "manifest.json").read_text())
+    assert man["version"] == 1 and sorted(man["generations"]) == ["gen_00006", "gen_00007"]
+
+
+def test_an_earlier_versions_folder_of_another_run_is_refused(box, tmp_path):
+    obj = function_objective(toy, box)
+    tune_loop(obj, make_strategy("random", 4, 2), 2, tmp_path / "r", progress=False)
+    _as_earlier_folder(tmp_path / "r")
+    from jaxplan.experiments import RunFolderError
+
+    with pytest.raises(RunFolderError, match="different tuning run"):
+        tune_loop(obj, make_strategy("random", 4, 2), 2, tmp_path / "r", seed=1, progress=False)
+
+
 def test_nan_objectives_are_counted_and_never_crash(box, tmp_path):
     obj = function_objective(lambda x, s: jnp.where(x[0] > 1.5, jnp.nan, jnp.sum((x - C) ** 2)), box)
     res = tune_loop(obj, make_strategy("random", 16, 4), 4, tmp_path / "nan", progress=False)
-    assert res["n_bad"] > 0 and res["n_bad"] == sum(r["n_bad"] for r in res["rows"])
-    assert np.isfinite(res["best_f"]) and res["best_x"][0] <= 1.5
+    assert res.n_bad > 0 and res.n_bad == sum(r["n_bad"] for r in res.rows)
+    assert np.isfinite(res.best_f) and res.best_x[0] <= 1.5
     assert "n_bad" in (tmp_path / "nan" / "generations.csv").read_text().splitlines()[0]
 
 
@@ -356,6 +427,7 @@ def test_best_toml_of_a_quick_run_keeps_the_configs_own_settings(tmp_path, monke
     to run with: the tuned weights and the config's own ants = 4, iterations = 2, and a comment saying so. The
     search itself is replaced by a stub (the workflow around it is what is tested)."""
     import jaxplan.tune._workflow as wf
+    from jaxplan.tune import TuneResult
 
     seen = {}
     build = wf.build_objective
@@ -366,7 +438,7 @@ def test_best_toml_of_a_quick_run_keeps_the_configs_own_settings(tmp_path, monke
 
     def search(objective, strategy, generations, run_dir, **kw):
         x = np.asarray(objective.defaults, np.float32)
-        return {"best_x": x, "best_f": 0.5, "evaluations": 2, "resumed_from": 0, "n_bad": 0, "rows": []}
+        return TuneResult(state=None, rows=[], best_x=x, best_f=0.5, n_bad=0, evaluations=2, resumed_from=0)
 
     side = {"objective": 0.5, "seed_sd": 0.1}
     monkeypatch.setattr(wf, "build_objective", built)
@@ -440,7 +512,7 @@ def test_a_weight_vector_with_nan_costs_inf_and_is_never_best(box, tmp_path):
             return jnp.full((4, 3), jnp.nan)
 
     res = tune_loop(obj, Nan(), 2, tmp_path / "nan", progress=False, x0=None)
-    assert res["n_bad"] == 8 and np.all(np.isfinite(res["best_x"]))
+    assert res.n_bad == 8 and np.all(np.isfinite(res.best_x))
 
 
 @pytest.mark.parametrize("quick, shared", [
@@ -454,17 +526,40 @@ def test_quick_test_seeds_must_not_meet_the_quick_train_seeds(quick, shared):
         parse_tune_config(text)
 
 
-def test_apply_tune_quick_checks_the_seeds_of_a_config_built_in_code():
+def test_the_quick_overlay_checks_the_seeds_of_a_config_built_in_code():
     import dataclasses
 
-    from jaxplan.tune import apply_tune_quick
+    from jaxplan.tune import quick_tune_config
 
-    cfg = parse_tune_config(CONFIG.replace("[tune.space]", "[tune.quick]\ntrain_seeds = [3]\n[tune.space]"))
-    q = apply_tune_quick(cfg)
-    assert q.train_seeds == (3,) and q.test_seeds == (1000,)
+    text = CONFIG.replace("[tune.space]", "[tune.quick]\ntrain_seeds = [3]\ngenerations = 1\n[tune.space]")
+    cfg = parse_tune_config(text)
+    q = quick_tune_config(cfg)
+    assert q.train_seeds == (3,) and q.test_seeds == (1000,) and q.generations == 1 and q.is_quick
+    assert parse_tune_config(text, quick=True) == q
+    assert not cfg.is_quick and cfg.generations != 1
     bad = dataclasses.replace(cfg, quick={**cfg.quick, "test_seeds": (3,)})
     with pytest.raises(ConfigError, match="must not share seeds"):
-        apply_tune_quick(bad)
+        quick_tune_config(bad)
+
+
+def test_apply_tune_quick_still_works_and_warns():
+    from jaxplan.tune import apply_tune_quick, quick_tune_config
+
+    cfg = parse_tune_config(CONFIG.replace("[tune.space]", "[tune.quick]\ntrain_seeds = [3]\n[tune.space]"))
+    with pytest.warns(DeprecationWarning, match="quick=True"):
+        q = apply_tune_quick(cfg)
+    assert q == quick_tune_config(cfg)
+
+
+def test_tune_result_is_typed_and_its_mapping_access_warns(box, tmp_path):
+    res = tune_loop(function_objective(toy, box), make_strategy("random", 4, 2), 2, tmp_path / "r", progress=False)
+    assert res.evaluations == 8 and res.resumed_from == 0 and len(res.rows) == 2
+    with pytest.warns(DeprecationWarning, match="use its attributes"):
+        assert res["rows"] is res.rows
+    with pytest.warns(DeprecationWarning):
+        assert set(res.keys()) == {"state", "rows", "best_x", "best_f", "n_bad", "evaluations", "resumed_from"}
+    with pytest.warns(DeprecationWarning), pytest.raises(KeyError):
+        res["nope"]
 
 
 def test_one_test_seed_has_no_spread(box):
@@ -479,8 +574,8 @@ def test_one_test_seed_has_no_spread(box):
 def test_a_missing_spread_reads_as_a_dash_and_null_in_json():
     import math
 
-    from jaxplan.tune._workflow import _json_safe, _sd_text
+    from jaxplan.tune._workflow import _sd_text, json_safe
 
     assert _sd_text(math.nan) == "–" and _sd_text(0.25) == "0.25"
-    assert json.loads(json.dumps(_json_safe({"a": [math.nan, 1.0], "b": math.inf}), allow_nan=False)) == {
+    assert json.loads(json.dumps(json_safe({"a": [math.nan, 1.0], "b": math.inf}), allow_nan=False)) == {
         "a": [None, 1.0], "b": None}

@@ -175,11 +175,11 @@ def test_bad_nav_config_values_raise_clearly(edit, match):
 def test_a_navigation_study_is_one_objective_over_every_map():
     """`jaxplan study` on a ``kind = "nav"`` config: one navigation objective over all maps (not a join that would
     run the first map's episodes only), with the pipeline's default params kept through the study's renaming."""
-    from jaxplan.tune import apply_study_quick, build_study_objective, parse_study_config
+    from jaxplan.tune import build_study_objective, parse_study_config
 
     root = Path(__file__).resolve().parents[1]
     text = (root / "configs" / "study_local_mppi.toml").read_text()
-    cfg = apply_study_quick(parse_study_config(text, data_dir=DATA.parent))
+    cfg = parse_study_config(text, data_dir=DATA.parent, quick=True)
     obj = build_study_objective(cfg)
     assert obj.name == "study_local_mppi" and obj.kind == "nav"
     assert [m.name for m in obj.maps] == ["maze-32-32-2", "random-32-32-20", "room-64-64-8"]

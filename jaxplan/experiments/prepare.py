@@ -9,14 +9,13 @@ planners on maps, tsp planners on instances. Chunks run in a fixed order (map, p
 scenarios), so the trials file has rows ordered by (map, planner, scenario, seed).
 
 `fingerprint` hashes everything that shapes the trials (seeds, chunk size, maps and their files'
-SHA-256, scenarios, planners, metrics): the checkpoint store (`jaxplan.experiments.store`)
+SHA-256, scenarios, planners, metrics): the run folder (`jaxplan.experiments.store`)
 refuses a run folder written by a different experiment.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import json
 import math
 from dataclasses import dataclass
@@ -25,6 +24,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from jaxplan.core.run_folder import sha256
 from jaxplan.experiments.config import METRICS, ConfigError, ExperimentConfig, MapSpec, applies
 from jaxplan.scale import check_memory, table_memory
 
@@ -86,14 +86,6 @@ class Prepared:
     @property
     def trials(self) -> int:
         return sum((u.hi - u.lo) * len(self.config.seeds) for u in self.units)
-
-
-def sha256(*chunks: bytes) -> str:
-    """Hex SHA-256 of the concatenated byte strings."""
-    h = hashlib.sha256()
-    for c in chunks:
-        h.update(c)
-    return h.hexdigest()
 
 
 def load_map_spec(spec: MapSpec):

@@ -45,16 +45,17 @@ import os
 import sys
 from pathlib import Path
 
-from jaxplan.core.io import atomic_write, confined, folder_lock
+from jaxplan.core.io import atomic_write, confined
+from jaxplan.core.run_folder import Payload, RunFolder
 from jaxplan.experiments import report, stats
 from jaxplan.experiments.budget import check_experiment
 from jaxplan.experiments.config import ConfigError, ExperimentConfig, apply_quick, load_config
 from jaxplan.experiments.execute import run_unit
-from jaxplan.experiments.prepare import Prepared, fingerprint, prepare, trial_columns
+from jaxplan.experiments.prepare import Prepared, Unit, fingerprint, prepare, trial_columns
 from jaxplan.experiments.progress import Progress
-from jaxplan.experiments.store import CheckpointError, Store, write_meta
+from jaxplan.experiments.store import RUN_LAYOUT, CheckpointError, write_meta
 
-__all__ = ["run_experiment", "resolve_config"]
+__all__ = ["run_experiment", "resolve_config", "chunk_payload"]
 
 
 def resolve_config(config: ExperimentConfig | str | os.PathLike, *, quick: bool = False,
@@ -74,18 +75,29 @@ def resolve_config(config: ExperimentConfig | str | os.PathLike, *, quick: bool 
     return cfg
 
 
-def _note(cfg: ExperimentConfig, store: Store, seen: int) -> int:
-    """Prints the store's notes from ``seen`` on (always: they concern the data, not the progress)."""
+def _note(cfg: ExperimentConfig, store: RunFolder, seen: int) -> int:
+    """Prints the run folder's notes from ``seen`` on (always: they concern the data, not the progress)."""
     for line in store.notes[seen:]:
         print(f"{cfg.name}: {line}", file=sys.stderr, flush=True)
     return len(store.notes)
 
 
-def _run_chunks(prep: Prepared, store: Store, progress: bool, stop_after: int | None) -> bool:
-    """Computes and commits every chunk the store lacks, in run order; False if ``stop_after`` cut it short."""
+def chunk_payload(prep: Prepared, u: Unit) -> Payload:
+    """Chunk ``u`` computed (`jaxplan.experiments.execute.run_unit`) as what the run folder commits: its rows of
+    CSV text, its arrays, and its manifest fields (map, planner, kind, scenario range, trials, timings). A pure
+    function of the work plan and the unit: it may run in another process, the run folder's writer commits it."""
+    cfg = prep.config
+    text, arrays, timing = run_unit(prep, u)
+    info = {"map": prep.maps[u.m].spec.name, "planner": cfg.planners[u.p].label, "kind": cfg.planners[u.p].kind,
+            "scenarios": [u.lo, u.hi], "trials": (u.hi - u.lo) * len(cfg.seeds), **timing}
+    return Payload(text.encode(), arrays, info)
+
+
+def _run_chunks(prep: Prepared, store: RunFolder, progress: bool, stop_after: int | None) -> bool:
+    """Computes and commits every chunk the run folder lacks, in run order; False if ``stop_after`` cut it short."""
     cfg = prep.config
     R = len(cfg.seeds)
-    done_units = [u for u in prep.units if store.done(u)]
+    done_units = [u for u in prep.units if store.done(u.uid)]
     done = sum((u.hi - u.lo) * R for u in done_units)
     bar = Progress(cfg.name, prep.trials, done, len(prep.units), progress)
     if progress and done_units:
@@ -93,29 +105,27 @@ def _run_chunks(prep: Prepared, store: Store, progress: bool, stop_after: int | 
     computed = 0
     try:
         for u in prep.units:
-            if store.done(u):
+            if store.done(u.uid):
                 continue
             if stop_after is not None and computed >= stop_after:
                 return False
-            bar.start(u.index + 1, f"{prep.maps[u.m].spec.name}/{cfg.planners[u.p].label}")
-            text, arrays, timing = run_unit(prep, u)
-            info = {"map": prep.maps[u.m].spec.name, "planner": cfg.planners[u.p].label,
-                    "kind": cfg.planners[u.p].kind, "scenarios": [u.lo, u.hi], "trials": (u.hi - u.lo) * R}
-            store.commit(u, info, text, arrays, timing)
+            label = f"{prep.maps[u.m].spec.name}/{cfg.planners[u.p].label}"
+            bar.start(u.index + 1, label)
+            store.commit(u.uid, chunk_payload(prep, u))
             computed += 1
             done += (u.hi - u.lo) * R
-            bar.update(done, u.index + 1, f"{info['map']}/{info['planner']}")
+            bar.update(done, u.index + 1, label)
     finally:
         bar.close()
     return True
 
 
-def _write_results(run_dir: Path, prep: Prepared, store: Store, trials: bytes) -> None:
+def _write_results(run_dir: Path, prep: Prepared, store: RunFolder, trials: bytes) -> None:
     """trials.csv (``trials``: header + the checked chunk files in run order), timings, summaries, significance
     tests and reports."""
     cfg = prep.config
     atomic_write(run_dir / "trials.csv", trials)
-    timings = [{"uid": u.uid, **store.manifest["chunks"][u.uid]} for u in prep.units]
+    timings = [{"uid": u.uid, **store.entries[u.uid]} for u in prep.units]
     stats.write_timings(run_dir / "timings.csv", timings)
     result = stats.analyse(run_dir / "trials.csv", run_dir / "timings.csv", cfg)
     stats.write_summary(run_dir / "summary.csv", result)
@@ -135,7 +145,7 @@ def run_experiment(config: ExperimentConfig | str | os.PathLike, out_dir: str | 
 
     Before any work the config is validated in full and the memory of every chunk and of the trials is
     checked (`jaxplan.experiments.budget`); the run folder is then locked against a second process
-    (`jaxplan.core.io.folder_lock`). On resume every committed chunk is checked against its SHA-256 and a
+    (`jaxplan.core.run_folder.RunFolder`). On resume every committed chunk is checked against its SHA-256 and a
     chunk that fails is recomputed; a damaged manifest is rebuilt from the intact chunks
     (`jaxplan.experiments.store`). What was found is printed on stderr.
 
@@ -162,19 +172,17 @@ def run_experiment(config: ExperimentConfig | str | os.PathLike, out_dir: str | 
     prep = prepare(cfg)
     check_experiment(prep)
     run_dir = confined(out_dir, cfg.name + ("-quick" if cfg.is_quick else ""))
-    run_dir.mkdir(parents=True, exist_ok=True)
-    with folder_lock(run_dir):
-        store = Store(run_dir, fingerprint(prep))
-        store.verify(prep.units)
+    with RunFolder.open(run_dir, fingerprint(prep), RUN_LAYOUT) as store:
+        store.verify([u.uid for u in prep.units])
         seen = _note(cfg, store, 0)
         started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
-        atomic_write(run_dir / "config.toml", cfg.text.encode())
+        store.write("config.toml", cfg.text.encode())
         write_meta(run_dir, cfg, store.session, started)
         header = ",".join(trial_columns(cfg)) + "\n"
         for _ in range(_MERGE_ATTEMPTS):
             if not _run_chunks(prep, store, progress, stop_after):
                 return run_dir
-            trials = store.merged(prep.units, header)
+            trials = store.merged([u.uid for u in prep.units], header.encode())
             seen = _note(cfg, store, seen)
             if trials is not None:
                 break

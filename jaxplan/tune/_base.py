@@ -58,7 +58,8 @@ def sanitize(fitness: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:
     return jnp.where(ok, fitness, worst), jnp.sum(~ok).astype(jnp.int32)
 
 
-def track_best(best_x, best_f, pop, fitness):
+def track_best(best_x: jnp.ndarray, best_f: jnp.ndarray, pop: jnp.ndarray,
+               fitness: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:
     """The new ``(best_x, best_f)`` after a generation ``pop f32[P, D]`` with sanitised ``fitness f32[P]``."""
     i = jnp.argmin(fitness)
     # a point with a NaN coordinate is never the best, even when sanitize gave every member the same worst value
@@ -71,12 +72,12 @@ def box(bounds: Bounds) -> tuple[jnp.ndarray, jnp.ndarray]:
     return jnp.asarray(bounds.low, jnp.float32), jnp.asarray(bounds.high, jnp.float32)
 
 
-def unit_of(state, x):
+def unit_of(state: Any, x: jnp.ndarray) -> jnp.ndarray:
     """Box points ``x`` of a state with ``low``/``high`` -> unit-cube coordinates."""
     return (x - state.low) / (state.high - state.low)
 
 
-def box_of(state, z):
+def box_of(state: Any, z: jnp.ndarray) -> jnp.ndarray:
     """Unit-cube points ``z`` -> box points of a state with ``low``/``high``."""
     return state.low + z * (state.high - state.low)
 

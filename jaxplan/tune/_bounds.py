@@ -20,6 +20,7 @@ from typing import Mapping, NamedTuple, Sequence
 
 import jax.numpy as jnp
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = ["Bounds", "make_bounds", "to_unit", "from_unit", "reflect", "clip"]
 
@@ -40,7 +41,7 @@ class Bounds(NamedTuple):
     def dim(self) -> int:
         return len(self.names)
 
-    def contains(self, x) -> np.ndarray:
+    def contains(self, x: ArrayLike) -> np.ndarray:
         """``bool[...]``: every coordinate of ``x [..., D]`` lies in the box."""
         x = np.asarray(x)
         return np.all((x >= self.low) & (x <= self.high), axis=-1)

@@ -18,14 +18,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
 from jaxplan.scale import MemoryEstimate
-from jaxplan.tune._objective import FAIL_GAP, Objective, Split, _scatter, _slots, aco_objective
+from jaxplan.tune._objective import FAIL_GAP, Objective, Split, aco_objective, aco_runs, aco_setup
+
+if TYPE_CHECKING:
+    from jaxplan.grid import GridMap
 
 __all__ = ["aco_own_objective", "concat_objectives", "path_costs", "check_disjoint"]
 
@@ -62,7 +64,7 @@ def path_costs(cells: jnp.ndarray, n: jnp.ndarray, width: int, resolution: float
     return w_len * length + w_angle * angle + w_turn * turns + cell
 
 
-def aco_own_objective(grid, train: Split, test: Split, planner: str = "iaco", space: Mapping | None = None,
+def aco_own_objective(grid: GridMap, train: Split, test: Split, planner: str = "iaco", space: Mapping | None = None,
                       weights: Mapping[str, float] | None = None, overrides: Mapping[str, Any] | None = None,
                       name: str | None = None) -> Objective:
     """`aco_objective` with ``gap`` = the gap to the planner's own optimum at its default weights (module docstring).
@@ -73,24 +75,16 @@ def aco_own_objective(grid, train: Split, test: Split, planner: str = "iaco", sp
     Raises:
       ValueError: as `aco_objective`; a scenario whose own optimum is not finite and positive.
     """
-    from jaxplan.aco import COLONIES, cached_map_tables, goal_tables, run_batch, seed_keys, split_params
-    from jaxplan.grid import collision_map
-    from jaxplan.metrics import clearance_metrics, geometry_metrics
-    from jaxplan.registry import resolve
+    from jaxplan.aco import goal_tables, seed_keys
     from jaxplan.search import exact_objectives, objective_terms
 
     base_obj = aco_objective(grid, train, test, planner, space, weights, overrides, name=name)
-    _, p = resolve(planner, dict(overrides or {}))
-    cfg, base, connectivity, vh = split_params(grid, p)
-    slots = _slots(base_obj.bounds)
-    colony = COLONIES[planner]
-    tables = cached_map_tables(grid, connectivity, vh)
-    cmap = collision_map(grid)
-    W, res = grid.width, float(grid.resolution)
+    setup = aco_setup(grid, planner, base_obj.bounds, overrides)
+    W, res = setup.width, setup.resolution
     prepared = {}
     for split_name, sp in (("train", train), ("test", test)):
         s, g = np.asarray(sp.starts), np.asarray(sp.goals)
-        gt = goal_tables(grid, s, g, connectivity, vh, geodesic=cfg.heuristic == "geodesic")
+        gt = goal_tables(grid, s, g, setup.connectivity, setup.vh, geodesic=setup.cfg.heuristic == "geodesic")
         terms = objective_terms(grid, s, g, planner, **dict(overrides or {}))
         own = exact_objectives(grid, s, g, planner, **dict(overrides or {}))
         if not np.all(np.isfinite(own) & (own > 0)):
@@ -106,20 +100,10 @@ def aco_own_objective(grid, train: Split, test: Split, planner: str = "iaco", sp
         gt, keys, optimal, own, w_len, w_angle, w_turn, cell_cost = prepared[split_name]
 
         def run(pop):
-            out = jax.vmap(lambda x: run_batch(colony, cfg, tables, gt, _scatter(base, slots, x), keys))(pop)
+            out, shared = aco_runs(setup, gt, keys, pop)
             ok = out.success
-            path = jnp.stack([out.cells % W, out.cells // W], axis=-1)  # [P, N, R, L + 1, 2]
-            npts = out.n + 1
-            geo = geometry_metrics(path, npts, res)
-            _, mean_c = clearance_metrics(cmap, path, npts)
             cost = path_costs(out.cells, out.n, W, res, w_len[None, :, None], w_angle, w_turn, cell_cost)
-            metrics = {
-                "gap": jnp.where(ok, cost / own[None, :, None] - 1.0, FAIL_GAP),
-                "failure": 1.0 - ok.astype(jnp.float32),
-                "turns": jnp.where(ok, geo["turns"].astype(jnp.float32), 0.0),
-                "roughness": jnp.where(ok, 1.0 - geo["smoothness"], 0.0),
-                "clearance": jnp.where(ok, 1.0 / jnp.maximum(mean_c, 1e-3), 0.0),
-            }
+            metrics = {"gap": jnp.where(ok, cost / own[None, :, None] - 1.0, FAIL_GAP), **shared}
             total = sum(w * metrics[k] for k, w in mw.items())
             metrics["length_gap"] = jnp.where(ok, out.length / optimal[None, :, None] - 1.0, FAIL_GAP)
             return total, metrics

@@ -5,7 +5,8 @@ The schema is declared once, below, as `jaxplan.experiments.schema` settings: `T
 ``[scenarios]`` are those of experiment configs (`jaxplan.experiments.config.MapTable`, `ScenarioSpec`).
 The reference page ``docs/guide/config.md`` and the editors' JSON Schema
 ``configs/schema/tune.schema.json`` are generated from them (``python -m jaxplan.config_reference``);
-``configs/tune_*.toml`` are complete examples.
+``configs/tune_*.toml`` are complete examples. ``[tune.quick]`` is an overlay on the resolved config, declared
+on `TuneQuickTable`'s settings (`jaxplan.experiments.schema.overlay`): ``parse_tune_config(..., quick=True)``.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping
 
+from jaxplan.core.deprecation import warn_deprecated
 from jaxplan.experiments.config import (
     RUN_NAME,
     MapSpec,
@@ -28,10 +30,19 @@ from jaxplan.experiments.config import (
     read_config_text,
     read_maps,
 )
-from jaxplan.experiments.schema import ConfigError, Reader, Setting, declaration, frozen, setting, setting_of
+from jaxplan.experiments.schema import (
+    ConfigError,
+    Reader,
+    Setting,
+    declaration,
+    frozen,
+    overlay,
+    setting,
+    setting_of,
+)
 
 __all__ = ["TuneConfig", "load_tune_config", "parse_tune_config", "apply_tune_quick", "KINDS", "TuneFile",
-           "TuneTable", "TuneQuickTable"]
+           "TuneTable", "TuneQuickTable", "read_toml", "quick_tune_config"]
 
 KINDS = ("aco", "dwa", "mppi", "nav")
 _DWA_PLANNERS = ("weighted", "fuzzy")
@@ -79,15 +90,16 @@ class TuneQuickTable:
     """What ``quick=True`` (``jaxplan tune --quick``) changes: a smoke run in the run folder NAME-quick (every key
     optional)."""
 
-    population: int = setting("int", None, "weight vectors per generation", ge=2)
-    generations: int = setting("int", None, "generations", ge=1)
-    train_count: int = setting("int", None, "training scenarios", ge=1)
-    test_count: int = setting("int", None, "at most this many test scenarios", ge=1)
-    train_seeds: Any = setting("seeds", None, "training seeds: a count or a list")
+    population: int = setting("int", None, "weight vectors per generation", ge=2, overlay="set")
+    generations: int = setting("int", None, "generations", ge=1, overlay="set")
+    train_count: int = setting("int", None, "training scenarios", ge=1, overlay="set")
+    test_count: int = setting("int", None, "at most this many test scenarios", ge=1, overlay="set")
+    train_seeds: Any = setting("seeds", None, "training seeds: a count or a list", overlay="set")
     test_seeds: Any = setting("seeds", None, "test seeds: a count or a list",
-                              default_text="1000.. as many as the quick train_seeds, if those are given")
-    overrides: Mapping[str, Any] = setting("table", doc="merged over [tune] overrides")
-    max_time: float = setting("float", None, "dwa: episode length (s)", gt=0)
+                              default_text="1000.. as many as the quick train_seeds, if those are given",
+                              overlay="set")
+    overrides: Mapping[str, Any] = setting("table", doc="merged over [tune] overrides", overlay="merge")
+    max_time: float = setting("float", None, "dwa: episode length (s)", gt=0, overlay="set")
 
 
 @declaration
@@ -212,13 +224,27 @@ def _space(r: Reader, t: Any, path: str) -> dict:
     return out
 
 
-def parse_tune_config(text: str, *, data_dir: str | os.PathLike | None = None, source: str = "config",
-                      path: Path | None = None) -> TuneConfig:
-    """Parses and validates a tuning config. Raises `ConfigError` listing every problem with its key path."""
+def read_toml(text: str, source: str) -> dict[str, Any]:
+    """The TOML document ``text`` as a dict.
+
+    Raises:
+      ConfigError: the text is not valid TOML (naming ``source``).
+    """
     try:
-        raw = tomllib.loads(text)
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise ConfigError([f"not valid TOML: {e}"], source) from None
+
+
+def parse_tune_config(text: str, *, data_dir: str | os.PathLike | None = None, source: str = "config",
+                      path: Path | None = None, quick: bool = False) -> TuneConfig:
+    """Parses and validates a tuning config; with ``quick``, its ``[tune.quick]`` overlay applied
+    (`quick_tune_config`).
+
+    Raises:
+      ConfigError: listing every problem with its key path.
+    """
+    raw = read_toml(text, source)
     r = Reader()
     r.section(raw, "", TuneFile)
     tt = raw.get("tune") if isinstance(raw.get("tune"), dict) else {}
@@ -235,7 +261,7 @@ def parse_tune_config(text: str, *, data_dir: str | os.PathLike | None = None, s
         r.bad("tune.test_seeds", f"must not share seeds with tune.train_seeds: {shared}")
     weights = r.value(tt, "tune", dataclasses.replace(setting_of(TuneTable, "weights"), keys=_metrics(kind)))
     weights = weights or dict(_DEFAULT_WEIGHTS[kind])
-    quick = r.section(tt.get("quick"), "tune.quick", TuneQuickTable)
+    quick_table = r.section(tt.get("quick"), "tune.quick", TuneQuickTable)
     dd = Path(data_dir) if data_dir is not None else default_data_dir()
     maps = read_maps(r, raw, dd)
     if len(maps) > 1 and kind != "nav":
@@ -255,21 +281,21 @@ def parse_tune_config(text: str, *, data_dir: str | os.PathLike | None = None, s
         pipeline=pipeline,
         space=MappingProxyType(_space(r, tt.get("space"), "tune.space")),
         map=maps[0] if maps else None,
-        quick=MappingProxyType(quick),
+        quick=MappingProxyType(quick_table),
         text=text, path=path, maps=tuple(maps), time_limit=t["time_limit"], walkers=tuple(t["walkers"]),
         walker_count=t["walker_count"], walker_speed=t["walker_speed"],
     )
     if kind == "nav" and "max_time" not in tt:
         cfg = dataclasses.replace(cfg, max_time=180.0)
     _check_options(r, cfg)
-    if any(quick[k] is not None for k in ("train_seeds", "test_seeds")):
-        shared = _shared_seeds(*_quick_seeds(train_seeds, test_seeds, quick))
+    if any(quick_table[k] is not None for k in ("train_seeds", "test_seeds")):
+        shared = _shared_seeds(*_quick_seeds(train_seeds, test_seeds, quick_table))
         if shared:
             r.bad("tune.quick.test_seeds", f"the quick run's test seeds must not share seeds with its train seeds: "
                                            f"{shared}")
     if r.problems:
         raise ConfigError(r.problems, source)
-    return cfg
+    return quick_tune_config(cfg) if quick else cfg
 
 
 def _check_nav(r: Reader, tt: Mapping[str, Any], t: Mapping[str, Any], planner: str, pipeline: str,
@@ -307,12 +333,18 @@ def _check_options(r: Reader, cfg: TuneConfig) -> None:
         r.bad("tune.options" + (f".{key}" if key else ""), problem)
 
 
-def load_tune_config(path: str | os.PathLike, *, data_dir: str | os.PathLike | None = None) -> TuneConfig:
-    """Reads and validates the tuning config at ``path`` (`ConfigError` lists every problem)."""
+def load_tune_config(path: str | os.PathLike, *, data_dir: str | os.PathLike | None = None,
+                     quick: bool = False) -> TuneConfig:
+    """Reads and validates the tuning config at ``path``; with ``quick``, its ``[tune.quick]`` overlay applied.
+
+    Raises:
+      FileNotFoundError: no such file.
+      ConfigError: listing every problem with its key path.
+    """
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"tuning config not found: {p}")
-    return parse_tune_config(read_config_text(p), data_dir=data_dir, source=str(p), path=p.resolve())
+    return parse_tune_config(read_config_text(p), data_dir=data_dir, source=str(p), path=p.resolve(), quick=quick)
 
 
 def _default_test_seeds(train_seeds: tuple[int, ...]) -> tuple[int, ...]:
@@ -333,22 +365,25 @@ def _shared_seeds(train: tuple[int, ...], test: tuple[int, ...]) -> list[int]:
     return sorted(set(train) & set(test))
 
 
-def apply_tune_quick(cfg: TuneConfig) -> TuneConfig:
-    """The config with its ``[tune.quick]`` settings applied (a smoke run: run folder NAME-quick).
+def quick_tune_config(cfg: TuneConfig) -> TuneConfig:
+    """The config with its ``[tune.quick]`` overlay applied (a smoke run: run folder NAME-quick): the keys as
+    `TuneQuickTable` declares them (`jaxplan.experiments.schema.overlay`), and default test seeds (1000..) for quick
+    train seeds given alone, as in the main section.
 
     Raises:
       ConfigError: the quick run's test seeds meet its train seeds (the test set would not be held out).
     """
     q = cfg.quick
-    ch: dict[str, Any] = {"is_quick": True}
-    for k in ("population", "generations", "train_count", "test_count", "max_time"):
-        if q.get(k) is not None:
-            ch[k] = q[k]
-    if q.get("overrides"):
-        ch["overrides"] = MappingProxyType({**cfg.overrides, **q["overrides"]})
-    ch["train_seeds"], ch["test_seeds"] = _quick_seeds(cfg.train_seeds, cfg.test_seeds, q)
-    shared = _shared_seeds(ch["train_seeds"], ch["test_seeds"])
+    train, test = _quick_seeds(cfg.train_seeds, cfg.test_seeds, q)
+    shared = _shared_seeds(train, test)
     if shared:  # parse_tune_config reports this too; a config built in code reaches here unchecked
         raise ConfigError([f"tune.quick.test_seeds: the quick run's test seeds must not share seeds with its train "
                            f"seeds: {shared}"], cfg.name)
-    return dataclasses.replace(cfg, **ch)
+    return dataclasses.replace(overlay(cfg, q, TuneQuickTable), train_seeds=train, test_seeds=test, is_quick=True)
+
+
+def apply_tune_quick(cfg: TuneConfig) -> TuneConfig:
+    """Deprecated: `quick_tune_config` (or ``load_tune_config(path, quick=True)``)."""
+    warn_deprecated("apply_tune_quick is deprecated: use load_tune_config(path, quick=True) or "
+                    "jaxplan.tune.quick_tune_config(cfg)")
+    return quick_tune_config(cfg)

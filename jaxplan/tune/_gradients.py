@@ -27,7 +27,7 @@
 
 from __future__ import annotations
 
-from typing import Any, Callable, NamedTuple
+from typing import TYPE_CHECKING, Any, Callable, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -37,6 +37,11 @@ import optax
 from jaxplan.tune._base import Strategy, box, require_positive, sanitize, track_best
 from jaxplan.tune._bounds import Bounds, reflect
 
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from jaxplan.tune._objective import Objective
+
 __all__ = ["score_function_grad", "reinforce", "surrogate", "relaxed_dwa_loss", "relaxed_dwa", "RelaxedResult",
            "quadratic_features"]
 
@@ -45,7 +50,7 @@ __all__ = ["score_function_grad", "reinforce", "surrogate", "relaxed_dwa_loss", 
 # (b) score-function gradient
 
 
-def score_function_grad(fitness: jnp.ndarray, eps: jnp.ndarray, sigma) -> jnp.ndarray:
+def score_function_grad(fitness: jnp.ndarray, eps: jnp.ndarray, sigma: float | jnp.ndarray) -> jnp.ndarray:
     """Unbiased estimate ``f32[D]`` of ``∇_μ E_{x ~ N(μ, σ²)}[f(x)]`` from samples ``x_i = μ + σ·ε_i``.
 
     Args:
@@ -200,7 +205,7 @@ def surrogate(population_size: int, generations: int, ridge: float = 1e-3, steps
 # (a) relaxed DWA
 
 
-def relaxed_dwa_loss(objective, split: str = "train", collision_weight: float = 10.0) -> Callable:
+def relaxed_dwa_loss(objective: Objective, split: str = "train", collision_weight: float = 10.0) -> Callable:
     """The smooth episode loss ``loss(x f32[D], temperature) -> f32[]`` of a DWA `Objective`.
 
     Softmax selection at ``temperature``; per episode, the mean over control steps of the
@@ -237,8 +242,9 @@ class RelaxedResult(NamedTuple):
     grad_norm: np.ndarray
 
 
-def relaxed_dwa(objective, steps: int, x0=None, learning_rate: float = 0.1, t0: float = 0.5, t1: float = 0.02,
-                split: str = "train", optimizer: optax.GradientTransformation | None = None) -> RelaxedResult:
+def relaxed_dwa(objective: Objective, steps: int, x0: ArrayLike | None = None, learning_rate: float = 0.1,
+                t0: float = 0.5, t1: float = 0.02, split: str = "train",
+                optimizer: optax.GradientTransformation | None = None) -> RelaxedResult:
     """Minimises `relaxed_dwa_loss` with optax over ``steps`` gradient steps.
 
     The temperature decays exponentially from ``t0`` to ``t1`` (``optax.exponential_decay``);

@@ -50,8 +50,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import time
-from typing import Any, Mapping, NamedTuple, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Mapping, NamedTuple, Sequence
 
 import jax
 import jax.numpy as jnp
@@ -70,6 +71,11 @@ from jaxplan.tune._objective import (
     _scatter,
     _slots,
 )
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from jaxplan.nav import NavConfig
 
 __all__ = ["NavMap", "NavObjective", "nav_map", "nav_objective", "spread_rows", "NAV_METRICS", "WALKER_KINDS",
            "AVOID_RADIUS"]
@@ -121,8 +127,9 @@ def spread_rows(optimal: np.ndarray, n_train: int, n_test: int, max_optimal: flo
     return tuple(train), tuple(test)
 
 
-def nav_map(map_path, scen_path=None, train_rows: Sequence[int] | int = 8, test_rows: Sequence[int] | int = 8, *,
-            name: str | None = None, resolution: float = 1.0, max_optimal: float = 80.0) -> NavMap:
+def nav_map(map_path: str | os.PathLike, scen_path: str | os.PathLike | None = None,
+            train_rows: Sequence[int] | int = 8, test_rows: Sequence[int] | int = 8, *, name: str | None = None,
+            resolution: float = 1.0, max_optimal: float = 80.0) -> NavMap:
     """A `NavMap` from a MovingAI ``.map`` (and its ``.scen``: default ``MAP.scen``, else ``STEM-random-1.scen``).
 
     ``train_rows`` / ``test_rows``: row numbers, or counts (then `spread_rows` picks them among the rows with
@@ -227,8 +234,8 @@ def _prepare_map(m: NavMap, rows: Sequence[int], seeds: Sequence[int], pipeline:
     E, R = len(rows), len(seeds)
     blocks, index, offset, params = [], np.zeros((E, len(walkers), R), np.int64), 0, None
     for k, kind in enumerate(walkers):
-        p = prepare_episodes(m.grid, S, G, pipeline, list(seeds), _walkers(m.grid, S, G, n_walkers, speed, radius,
-                                                                           WALKER_KINDS[kind]),
+        p = prepare_episodes(m.grid, S, G, pipeline=pipeline, seeds=list(seeds),
+                             obstacles=_walkers(m.grid, S, G, n_walkers, speed, radius, WALKER_KINDS[kind]),
                              config=config, time_limit=time_limit, mesh=None)
         blocks.append(p.inputs)
         index[:, k, :] = offset + np.arange(E * R).reshape(E, R)
@@ -300,7 +307,7 @@ class NavObjective(Objective):
             metrics[f"success_{kind}"] = success[:, :, j].astype(jnp.float32)
         return flat(cost), metrics
 
-    def map_program(self, split: str, i: int):
+    def map_program(self, split: str, i: int) -> Callable:
         """Map ``i``'s pure program ``pop [P, D] -> (cost [P, E·K, R], metrics {k: [P, ·, R]})`` on ``split``: one
         compiled `run_episodes` call, every episode stepped until the batch's last ends (`evaluate` drops
         finished ones instead, with the same scores)."""
@@ -315,7 +322,7 @@ class NavObjective(Objective):
 
         return run
 
-    def evaluate(self, pop, split: str = "train") -> Evaluation:
+    def evaluate(self, pop: ArrayLike, split: str = "train") -> Evaluation:
         """Evaluates ``pop [P, D]`` (or one vector) on ``split``: one batch per map, stepped by
         `jaxplan.nav.run_outcomes` (finished episodes dropped; its programs compiled once per batch size)."""
         from jaxplan.nav import run_outcomes
@@ -358,8 +365,8 @@ class NavObjective(Objective):
 def nav_objective(maps: Sequence[NavMap], train_seeds: Sequence[int], test_seeds: Sequence[int], local: str = "dwa",
                   *, pipeline: str | None = None, walkers: Sequence[str] = ("blind", "seeing"), n_walkers: int = 5,
                   speed: float = 1.0, walker_radius: float = 0.25, space: Mapping | Bounds | None = None,
-                  weights: Mapping[str, float] | None = None, config=None, time_limit: float | None = None,
-                  name: str | None = None) -> NavObjective:
+                  weights: Mapping[str, float] | None = None, config: NavConfig | None = None,
+                  time_limit: float | None = None, name: str | None = None) -> NavObjective:
     """The objective of the local planner's weights on navigation episodes among walkers (module docstring).
 
     Args:

@@ -34,7 +34,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from typing import Any, Callable, Mapping, NamedTuple, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Mapping, NamedTuple, Sequence
 
 import jax
 import jax.numpy as jnp
@@ -51,6 +51,13 @@ from jaxplan.scale import (
     padded_size,
 )
 from jaxplan.tune._bounds import Bounds, make_bounds
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from jaxplan.dwa import ClearanceTable, DWAConfig, DWAParams
+    from jaxplan.grid import GridMap
+    from jaxplan.mppi import MPPIConfig, MPPIParams
 
 __all__ = ["Split", "Evaluation", "Objective", "aco_objective", "dwa_objective", "mppi_objective", "function_objective",
            "DWAEpisodes", "dwa_episodes", "mppi_episodes", "dwa_scenarios", "ACO_METRICS", "DWA_METRICS", "FAIL_GAP"]
@@ -192,7 +199,7 @@ class Objective:
 
         return fn
 
-    def evaluate(self, pop, split: str = "train") -> Evaluation:
+    def evaluate(self, pop: ArrayLike, split: str = "train") -> Evaluation:
         """Evaluates ``pop [P, D]`` (or one vector ``[D]``) on ``split`` as one compiled call."""
         pop = jnp.atleast_2d(jnp.asarray(pop, jnp.float32))
         if pop.shape[-1] != self.bounds.dim:
@@ -236,7 +243,7 @@ class Objective:
                 x[d] = float(v if i is None else np.asarray(v)[i])
         return x
 
-    def params(self, x) -> dict:
+    def params(self, x: ArrayLike) -> dict[str, Any]:
         """``{name: value}`` of a vector ``x [D]`` (vector weights as lists, the rest of a vector
         weight from the planner's defaults): what `jaxplan run` takes as overrides / DWA params."""
         out: dict[str, Any] = {}
@@ -274,7 +281,69 @@ def _check_sign(bounds: Bounds, what: str, unit: Sequence[str] = ()) -> None:
 # ACO
 
 
-def aco_objective(grid, train: Split, test: Split, planner: str = "iaco", space: Mapping | None = None,
+class ACOSetup(NamedTuple):
+    """What an ACO objective's population programs share (`aco_setup`): the colony and its static config, the
+    planner's parameter dict, the tuned slots, the map's tables and collision map, the map's width (cells) and cell
+    size (m)."""
+
+    colony: Any
+    cfg: Any
+    base: Mapping[str, Any]
+    slots: list
+    tables: Any
+    cmap: Any
+    connectivity: int
+    vh: Any
+    width: int
+    resolution: float
+
+
+def aco_setup(grid: GridMap, planner: str, bounds: Bounds, overrides: Mapping[str, Any] | None) -> ACOSetup:
+    """The `ACOSetup` of ``planner`` on ``grid`` with ``overrides``, its tuned slots those of ``bounds``."""
+    from jaxplan.aco import COLONIES, cached_map_tables, split_params
+    from jaxplan.grid import collision_map
+    from jaxplan.registry import resolve
+
+    _, p = resolve(planner, dict(overrides or {}))
+    cfg, base, connectivity, vh = split_params(grid, p)
+    return ACOSetup(COLONIES[planner], cfg, base, _slots(bounds), cached_map_tables(grid, connectivity, vh),
+                    collision_map(grid), connectivity, vh, grid.width, float(grid.resolution))
+
+
+def aco_runs(setup: ACOSetup, goal_tables: Any, keys: jax.Array, pop: jnp.ndarray) -> tuple[Any, dict]:
+    """One population's colony runs on a split, and the metrics every ACO objective shares.
+
+    Args:
+      setup: the planner on its map (`aco_setup`).
+      goal_tables: the split's goal tables (`jaxplan.aco.goal_tables`).
+      keys: the split's seed keys (`jaxplan.aco.seed_keys`).
+      pop: ``f32[P, D]`` weight vectors (traced).
+
+    Returns:
+      The runs (`jaxplan.aco.run_batch`'s, leading axes ``[P, N, R]``) and ``{"failure", "turns", "roughness",
+      "clearance"}``, each ``f32[P, N, R]`` (a failed run counts failure 1 and nothing else).
+    """
+    from jaxplan.aco import run_batch
+    from jaxplan.metrics import clearance_metrics, geometry_metrics
+
+    W = setup.width
+    # vmap over the population: the weights are traced leaves, scenarios × seeds are run_batch's axes.
+    out = jax.vmap(lambda x: run_batch(setup.colony, setup.cfg, setup.tables, goal_tables,
+                                       _scatter(setup.base, setup.slots, x), keys))(pop)
+    ok = out.success
+    path = jnp.stack([out.cells % W, out.cells // W], axis=-1)  # [P, N, R, L + 1, 2]
+    npts = out.n + 1
+    geo = geometry_metrics(path, npts, setup.resolution)
+    _, mean_c = clearance_metrics(setup.cmap, path, npts)
+    return out, {
+        "failure": 1.0 - ok.astype(jnp.float32),
+        "turns": jnp.where(ok, geo["turns"].astype(jnp.float32), 0.0),
+        "roughness": jnp.where(ok, 1.0 - geo["smoothness"], 0.0),
+        "clearance": jnp.where(ok, 1.0 / jnp.maximum(mean_c, 1e-3), 0.0),
+    }
+
+
+def aco_objective(grid: GridMap, train: Split, test: Split, planner: str = "iaco", space: Mapping | None = None,
                   weights: Mapping[str, float] | None = None, overrides: Mapping[str, Any] | None = None,
                   name: str | None = None) -> Objective:
     """The objective of an ACO planner's weights (see the module docstring).
@@ -287,24 +356,13 @@ def aco_objective(grid, train: Split, test: Split, planner: str = "iaco", space:
         α, β and (for iaco) λ.
       weights: metric weights (`ACO_METRICS`); default ``{"gap": 1, "failure": 1}``.
       overrides: the planner's settings (ants, iterations, …: static; weights not tuned).
+      name: the objective's label (default ``PLANNER_weights``).
 
     Raises:
       ValueError: naming the parameter, for an unknown or static name, bad bounds, or bounds
         outside the parameter's valid range (negative; above 1 for ρ, δ, ρ_res, λ_p).
     """
-    from jaxplan.aco import (
-        COLONIES,
-        STATIC_PARAMS,
-        UNIT_PARAMS,
-        cached_map_tables,
-        goal_tables,
-        run_batch,
-        seed_keys,
-        split_params,
-    )
-    from jaxplan.grid import collision_map
-    from jaxplan.metrics import clearance_metrics, geometry_metrics
-    from jaxplan.registry import resolve
+    from jaxplan.aco import COLONIES, STATIC_PARAMS, UNIT_PARAMS, goal_tables, seed_keys
 
     if planner not in COLONIES:
         raise ValueError(f"aco_objective: planner must be one of {sorted(COLONIES)}, got {planner!r}")
@@ -314,22 +372,17 @@ def aco_objective(grid, train: Split, test: Split, planner: str = "iaco", space:
             space["lambdas"] = [(0.0, 1.0)] * 3
     weights = _metric_weights("aco_objective", weights, ACO_METRICS, {"gap": 1.0, "failure": 1.0})
     bounds = space if isinstance(space, Bounds) else make_bounds(space)
-    _, p = resolve(planner, dict(overrides or {}))
-    cfg, base, connectivity, vh = split_params(grid, p)
+    setup = aco_setup(grid, planner, bounds, overrides)
+    cfg, base, slots = setup.cfg, setup.base, setup.slots
     what = f"aco_objective({planner})"
     _check_names(bounds, base, what, STATIC_PARAMS)
     _check_sign(bounds, what, UNIT_PARAMS)
-    slots = _slots(bounds)
     defaults = np.array([float(np.asarray(base[n]) if i is None else np.asarray(base[n])[i]) for n, i in slots],
                         np.float32)
     defaults = np.clip(defaults, bounds.low, bounds.high)
-    colony = COLONIES[planner]
-    tables = cached_map_tables(grid, connectivity, vh)
-    cmap = collision_map(grid)
-    W, res = grid.width, float(grid.resolution)
     prepared = {}
     for split_name, sp in (("train", train), ("test", test)):
-        gt = goal_tables(grid, np.asarray(sp.starts), np.asarray(sp.goals), connectivity, vh,
+        gt = goal_tables(grid, np.asarray(sp.starts), np.asarray(sp.goals), setup.connectivity, setup.vh,
                          geodesic=cfg.heuristic == "geodesic")
         prepared[split_name] = (gt, seed_keys(sp.seeds), jnp.asarray(sp.optimal, jnp.float32))
 
@@ -337,21 +390,8 @@ def aco_objective(grid, train: Split, test: Split, planner: str = "iaco", space:
         gt, keys, optimal = prepared[split_name]
 
         def run(pop):
-            # vmap over the population: the weights are traced leaves, scenarios × seeds are run_batch's axes.
-            out = jax.vmap(lambda x: run_batch(colony, cfg, tables, gt, _scatter(base, slots, x), keys))(pop)
-            ok = out.success
-            path = jnp.stack([out.cells % W, out.cells // W], axis=-1)  # [P, N, R, L + 1, 2]
-            npts = out.n + 1
-            geo = geometry_metrics(path, npts, res)
-            _, mean_c = clearance_metrics(cmap, path, npts)
-            gap = jnp.where(ok, out.length / optimal[None, :, None] - 1.0, FAIL_GAP)
-            metrics = {
-                "gap": gap,
-                "failure": 1.0 - ok.astype(jnp.float32),
-                "turns": jnp.where(ok, geo["turns"].astype(jnp.float32), 0.0),
-                "roughness": jnp.where(ok, 1.0 - geo["smoothness"], 0.0),
-                "clearance": jnp.where(ok, 1.0 / jnp.maximum(mean_c, 1e-3), 0.0),
-            }
+            out, shared = aco_runs(setup, gt, keys, pop)
+            metrics = {"gap": jnp.where(out.success, out.length / optimal[None, :, None] - 1.0, FAIL_GAP), **shared}
             cost = sum(w * metrics[k] for k, w in weights.items())
             return cost, metrics
 
@@ -402,7 +442,8 @@ class EpisodeTrace(NamedTuple):
     moving: jnp.ndarray
 
 
-def dwa_episodes(table, config, params, episodes: DWAEpisodes, steps: int, tolerance: float = 0.5) -> EpisodeTrace:
+def dwa_episodes(table: ClearanceTable, config: DWAConfig, params: DWAParams, episodes: DWAEpisodes, steps: int,
+                 tolerance: float = 0.5) -> EpisodeTrace:
     """``steps`` DWA control steps (period ``config.period``) of E robots driving to their goals.
 
     Pure and reverse-differentiable (fixed-length `lax.scan`, a robot at its goal stays put
@@ -446,7 +487,7 @@ def _episode_metrics(trace: EpisodeTrace, steps: int, period: float, radius: flo
     }
 
 
-def dwa_scenarios(grid, starts: np.ndarray, goals: np.ndarray, seeds: Sequence[int], n_discs: int = 2,
+def dwa_scenarios(grid: GridMap, starts: np.ndarray, goals: np.ndarray, seeds: Sequence[int], n_discs: int = 2,
                   speed: tuple[float, float] = (0.4, 1.0), radius: float = 0.25,
                   heading_jitter: float = 0.5) -> DWAEpisodes:
     """Episodes ``[N·R]`` (scenario-major) from cells: start and goal at cell centres, start heading
@@ -531,7 +572,7 @@ def _episode_programs(grid, train: Split, test: Split, config, base: Mapping[str
     return program, memory, parts
 
 
-def dwa_objective(grid, train: Split, test: Split, evaluator: str = "weighted", space: Mapping | None = None,
+def dwa_objective(grid: GridMap, train: Split, test: Split, evaluator: str = "weighted", space: Mapping | None = None,
                   weights: Mapping[str, float] | None = None, dwa: Mapping[str, Any] | None = None,
                   max_time: float = 20.0, n_discs: int = 2, tolerance: float = 0.5,
                   name: str | None = None) -> Objective:
@@ -569,7 +610,8 @@ def dwa_objective(grid, train: Split, test: Split, evaluator: str = "weighted", 
     return obj
 
 
-def mppi_episodes(table, config, params, episodes: DWAEpisodes, steps: int, tolerance: float = 0.5,
+def mppi_episodes(table: ClearanceTable, config: MPPIConfig, params: MPPIParams, episodes: DWAEpisodes, steps: int,
+                  tolerance: float = 0.5,
                   key: jax.Array | None = None) -> EpisodeTrace:
     """``steps`` MPPI control steps (period ``config.period``) of E robots driving to their goals, as `dwa_episodes`.
 
@@ -606,7 +648,7 @@ def mppi_episodes(table, config, params, episodes: DWAEpisodes, steps: int, tole
     return jax.vmap(one)(episodes.start, episodes.goal, episodes.obstacles, jnp.arange(E))
 
 
-def mppi_objective(grid, train: Split, test: Split, space: Mapping | None = None,
+def mppi_objective(grid: GridMap, train: Split, test: Split, space: Mapping | None = None,
                    weights: Mapping[str, float] | None = None, mppi: Mapping[str, Any] | None = None,
                    max_time: float = 20.0, n_discs: int = 2, tolerance: float = 0.5,
                    name: str | None = None) -> Objective:
@@ -644,8 +686,9 @@ def mppi_objective(grid, train: Split, test: Split, space: Mapping | None = None
 # Any function
 
 
-def function_objective(fn: Callable, space: Mapping | Bounds, defaults=None, train_seeds: Sequence[int] = (0,),
-                       test_seeds: Sequence[int] = (1,), name: str = "function") -> Objective:
+def function_objective(fn: Callable, space: Mapping | Bounds, defaults: ArrayLike | None = None,
+                       train_seeds: Sequence[int] = (0,), test_seeds: Sequence[int] = (1,),
+                       name: str = "function") -> Objective:
     """An `Objective` from a pure function ``fn(x f32[D], seed i32[]) -> f32[]`` (one scenario):
     for tests, toy problems and custom pipelines. Evaluated as one ``vmap`` over population × seeds."""
     bounds = space if isinstance(space, Bounds) else make_bounds(space)

@@ -62,12 +62,12 @@ class SparrowState(NamedTuple):
     generation: jnp.ndarray
 
 
-def adaptive_weight(t, T: int, lam_max: float = 0.9, lam_min: float = 0.4) -> jnp.ndarray:
+def adaptive_weight(t: int | jnp.ndarray, T: int, lam_max: float = 0.9, lam_min: float = 0.4) -> jnp.ndarray:
     """li2026 Eq. 6: ``λ = λmin + (λmax − λmin)/(λmax + λmin)·cos(t·π/T)``."""
     return lam_min + (lam_max - lam_min) / (lam_max + lam_min) * jnp.cos(t * math.pi / T)
 
 
-def levy(key, shape, zeta: float = 1.5, scale: float = 1.0) -> jnp.ndarray:
+def levy(key: jax.Array, shape: tuple[int, ...], zeta: float = 1.5, scale: float = 1.0) -> jnp.ndarray:
     """li2026 Eq. 7 (Mantegna's algorithm): ``scale·r1·σ/|r2|^(1/ζ)``, r1, r2 ~ N(0, 1)."""
     sigma = (math.gamma(1 + zeta) * math.sin(math.pi * zeta / 2)
              / (math.gamma((1 + zeta) / 2) * zeta * 2 ** ((zeta - 1) / 2))) ** (1 / zeta)

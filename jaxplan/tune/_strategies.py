@@ -108,7 +108,7 @@ def option_problems(name: str, options: Mapping[str, Any], population_size: int 
     return problems
 
 
-def make_strategy(name: str, population_size: int, generations: int, **options) -> Strategy:
+def make_strategy(name: str, population_size: int, generations: int, **options: Any) -> Strategy:
     """A `Strategy` by name (`STRATEGIES`); ``generations`` sizes the grid, the sparrows' schedules and the
     surrogate's memory.
 
