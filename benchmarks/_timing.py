@@ -17,7 +17,7 @@ from typing import Any, Callable
 
 from jaxplan.core.provenance import cpu_info, machine_line
 
-__all__ = ["median_time", "cpu_info", "machine_line", "Steal"]
+__all__ = ["median_time", "cpu_info", "machine_line", "Steal", "Record", "RESULTS"]
 
 
 def median_time(fn: Callable[[], object], repeat: int) -> float:
@@ -66,3 +66,83 @@ def blocking(fn: Callable, args: tuple) -> Callable[[], Any]:
     import jax
 
     return lambda: jax.block_until_ready(fn(*args))
+
+
+RESULTS = Path(__file__).resolve().parent / "results"
+"""Where each benchmark run's JSON record goes (docs/benchmarks.md is generated from these files)."""
+
+
+class Record:
+    """The JSON record of one benchmark run: ``benchmarks/results/<bench>-<date>-<HHMM>-<rev>[-quick].json``.
+
+    A benchmark makes one at its start (the machine line, load and steal are taken then), fills named tables as it
+    prints them, and writes the file at its end; ``python benchmarks/run_all.py --page`` renders the newest table
+    of each name into docs/benchmarks.md. The file holds ``bench``, ``command``, ``started_utc``, ``wall_s``,
+    ``machine_line``, ``machine`` (the provenance record), ``load_avg``, ``steal``, ``options`` and ``tables``:
+    each ``{"name", "title", "columns", "rows", "notes"}``, a row a list of cells (numbers or text) under
+    ``columns``. The start time is in the name, so two runs of different sections on one day both stay.
+
+    Args:
+      bench: the script's name without ``.py`` (``"bench_dwa"``).
+      options: the run's parsed options (``vars(args)``); paths become strings.
+      quick: a smoke-sized run (the page prefers full runs).
+    """
+
+    def __init__(self, bench: str, options: dict[str, Any], *, quick: bool = False) -> None:
+        import datetime as dt
+        import os
+        import sys
+
+        self.bench, self.quick = bench, quick
+        self.options = {k: (str(v) if isinstance(v, Path) else v) for k, v in options.items()}
+        self.command = " ".join(["python", f"benchmarks/{bench}.py", *sys.argv[1:]])
+        self.started = dt.datetime.now(dt.timezone.utc)
+        self.load_avg = list(os.getloadavg()) if hasattr(os, "getloadavg") else None
+        self.tables: list[dict[str, Any]] = []
+        self.extra: dict[str, Any] = {}  # further top-level fields (a benchmark's raw measurements)
+        self._steal = Steal()
+        self._t0 = time.perf_counter()
+
+    def table(self, name: str, columns: list[str], title: str = "") -> list[list[Any]]:
+        """A new table ``name`` (unique within the benchmark: the page shows the newest table of each name) with
+        ``columns``; returns its list of rows, to append to (each a list of cells, one per column)."""
+        rows: list[list[Any]] = []
+        self.tables.append({"name": name, "title": title or name, "columns": list(columns), "rows": rows,
+                            "notes": []})
+        return rows
+
+    def note(self, text: str) -> None:
+        """A sentence under the last table (what a column means, a target met or missed)."""
+        self.tables[-1]["notes"].append(text)
+
+    def write(self, path: str | Path | None = None) -> Path:
+        """Writes the record atomically (to ``path``, default `RESULTS`) and returns the path."""
+        import json
+        import sys
+
+        from jaxplan.core.io import atomic_write
+        from jaxplan.core.provenance import provenance
+
+        rec = provenance(devices="jax" in sys.modules)  # lists the devices only if the bench started JAX
+        steal = self._steal.fraction()
+        rev = (rec["git_revision"] or "norev")[:7]
+        data = {
+            "bench": self.bench, "command": self.command, "quick": self.quick,
+            "started_utc": self.started.isoformat(timespec="seconds"),
+            "wall_s": time.perf_counter() - self._t0, "machine_line": machine_line(), "machine": rec,
+            "load_avg": self.load_avg, "steal": steal, "options": self.options,
+            "tables": [t for t in self.tables if t["rows"]], **self.extra,
+        }
+        name = f"{self.bench}-{self.started:%Y-%m-%d-%H%M}-{rev}{'-quick' if self.quick else ''}.json"
+        out = Path(path) if path is not None else RESULTS / name
+        out.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write(out, json.dumps(data, indent=1, default=_plain) + "\n")
+        print(f"JSON: {out}")
+        return out
+
+
+def _plain(x: Any) -> Any:
+    """JSON for numpy scalars and arrays (a bench's cells are often numpy numbers)."""
+    if hasattr(x, "tolist"):
+        return x.tolist()
+    raise TypeError(f"not JSON: {type(x).__name__}")

@@ -23,6 +23,7 @@ heuristic and with the objective heuristic (η = 1 / (move cost + exact own cost
 `heuristic="objective"`), and `risk_aco` on a Poisson(1) risk layer (`jp.poisson_risk`, seed 0),
 where its H term counts. ``--only-defaults`` runs just those rows; ``--floor`` only the objective
 heuristic with β raised (14, 28) and with 200 iterations, to find where each colony's own gap stops falling.
+The tables also go to a JSON record in benchmarks/results/ (`_timing.Record`; docs/benchmarks.md is made from it).
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import os
 from pathlib import Path
 
 import numpy as np
+from _timing import Record
 
 import jaxplan as jp
 
@@ -83,7 +85,7 @@ def own_gaps(grid, starts, goals, r, name: str, over: dict) -> np.ndarray:
 PAPER_CONFIGS = ("cui2025_table1", "chen2023_table4", "chu2024_tables3_5", "yu2020_tables2_3")
 
 
-def paper_settings(root: Path, seeds: int) -> None:
+def paper_settings(root: Path, seeds: int, record: Record) -> None:
     """Each colony row of the papers' reproduction configs, on its own maps and scenarios, with its settings as
     they are: the gap to its own optimum. opt_ant with c > 0 on a height map has no exact optimum (H_msd is
     a variance): its row reports the gap to the exact minimum of a·L + b·R (c=0), an upper bound of the gap."""
@@ -94,6 +96,9 @@ def paper_settings(root: Path, seeds: int) -> None:
 
     print(f"\npaper settings (configs/*.toml as they are, {seeds} seeds):")
     print(f"{'config':<20}{'planner':<22}{'map':<14}{'runs':>5}{'success':>9}{'own gap':>9}{'own max':>9}  note")
+    table = record.table("paper settings", ["config", "planner", "map", "runs", "success (%)", "own gap (%)",
+                                            "own max (%)", "note"],
+                         f"the colony rows of the reproduction configs as they are, {seeds} seeds")
     for name in PAPER_CONFIGS:
         prep = prepare(load_config(root / "configs" / f"{name}.toml"))
         for mw in prep.maps:
@@ -117,6 +122,9 @@ def paper_settings(root: Path, seeds: int) -> None:
                 print(f"{name:<20}{pc.label[:21]:<22}{mw.spec.name[:13]:<14}{ok.size:>5}{ok.mean():>9.1%}"
                       f"{(np.nanmean(own[ok]) if ok.any() else nan):>9.2%}"
                       f"{(np.nanmax(own[ok]) if ok.any() else nan):>9.2%}  {note}", flush=True)
+                table.append([name, pc.label, mw.spec.name, ok.size, 100 * ok.mean(),
+                              100 * np.nanmean(own[ok]) if ok.any() else None,
+                              100 * np.nanmax(own[ok]) if ok.any() else None, note])
 
 
 def main() -> None:
@@ -136,8 +144,10 @@ def main() -> None:
     ap.add_argument("--heuristic", default=None, choices=("euclidean", "geodesic", "objective"),
                     help="with --only-defaults: only the rows with this heuristic")
     args = ap.parse_args()
+    record = Record("bench_aco_quality", vars(args))
     if args.papers:
-        paper_settings(root, args.seeds)
+        paper_settings(root, args.seeds, record)
+        record.write()
         return
     d = Path(args.data_dir) / "movingai"
     maps = MAPS if args.maps is None else [(m, sc) for m, sc in MAPS + MORE_MAPS
@@ -150,6 +160,16 @@ def main() -> None:
         settings = [(n, o) for n, o in settings if o.get("heuristic", "euclidean") == args.heuristic]
     print(f"{'planner':<10}{'overrides':<62}{'map':<26}{'runs':>6}{'success':>9}{'mean gap':>10}"
           f"{'max gap':>9}{'own gap':>9}{'own max':>9}{'run s':>8}{'compile s':>10}")
+    # a run of a subset of the settings records tables of their own name, beside the full run's
+    subset = ", ".join(x for x in ("only defaults" * args.only_defaults, "floor" * args.floor,
+                                   args.planners and f"planners {args.planners}",
+                                   args.heuristic and f"{args.heuristic} heuristic") if x)
+    suffix = f" ({subset})" if subset else ""
+    per_map = record.table(f"per map{suffix}", ["planner", "overrides", "map", "runs", "success (%)",
+                                                "mean gap (%)", "max gap (%)", "own gap (%)", "own max (%)",
+                                                "run (s)", "compile (s)"],
+                           f"{args.rows} rows (optimal ≤ 64 cells) × {args.seeds} seeds per map; gap of the raw grid "
+                           "path to the shortest, own gap to the colony's own optimum")
     totals: dict[str, list] = {}
     for m, sc in maps:
         grid = jp.load_map(d / m)
@@ -171,13 +191,20 @@ def main() -> None:
                   f"{(gap[ok].mean() if ok.any() else nan):>10.2%}{(gap[ok].max() if ok.any() else nan):>9.2%}"
                   f"{(own[ok].mean() if ok.any() else nan):>9.2%}{(own[ok].max() if ok.any() else nan):>9.2%}"
                   f"{r.time_s:>8.1f}{r.compile_s:>10.1f}", flush=True)
+            stats = [100 * float(f(x[ok])) if ok.any() else None for x in (gap, own) for f in (np.mean, np.max)]
+            per_map.append([name, label, m[:-4], ok.size, 100 * ok.mean(), stats[0], stats[1], stats[2], stats[3],
+                            r.time_s, r.compile_s])
             totals.setdefault(f"{name} ({label})", []).append((ok, gap, own))
     print("\nall maps:")
+    pooled = record.table(f"all maps{suffix}", ["planner, setting", "success (%)", "mean gap (%)", "own gap (%)"],
+                          f"pooled over {', '.join(m[:-4] for m, _ in maps)}")
     for key, parts in totals.items():
         ok = np.concatenate([p[0].ravel() for p in parts])
         gap = np.concatenate([p[1].ravel() for p in parts])
         own = np.concatenate([p[2].ravel() for p in parts])
         print(f"  {key:<70} success {ok.mean():7.1%}   mean gap {gap[ok].mean():7.2%}   own gap {own[ok].mean():7.2%}")
+        pooled.append([key, 100 * ok.mean(), 100 * gap[ok].mean(), 100 * own[ok].mean()])
+    record.write()
 
 
 if __name__ == "__main__":

@@ -19,7 +19,8 @@ iaco with 1,024 ants on brc202d (measured first, in a fresh child process of its
 speed figures are measured three times, each in a child process: with XLA's default threads,
 pinned to one core, and with XLA's intra-op threading off (``XLA_FLAGS=--xla_cpu_multi_thread_eigen=false
 intra_op_parallelism_threads=1``) while the numba walk keeps both cores, which shows what
-XLA's intra-op threads gain or cost next to the walk's threads on a small CPU.
+XLA's intra-op threads gain or cost next to the walk's threads on a small CPU. The tables also go to a JSON record
+in benchmarks/results/ (`_timing.Record`; docs/benchmarks.md is made from it).
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ import subprocess
 import sys
 import time
 
-from _timing import Steal, machine_line
+from _timing import Record, Steal, machine_line
 
 BACKENDS = ("jax", "numba")
 SINGLE_THREADED_XLA = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
@@ -142,6 +143,7 @@ def main() -> None:
         print(json.dumps(measure_memory(1024, 2)))
         return
     steal = Steal()
+    record = Record("bench_aco_speed", {k: v for k, v in vars(args).items() if k not in ("child", "memory_child")})
     memory = None
     if os.path.exists(BRC202D):
         proc = subprocess.run([sys.executable, __file__, "--memory-child"], capture_output=True, text=True, check=True)
@@ -157,6 +159,9 @@ def main() -> None:
                               env=env, check=True)
         results[label] = json.loads(proc.stdout.strip().splitlines()[-1])
     print(f"machine: {machine_line()}; {results['default threads']['devices']}")
+    speed = record.table("ant-steps", ["threads", "planner", "ants", "jax walk (M ant-steps/s)", "slot use",
+                                       "numba walk (M ant-steps/s)", "numba ÷ jax"],
+                         "ant-steps per second on a 100×100 random map (20 % obstacles), compilation excluded")
     for label, res in results.items():
         print(f"\n{label}: M ant-steps/s (slot use of the JAX loop), compile s = XLA compile / first call minus run")
         print(f"{'planner':<8}{'ants':>6} | {'jax':>8}{'slots':>7}{'compile':>9}{'first-run':>10} | "
@@ -167,18 +172,27 @@ def main() -> None:
                   f"{j['compile_s']:>9.2f}{j['first_minus_run_s']:>10.2f} | {n['ant_steps_per_s'] / 1e6:>8.2f}"
                   f"{n['compile_s']:>9.2f}{n['first_minus_run_s']:>10.2f} | "
                   f"{n['run_s'] and j['run_s'] / n['run_s']:>7.1f}x")
+            speed.append([label, row["planner"], row["ants"], j["ant_steps_per_s"] / 1e6, j["slot_use"],
+                          n["ant_steps_per_s"] / 1e6, n["run_s"] and j["run_s"] / n["run_s"]])
     labels = list(results)
     print("\ncompile time per configuration, s (trace, lower and XLA compile; 100x100 bench map, default backend; "
           "target <= 2 s)")
     print(f"{'planner':<10}{'setting':<11}" + "".join(f"{lab:>30}" for lab in labels))
+    compile_rows = record.table("compile time", ["planner", "setting", *(f"{lab} (s)" for lab in labels)],
+                                "per configuration: trace, lower and XLA compile, default backend (target ≤ 2 s)")
     for key in results[labels[0]]["compile"]:
         planner, setting = key.split("/")
         print(f"{planner:<10}{setting:<11}" + "".join(f"{results[lab]['compile'][key]:>30.2f}" for lab in labels))
+        compile_rows.append([planner, setting, *(results[lab]["compile"][key] for lab in labels)])
     print()
+    chen = record.table("chen2023-sized run", ["threads", "jax walk (ms)", "numba walk (ms)"],
+                        "risk_aco defaults (100 ants × 50 iterations) on a 20×20 warehouse")
     for label, r in results.items():
         ms = r["chen2023_ms"]
         print(f"chen2023-sized run (20x20, risk_aco, 100 ants x 50 iterations), {label}: jax {ms['jax']:.1f} ms, "
               f"numba {ms['numba']:.1f} ms (target <= 30 ms; paper: 8,468 ms in MATLAB)")
+        chen.append([label, ms["jax"], ms["numba"]])
+    record.note("Target: at most 30 ms. chen2023 reports 8,468 ms in MATLAB (the paper's figure, not measured here).")
     if memory is None:
         print(f"walk memory: skipped ({BRC202D} not found)")
     else:
@@ -188,7 +202,12 @@ def main() -> None:
               f"{m['peak_rss_MB']:.0f} MB (bound 2,048 MB; {m['before_run_MB']:.0f} MB after imports and map loading); "
               f"walk buffers and move tables {m['walk_estimate_MB']:.0f} MB estimated; compile {m['compile_s']:.2f} s, "
               f"run {m['run_s']:.2f} s")
+        record.table("memory", ["peak RSS (MB)", "after imports and map (MB)", "walk buffers, estimated (MB)",
+                                "compile (s)", "run (s)"],
+                     "iaco with 1,024 ants × 2 iterations on brc202d, a fresh process (bound 2,048 MB)").append(
+            [m["peak_rss_MB"], m["before_run_MB"], m["walk_estimate_MB"], m["compile_s"], m["run_s"]])
     print(steal.summary())
+    record.write()
 
 if __name__ == "__main__":
     import jaxplan

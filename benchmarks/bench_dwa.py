@@ -42,7 +42,8 @@ Each measurement runs in a child process, twice: with XLA's default threads and 
 to one core (on a 2-core machine XLA's intra-op threads help big batches but cost a
 single robot), and once more with the batch sharded over two XLA host devices
 (``--xla_force_host_platform_device_count=2``, one thread each). Other processes share
-the cores, so figures vary by tens of percent from run to run; compare medians.
+the cores, so figures vary by tens of percent from run to run; compare medians. The tables also go to a JSON record
+in benchmarks/results/ (`_timing.Record`; docs/benchmarks.md is made from it).
 """
 
 from __future__ import annotations
@@ -56,7 +57,7 @@ import sys
 import time
 
 import numpy as np
-from _timing import Steal, blocking, machine_line, median_time
+from _timing import Record, Steal, blocking, machine_line, median_time
 
 # ---------------------------------------------------------------------------------------------
 # The numpy version of one step (same maths as jaxplan.dwa, vectorised over robots and samples).
@@ -396,6 +397,7 @@ def main() -> None:
         print(json.dumps(measure(robots, args.repeat, args.child == "sharded")))
         return
     steal = Steal()
+    record = Record("bench_dwa", {k: v for k, v in vars(args).items() if k != "child"})
     results = {}
     # The sharded child splits batches over two devices: nothing to run with one robot only.
     labels = ("default", "pinned", "sharded") if any(b > 1 for b in robots) else ("default", "pinned")
@@ -414,17 +416,37 @@ def main() -> None:
     names = {"default": "XLA default threads", "pinned": "pinned to 1 core", "sharded": "batch over 2 host devices"}
     print(f"\n{'threads':<26}{'clearance':<17}{'robots':>7} | {'ms/step':>9}{'M pts/s':>9}{'compile s':>10} | "
           f"{'numpy ms':>10}{'x numpy':>8}{'same choice':>12}")
+    steps = record.table("control step", ["threads", "clearance", "robots", "ms/step", "M points/s", "compile (s)",
+                                          "numpy (ms)", "× numpy", "same choice (%)"],
+                         "one compiled control step (20 × 40 samples × 20 steps of 0.1 s), median of "
+                         f"{args.repeat}, beside the same step in vectorised numpy")
     for label, res in results.items():
         for r in res["rows"]:
             np_part = (f"{r['numpy_ms']:>10.2f}{r['numpy_ms'] / r['jax_ms']:>8.1f}{r['same_choice']:>12.1%}"
                        if "numpy_ms" in r else "")
             print(f"{names[label]:<26}{r['mode']:<17}{r['robots']:>7} | {r['jax_ms']:>9.3f}"
                   f"{r['points_per_s'] / 1e6:>9.1f}{r['compile_s']:>10.2f} | {np_part}")
+            numpy = [r["numpy_ms"], r["numpy_ms"] / r["jax_ms"], 100 * r["same_choice"]] if "numpy_ms" in r else [
+                None, None, None]
+            steps.append([names[label], r["mode"], r["robots"], r["jax_ms"], r["points_per_s"] / 1e6, r["compile_s"],
+                          *numpy])
+    record.note("Targets: ≤ 0.2 ms per single-robot step, ≥ 200 M points/s for ≥ 64 robots, ≥ 3× numpy, compile "
+                "≤ 1 s.")
+    one = record.table("one robot", ["threads", "in a compiled episode (ms)", "dwa_step (ms)",
+                                      "dwa_step(full_info=False) (ms)"],
+                       "one robot's step inside a compiled 50-step episode, and from Python")
     for label in ("default", "pinned"):
         r = results[label]
+        if "episode_step_ms" not in r:
+            continue
         print(f"1 robot, {names[label]}: {r['episode_step_ms']:.3f} ms per control step inside a 50-step episode "
               f"(lax.scan, hybrid); host front dwa_step with every rollout kept: {r['front_ms']:.3f} ms, "
               f"full_info=False: {r['lean_front_ms']:.3f} ms")
+        one.append([names[label], r["episode_step_ms"], r["front_ms"], r["lean_front_ms"]])
+    pr_rows = record.table("PythonRobotics", ["threads", "make_stepper", "split", "full_info=False", "dwa_step",
+                                              "in an episode", "stepper ÷ episode", "PythonRobotics dwa_control",
+                                              "its points", "× PythonRobotics"],
+                           "PythonRobotics' own DWA scenario, one robot, ms per call (jaxplan: 16,000 points per step)")
     print("\nPythonRobotics' DWA scenario, one robot, ms per call (jaxplan: 16,000 trajectory points per step):")
     print(f"{'threads':<26}{'stepper':>9}{'split':>8}{'lean':>8}{'dwa_step':>10}{'episode':>9}{'/episode':>10} | "
           f"{'PythonRobotics':>15}{'its points':>11}{'x PR':>7}")
@@ -436,6 +458,12 @@ def main() -> None:
               f"{r['episode_ms']:>9.3f}{r['stepper_ms'] / r['episode_ms']:>9.2f}x | {pr}")
         if "note" in r:
             print(f"  {r['note']}")
+        pr_rows.append([names[label], r["stepper_ms"], r["split_ms"], r["lean_ms"], r["full_ms"], r["episode_ms"],
+                        r["stepper_ms"] / r["episode_ms"], r.get("pr_ms"), r.get("pr_points"),
+                        r["pr_ms"] / r["stepper_ms"] if "pr_ms" in r else None])
+    record.note("split: the stepper's program as XLA compiles it by default (loops split across its threads). "
+                "Targets: the Python-facing step ≤ 2× the in-episode step and ≥ 100× PythonRobotics "
+                "(`PYTHONROBOTICS_DIR`: fetched, not vendored).")
     print("  stepper: make_stepper(grid)(state, subgoal); split: the same with the program as XLA compiles it by "
           "default (large loops split across its threads); lean: dwa_step(..., full_info=False); dwa_step: every "
           "rollout kept; episode: the step inside a compiled 50-step episode; x PR: PythonRobotics' dwa_control "
@@ -443,6 +471,7 @@ def main() -> None:
     print("targets: <= 0.2 ms per single-robot step, >= 200 M points/s for >= 64 robots, >= 3x numpy, compile <= 1 s; "
           "Python-facing single-robot step <= 2x the in-episode step and >= 100x PythonRobotics")
     print(steal.summary())
+    record.write()
 
 
 if __name__ == "__main__":

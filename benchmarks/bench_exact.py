@@ -10,6 +10,7 @@ For brc202d (MovingAI, 530x481) and a 512x512 random map with 20 % obstacles it 
     on brc202d), beside scipy's single-source Dijkstra per row (timed on a subset and
     scaled, as a full scipy run takes minutes);
   * the first-call time (loading the compiled search loops) and the machine.
+The figures also go to a JSON record in benchmarks/results/ (`_timing.Record`; docs/benchmarks.md is made from it).
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import scipy
 import scipy.sparse as sp
-from _timing import median_time
+from _timing import Record, median_time
 from scipy.sparse.csgraph import dijkstra as scipy_dijkstra
 
 import jaxplan as jp
@@ -41,7 +42,8 @@ def csgraph_of(grid: jp.GridMap) -> sp.csr_array:
 
 
 
-def bench_map(name: str, grid: jp.GridMap, starts: np.ndarray, goals: np.ndarray, optimal, n_queries: int, n_rows: int):
+def bench_map(name: str, grid: jp.GridMap, starts: np.ndarray, goals: np.ndarray, optimal, n_queries: int, n_rows: int,
+              table: list[list] | None = None):
     rng = np.random.default_rng(0)
     graph = csgraph_of(grid)
     W = grid.width
@@ -86,6 +88,15 @@ def bench_map(name: str, grid: jp.GridMap, starts: np.ndarray, goals: np.ndarray
     print(f"  {str(len(rows)) + ' rows via shortest_lengths, median of 3 (s)':<44}{batch:>12.3f}{scipy_rows:>12.3f}"
           f"{batch / scipy_rows:>8.3f}")
     print(f"  {'first call incl. loading compiled loops (s)':<44}{first:>12.3f}")
+    if table is not None:
+        short = name.split(" (")[0]
+        table += [[short, f"one query, median of {len(q)}", "ms", one_ours * 1e3, one_scipy * 1e3,
+                   one_ours / one_scipy],
+                  [short, "A* nodes expanded, median (scipy: every free cell)", "", statistics.median(expanded), free,
+                   None],
+                  [short, f"{len(rows)} rows via shortest_lengths, median of 3 (scipy: per row, scaled)", "s", batch,
+                   scipy_rows, batch / scipy_rows],
+                  [short, "first call, loading the compiled search loops", "s", first, None, None]]
     return dict(one=one_ours, one_scipy=one_scipy, batch=batch)
 
 
@@ -96,6 +107,9 @@ def main() -> None:
     ap.add_argument("--queries", type=int, default=50)
     ap.add_argument("--rows", type=int, default=1000)
     args = ap.parse_args()
+    record = Record("bench_exact", vars(args))
+    table = record.table("exact search", ["map", "measure", "unit", "jaxplan", "scipy", "jaxplan ÷ scipy"],
+                         "jp.astar and jp.shortest_lengths beside scipy's Dijkstra on the same graph")
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
           f"numpy {np.__version__}, scipy {scipy.__version__}, jaxplan {jp.__version__}, "
           f"search threads {_kernels.n_threads()}")
@@ -104,7 +118,7 @@ def main() -> None:
     grid = jp.load_map(d / "brc202d.map")
     scen = jp.load_scenarios(d / "brc202d.map.scen", grid=grid)
     r1 = bench_map("brc202d (scenario rows, sampled across all buckets)", grid, scen.starts, scen.goals,
-                   scen.optimal, args.queries, args.rows)
+                   scen.optimal, args.queries, args.rows, table)
 
     scene = jp.RandomMapGenerator(512, 512, 0.2)(0)
     grid = scene.grid
@@ -113,11 +127,13 @@ def main() -> None:
     pairs = cells[rng.choice(len(cells), size=(args.rows, 2))]
     ok = np.isfinite(jp.shortest_lengths(grid, pairs[:, 0], pairs[:, 1]))
     r2 = bench_map("random 512x512, 20 % obstacles (random connected pairs)", grid, pairs[ok, 0], pairs[ok, 1],
-                   None, args.queries, args.rows)
+                   None, args.queries, args.rows, table)
 
     print("\ntargets: one query ratio <= 1.0 ->",
           "brc202d %.2f, random512 %.2f" % (r1["one"] / r1["one_scipy"], r2["one"] / r2["one_scipy"]),
           "| 1000 brc202d rows < 10 s -> %.2f s" % r1["batch"])
+    record.note("Targets: one query at most scipy's time (ratio <= 1); 1,000 brc202d rows in under 10 s.")
+    record.write()
 
 
 if __name__ == "__main__":

@@ -21,7 +21,8 @@ Prints one table:
   * ``numpy loop``: the same metrics path by path with the numpy host functions (and
     the clearance field at the vertices), timed on ``--subset`` paths (median of 3) and
     extrapolated.
-Each JAX figure is the median of ``--repeat`` runs after one compiling call.
+Each JAX figure is the median of ``--repeat`` runs after one compiling call. The table also goes to a JSON record
+in benchmarks/results/ (`_timing.Record`; docs/benchmarks.md is made from it).
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ import time
 import jax
 import jax.numpy as jnp
 import numpy as np
-from _timing import median_time
+from _timing import Record, median_time
 
 import jaxplan as jp
 from jaxplan.grid._collision import cached_collision_map
@@ -80,6 +81,7 @@ def main() -> None:
     ap.add_argument("--hausdorff-paths", type=int, default=200)
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
+    record = Record("bench_metrics", vars(args))
     print(f"machine: {os.cpu_count()} cores; {jax.devices()}; jax {jax.__version__}")
 
     scene = jp.RandomMapGenerator(100, 100, 0.2)(args.seed)
@@ -148,13 +150,20 @@ def main() -> None:
     print(f"\n{B} paths x {L} points (valid {L // 2}..{L}) on a 100x100 map with 20 % obstacles; "
           f"median of {args.repeat} runs\n")
     print(f"{'what':<36}{'paths':>8}{'compile/first s':>17}{'run s':>9}{'paths/s':>12}{'vs numpy':>10}")
+    table = record.table("path metrics", ["what", "paths", "compile / first call (s)", "run (s)", "paths/s",
+                                          "× numpy loop"],
+                         f"{B} paths × {L} points on a 100×100 map with 20 % obstacles, median of {args.repeat} runs")
     for name, count, comp, t, *same in rows:
         rate = count / t
         ratio = f"{rate / (B / t_np):>9.1f}x" if not same or same[0] else f"{'-':>10}"
         print(f"{name:<36}{count:>8}{comp:>17.2f}{t:>9.3f}{rate:>12,.0f}{ratio}")
+        table.append([name, count, comp, t, rate, rate / (B / t_np) if not same or same[0] else None])
     print("(vs numpy: paths/s against the numpy loop; the Hausdorff row has no numpy counterpart)")
     print(f"\ntarget: core < 1 s for 10,000 x 256 -> {'met' if t_core < 1.0 else 'MISSED'} ({t_core:.3f} s); "
           f"largest relative difference JAX vs numpy on the subset: {worst:.1e}")
+    record.note(f"Target: the core under 1 s for 10,000 × 256 ({'met' if t_core < 1.0 else 'missed'}); largest "
+                f"relative difference JAX against numpy on the subset {worst:.1e}.")
+    record.write()
 
 
 if __name__ == "__main__":

@@ -38,7 +38,9 @@ Sections:
              time (targets <= 1 ms per step for one robot inside an episode, >= 500x real time).
 
 Every figure is mean ± sd over seeds of the per-seed mean over episodes (success as a
-rate; time over the successful episodes). Infeasible episodes are excluded and counted.
+rate; time over the successful episodes). Infeasible episodes are excluded and counted. The tables also go to a
+JSON record in benchmarks/results/ (`_timing.Record`; docs/benchmarks.md is made from it): a table's name carries
+the options that differ from the defaults, so a run of one map or with more seeds does not stand in for the full one.
 """
 
 from __future__ import annotations
@@ -105,6 +107,40 @@ HEADER = (f"{'':<30}{'runs':>6}{'infeas':>7} | {'success %':>13}{'active/ep':>12
           f"{'act. ep %':>10}{'time s':>14}{'rmse m':>13}{'max κ 1/m':>13}{'replans':>11}{'wall s':>8}")
 
 
+COLUMNS = ["episodes", "infeasible", "success (%)", "active / ep.", "passive / ep.", "episodes with active contact (%)",
+           "time (s)", "RMSE (m)", "max κ (1/m)", "re-plans", "wall (s)"]
+"""The columns of `cells`: one batch of episodes, mean ± sd over seeds."""
+
+RECORD = None
+"""The run's `_timing.Record` (set by `main`)."""
+
+
+def table(name: str, columns: list[str], title: str = "") -> list[list]:
+    """A new table of the run's record (rows to append to)."""
+    return RECORD.table(name, columns, title)
+
+
+def variant(args, keys: tuple[str, ...]) -> str:
+    """`` (…)`` naming the options among ``keys`` that differ from the defaults (for a table's name), or ``""``."""
+    default = {"maps": list(MAPS), "rows": 50, "seeds": 5, "cases": ["static", "blind", "seeing"],
+               "allrows_maps": list(MAPS), "pipeline_maps": [WAREHOUSE], "episodes": 1000, "teams": 10}
+    parts = [f"{k.replace('_', ' ')} {','.join(map(str, v)) if isinstance(v, list) else v}"
+             for k in keys if (v := getattr(args, k)) != default[k]]
+    parts += ["quick"] * args.quick + ["oracle"] * (args.oracle and "maps" in keys) + [
+        "admissible"] * (args.admissible and "maps" in keys)
+    return f" ({'; '.join(parts)})" if parts else ""
+
+
+def cells(b, wall: float) -> list:
+    """`COLUMNS` of one batch (the ± figures as text, as printed)."""
+    s = b.summary()
+    run = b.feasible
+    act_ep = 100 * float(np.mean(b.active_contacts[run] > 0)) if run.any() else None
+    return [int(s["episodes"][0]), int(s["infeasible"][0]), fmt(*s["success"], pct=True), s["active_contacts"][0],
+            s["passive_contacts"][0], act_ep, fmt(*s["time_s"], 1), fmt(*s["rmse"]), fmt(*s["max_curvature"]),
+            fmt(*s["replans"], 1), wall]
+
+
 def row(label: str, b, wall: float) -> str:
     s = b.summary()
     run = b.feasible
@@ -131,6 +167,9 @@ def section_maps(d: Path, args) -> None:
         pipe = f"iaco_{local}"
         print(f"\n== {pipe} on the MovingAI maps (1.0 m per cell) ==")
         print(HEADER)
+        out = table(f"maps, {pipe}{variant(args, ('maps', 'rows', 'seeds', 'cases'))}", ["map", "case", *COLUMNS],
+                    f"{pipe}, {args.rows} rows (optimal ≤ 80 cells) × {args.seeds} seeds per map; 5 walkers of "
+                    "0.25 m at 1.0 m/s, blind or seeing")
         for name in args.maps:
             grid, scen = load(d, name)
             sel = rows(scen, args.rows)
@@ -144,13 +183,11 @@ def section_maps(d: Path, args) -> None:
             if args.oracle:
                 cases.append(("blind, oracle", blind, NavConfig(prediction="oracle")))
             if args.admissible:
-                base = NavConfig()
-                safe = (base.replace(mppi=base.mppi.replace(admissible=True)) if local == "mppi"
-                        else base.replace(dwa=base.dwa.replace(admissible=True)))
-                cases.append(("blind, admissible", blind, safe))
+                cases.append(("blind, admissible", blind, NavConfig(safety="predicted")))
             for label, obs, cfg in cases:
                 b, wall = run(grid, S, G, pipe, seeds, obs, cfg)
                 print(row(f"{name[:15]} {label[:14]}", b, wall), flush=True)
+                out.append([name, label, *cells(b, wall)])
                 if args.verbose:
                     bad = ~b.success & b.feasible
                     print("   failures:", {r: int(np.sum(b.reason[bad] == r)) for r in np.unique(b.reason[bad])},
@@ -168,6 +205,9 @@ def section_allrows(d: Path, args) -> None:
         pipe = f"iaco_{local}"
         total = failed = 0
         t0 = time.perf_counter()
+        out = table(f"allrows, {pipe}{variant(args, ('allrows_maps',))}",
+                    ["map", "rows", "infeasible", "arrived", "failed", "wall (s)"],
+                    f"static {pipe} episodes on every row (optimal ≤ 80 cells) of every scenario file, seed 0")
         for name in args.allrows_maps:
             grid, scen = load(d, name)
             sel = np.nonzero(scen.optimal <= 80.0)[0][: 20 if args.quick else None]
@@ -189,9 +229,11 @@ def section_allrows(d: Path, args) -> None:
             failed += len(lines)
             print(f"{pipe:<12} {name:<24} rows {len(sel):>4}  infeasible {infeasible:>3}  arrived "
                   f"{arrived:>4}  failed {len(lines):>3}  ({wall:.0f} s)", flush=True)
+            out.append([name, len(sel), infeasible, arrived, len(lines), wall])
             if lines:
                 print("\n".join(lines), flush=True)
         print(f"{pipe}: {total - failed} of {total} feasible rows arrived ({time.perf_counter() - t0:.0f} s)")
+        RECORD.note(f"{total - failed} of {total} feasible rows arrived.")
 
 
 def section_pipelines(d: Path, args) -> None:
@@ -203,12 +245,15 @@ def section_pipelines(d: Path, args) -> None:
         sel = rows(scen, args.rows)
         S, G = scen.starts[sel], scen.goals[sel]
         seeds = list(range(args.seeds))
+        out = table(f"pipelines, {map_name}{variant(args, ('rows', 'seeds'))}", ["pipeline", "case", *COLUMNS],
+                    f"every pipeline and ablation on {map_name}, {args.rows} rows × {args.seeds} seeds")
         for label, obs in (("static", None), ("5 walkers at 1.0 m/s", walkers(grid, S, G, 5, 1.0))):
             print(f"-- {label}")
             print(HEADER)
             for name in args.pipelines or list(jp.pipelines()):
                 b, wall = run(grid, S, G, name, seeds, obs)
                 print(row(name, b, wall), flush=True)
+                out.append([name, label, *cells(b, wall)])
                 if args.verbose:
                     bad = ~b.success & b.feasible
                     print("   failures:", {r: int(np.sum(b.reason[bad] == r)) for r in np.unique(b.reason[bad])})
@@ -234,6 +279,11 @@ def section_multi(d: Path, args) -> None:
     cfg = NavConfig(replan=True, stop_on_collision=False)
     print(f"{'obstacle speed':<16}{'teams':>6} | {'robot contacts':>15}{'robot-robot':>13}{'max κ 1/m':>13}"
           f"{'time s':>13}{'energy J':>15}{'success %':>13}{'wall s':>8}")
+    out = table(f"multi{variant(args, ('teams', 'seeds'))}",
+                ["walker speed (m/s)", "teams", "robot contacts per team", "robot–robot", "max κ (1/m)", "time (s)",
+                 "energy (J)", "success (%)", "wall (s)"],
+                f"li2026 Table 3: {args.teams} teams of 5 iaco_dwa robots on {WAREHOUSE} among 5 random walkers, "
+                f"{args.seeds} seeds")
     for speed in (1.0, 1.5):
         obs = walkers(grid, S.reshape(len(teams), -1, 2), G.reshape(len(teams), -1, 2), 5, speed)
         t0 = time.perf_counter()
@@ -253,8 +303,12 @@ def section_multi(d: Path, args) -> None:
         m = lambda x, k=2: fmt(float(np.nanmean(x)), float(np.nanstd(x)), k)  # noqa: E731
         print(f"{speed:<16.1f}{int(run_.sum()):>6} | {m(contacts):>15}{m(pairs):>13}{m(kappa):>13}{m(t, 1):>13}"
               f"{m(en, 0):>15}{fmt(float(np.mean(succ)), float(np.std(succ)), pct=True):>13}{wall:>8.0f}", flush=True)
+        out.append([speed, int(run_.sum()), m(contacts), m(pairs), m(kappa), m(t, 1), m(en, 0),
+                    fmt(float(np.mean(succ)), float(np.std(succ)), pct=True), wall])
     print("   robot contacts: per team, summed over its robots (a robot-robot contact counts for both);"
           " κ: the team's largest; time: mean over arrived robots; energy: team total (EnergyModel proxy, J).")
+    RECORD.note("Robot contacts per team, summed over its robots (a robot–robot contact counts for both); κ the "
+                "team's largest; time the mean over arrived robots; energy the team's total (EnergyModel proxy).")
 
 
 def _one_episode(grid, scen, sel, pipeline: str) -> dict:
@@ -355,6 +409,11 @@ def measure_speed(d: Path, episodes: int) -> dict:
 
 def section_speed(d: Path, args) -> None:
     print(f"\n== speed: {args.episodes} static iaco_dwa episodes on {WAREHOUSE} in one call ==")
+    out = table(f"speed, iaco_dwa{variant(args, ('episodes',))}",
+                ["threads", "episodes", "success (%)", "ms per episode", "compile (s)", "one episode: ms per step",
+                 "× real time"],
+                f"{args.episodes} static iaco_dwa episodes on {WAREHOUSE} in one call (global planning included); "
+                "one episode's compiled control loop against real time (target ≥ 1,000×)")
     for label, prefix in (("XLA default threads", []), ("pinned to 1 core", ["taskset", "-c", "0"])):
         cmd = prefix + [sys.executable, __file__, "--child-speed", str(args.episodes), "--data-dir", str(d)]
         res = subprocess.run(cmd, capture_output=True, text=True)
@@ -370,8 +429,15 @@ def section_speed(d: Path, args) -> None:
         print(f"   one episode: {r['single_steps']} control steps ({r['single_sim_s']:.1f} s simulated) in "
               f"{1e3 * r['single_s']:.1f} ms = {1e3 * r['single_s'] / r['single_steps']:.3f} ms per step, "
               f"{r['single_sim_s'] / r['single_s']:.0f}x real time (target >= 1000x)", flush=True)
+        out.append([label, r["episodes"], 100 * r["success"], 1e3 * total / r["episodes"], r["compile_s"],
+                    1e3 * r["single_s"] / r["single_steps"], r["single_sim_s"] / r["single_s"]])
     if "mppi" in args.local:
         print(f"\n== speed: MPPI ({WAREHOUSE}; 5 moving discs per robot) ==")
+        steps = table("speed, MPPI step", ["threads", "robots", "ms per step", "M rollout points/s", "compile (s)"],
+                      f"one compiled MPPI control step on {WAREHOUSE}, 5 moving discs per robot")
+        episode = table("speed, iaco_mppi episode", ["threads", "control steps", "simulated (s)", "ms per step",
+                                                     "× real time"],
+                        "one static iaco_mppi episode's compiled call (targets ≤ 1 ms per step, ≥ 500× real time)")
         for label, prefix in (("XLA default threads", []), ("pinned to 1 core", ["taskset", "-c", "0"])):
             cmd = prefix + [sys.executable, __file__, "--child-mppi", "--data-dir", str(d)]
             res = subprocess.run(cmd, capture_output=True, text=True)
@@ -382,9 +448,12 @@ def section_speed(d: Path, args) -> None:
             for x in r["rows"]:
                 print(f"{label}: one compiled MPPI step, {x['robots']:>5} robots: {x['ms']:8.3f} ms "
                       f"({x['points_per_s'] / 1e6:.0f} M rollout points/s; compile {x['compile_s']:.2f} s)")
+                steps.append([label, x["robots"], x["ms"], x["points_per_s"] / 1e6, x["compile_s"]])
             print(f"   one iaco_mppi episode: {r['single_steps']} control steps ({r['single_sim_s']:.1f} s simulated) "
                   f"in {1e3 * r['single_s']:.1f} ms = {1e3 * r['single_s'] / r['single_steps']:.3f} ms per step "
                   f"(target <= 1 ms), {r['single_sim_s'] / r['single_s']:.0f}x real time (target >= 500x)", flush=True)
+            episode.append([label, r["single_steps"], r["single_sim_s"], 1e3 * r["single_s"] / r["single_steps"],
+                            r["single_sim_s"] / r["single_s"]])
 
 
 def main() -> None:
@@ -435,8 +504,11 @@ def main() -> None:
     import jax
 
     sys.path.insert(0, str(Path(__file__).parent))
-    from _timing import Steal, machine_line
+    from _timing import Record, Steal, machine_line
 
+    global RECORD
+    RECORD = Record("bench_nav", {k: v for k, v in vars(args).items() if not k.startswith("child")},
+                    quick=args.quick)
     steal = Steal()
     print(f"jax {jax.__version__} on {jax.devices()[0].platform}, {machine_line()}; maps from {d}")
     print(f"{args.rows} rows (optimal <= 80 cells) x {args.seeds} seeds per map")
@@ -445,6 +517,7 @@ def main() -> None:
                     "multi": section_multi, "speed": section_speed}
         sections[s](d, args)
     print(steal.summary())
+    RECORD.write()
 
 
 if __name__ == "__main__":

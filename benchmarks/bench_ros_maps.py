@@ -8,7 +8,8 @@ Loads ``ros/warehouse.yaml`` with its keep-out mask, picks starts and goals by w
 map frame, as a ROS user gives them), and for each resolution and planner prints the path length (m), its gap
 to the exact shortest path at that resolution, and the times: loading, resampling, the first call (compiles)
 and a second, warm call; then episodes (DWA, MPPI) through a slow zone of the speed mask, with and without the
-speed layer. The load of the machine (1-minute load average) is printed first and last.
+speed layer. The load of the machine (1-minute load average) is printed first and last. The tables also go to a
+JSON record in benchmarks/results/ (`_timing.Record`; docs/benchmarks.md is made from it).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _timing import Record
 
 import jaxplan as jp
 
@@ -49,6 +51,10 @@ def main() -> None:
                     help="also run episodes through a slow zone of the speed mask (DWA and MPPI)")
     ap.add_argument("--routes", default="aisle,cross,across", help=f"comma-separated, of {', '.join(ROUTES)}")
     a = ap.parse_args()
+    record = Record("bench_ros_maps", vars(a))
+    table = record.table("plans", ["resolution (m)", "cells", "route", "planner", "seed", "success", "length (m)",
+                                   "gap to A*", "first call (s)", "warm call (s)"],
+                         "Nav2's warehouse with its keep-out mask, at its own 0.03 m and resampled")
     ros = Path(a.data_dir) / "ros"
     print(f"load average (1 min): {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     t0 = time.perf_counter()
@@ -63,13 +69,15 @@ def main() -> None:
         grid = jp.resample(fine, res)
         rs = time.perf_counter() - t0
         for route in a.routes.split(","):
-            _route(a, grid, res, rs, route)
+            _route(a, grid, res, rs, route, table)
+    record.note(f"Routes (start and goal in world metres): {ROUTES}.")
     if a.speed:
-        speed_episodes(ros)
+        speed_episodes(ros, record)
     print(f"routes {ROUTES}; load average (1 min) at the end: {os.getloadavg()[0]:.2f}")
+    record.write()
 
 
-def _route(a: argparse.Namespace, grid: jp.GridMap, res: float, rs: float, route: str) -> None:
+def _route(a: argparse.Namespace, grid: jp.GridMap, res: float, rs: float, route: str, table: list[list]) -> None:
     s, g = grid.cell_at(ROUTES[route][0]), grid.cell_at(ROUTES[route][1])
     opt = None
     for spec in a.planners.split(","):
@@ -87,12 +95,14 @@ def _route(a: argparse.Namespace, grid: jp.GridMap, res: float, rs: float, route
             gap = f"{r.length / opt - 1:+.2%}" if (opt and r.success) else "-"
             print(f"| {res} | {grid.shape[1]}x{grid.shape[0]} (resampled in {rs:.2f} s) | {route} | {spec} | "
                   f"{seed} | {r.success} | {r.length:.2f} | {gap} | {first:.2f} | {warm:.2f} |", flush=True)
+            table.append([res, f"{grid.shape[1]}×{grid.shape[0]}", route, spec, seed, bool(r.success), r.length, gap,
+                          first, warm])
 
 
 ZONE_ROUTE = ((-14.0, 0.9), (-3.7, 0.9))  # west to east through the 80 % zone around the marker at (-7.5, 0)
 
 
-def speed_episodes(ros: Path, resolution: float = 0.1) -> None:
+def speed_episodes(ros: Path, record: Record, resolution: float = 0.1) -> None:
     """Episodes through a slow zone of Nav2's speed mask, with and without the speed layer: the robot's commanded
     speeds in the zone (its top speed times the mask's 80 %), and how many exceed the limit while it brakes."""
     grid = jp.load_map(ros / "warehouse.yaml", keepout=ros / "warehouse_keepout.yaml",
@@ -101,6 +111,10 @@ def speed_episodes(ros: Path, resolution: float = 0.1) -> None:
     print("| local | speed layer | success | time (s) | steps in zone | max v in zone (m/s) | limit (m/s) "
           "| over the limit (braking) | speeds on entering | wall (s) |")
     print("|---|---|---|---|---|---|---|---|---|---|")
+    table = record.table("speed zone", ["local", "speed layer", "success", "time (s)", "steps in zone",
+                                        "max v in zone (m/s)", "limit (m/s)", "over the limit (braking)",
+                                        "speeds on entering", "wall (s)"],
+                         f"episodes through the 80 % zone of Nav2's speed mask at {resolution} m")
     for local in ("dwa", "mppi"):
         for layer in (True, False):
             g = grid if layer else grid.replace(speed_limit=None)
@@ -120,6 +134,9 @@ def speed_episodes(ros: Path, resolution: float = 0.1) -> None:
             print(f"| {local} | {layer} | {ep.success} | {ep.time_s:.1f} | {int(zone.sum())} | "
                   f"{float(v[zone].max()) if zone.any() else float('nan'):.3f} | {limit:.3f} | {int(over.sum())} | "
                   f"{', '.join(f'{x:.2f}' for x in v[first])} | {wall:.1f} |", flush=True)
+            table.append([local, layer, bool(ep.success), ep.time_s, int(zone.sum()),
+                          float(v[zone].max()) if zone.any() else None, limit, int(over.sum()),
+                          ", ".join(f"{x:.2f}" for x in v[first]), wall])
 
 
 if __name__ == "__main__":

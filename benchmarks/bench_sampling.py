@@ -8,7 +8,8 @@ per planner with its registry defaults: success rate, mean ratio of the planned 
 the scenario's optimal octile length (any-angle paths can go below 1), mean turns, and the
 median wall and CPU milliseconds per plan (CPU time is the steadier figure on a shared
 machine). One-off costs (loading compiled numba loops, memoised map preparation) are
-excluded by a warm-up pass over the same rows.
+excluded by a warm-up pass over the same rows. The table also goes to a JSON record in benchmarks/results/
+(`_timing.Record`; docs/benchmarks.md is made from it).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _timing import Record
 
 import jaxplan as jp
 
@@ -62,6 +64,10 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=1)
     ap.add_argument("--max-optimal", type=float, default=80.0)
     args = ap.parse_args()
+    record = Record("bench_sampling", vars(args))
+    table = record.table("sampling planners", ["map", "planner", "success", "length ÷ optimal", "turns", "ms per plan",
+                                               "CPU ms per plan"],
+                         f"{args.rows} rows × {args.seeds} seed(s) per map, optimal ≤ {args.max_optimal:g} cells")
     folder = args.data_dir / "movingai"
     if not folder.is_dir():
         raise SystemExit(f"MovingAI benchmarks not found at {folder} (pass --data-dir)")
@@ -76,6 +82,8 @@ def main() -> None:
             m = bench(grid, scen, rows, planner, args.seeds)
             print(f"{name:<24} {planner:<10} {m['success']:>8.2f} {m['ratio']:>8.3f} {m['turns']:>6.1f} "
                   f"{m['ms']:>8.2f} {m['cpu']:>8.2f}")
+            table.append([name, planner, m["success"], m["ratio"], m["turns"], m["ms"], m["cpu"]])
+    record.write()
 
 
 if __name__ == "__main__":

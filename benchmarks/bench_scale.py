@@ -26,7 +26,8 @@ The aco workload also runs with XLA's Eigen thread pool off (``--xla_cpu_multi_t
 In the 2-device process the call is timed with the mesh and with ``mesh=None`` (one device) in turn,
 so that the machine's drift hits both alike; that ratio is the figure to quote. Each figure is
 the median of 5 timed calls after one untimed call (which compiles). Other
-processes sharing the cores make every figure noisy: run on an idle machine.
+processes sharing the cores make every figure noisy: run on an idle machine. The tables also go to a JSON
+record in benchmarks/results/ (`_timing.Record`; docs/benchmarks.md is made from it).
 """
 
 from __future__ import annotations
@@ -38,7 +39,7 @@ import subprocess
 import sys
 import textwrap
 
-from _timing import Steal, machine_line
+from _timing import Record, Steal, machine_line
 
 CHILD = r"""
 import json, statistics, sys, time
@@ -136,9 +137,12 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--only", default="aco,nav,tune", help="comma-separated workloads: aco, nav, tune")
     args = ap.parse_args(argv)
     steal = Steal()
+    record = Record("bench_scale", vars(args), quick=args.quick)
     print(f"machine: {machine_line()}")
     for work in args.only.split(","):
-        print(f"\n{work}: {textwrap.shorten(__doc__.split(work + '  ')[1].split(chr(10) + chr(10))[0], 300)}")
+        what = textwrap.shorten(__doc__.split(work + '  ')[1].split(chr(10) + chr(10))[0], 300)
+        print(f"\n{work}: {what}")
+        table = record.table(work, ["configuration", "rate", "unit", "÷ row 1"], what)
         print(f"{'configuration':38s} {'rate':>10s} {'unit':>11s} {'vs row 1':>9s}")
         base = None
         for label, d, extra in (ROWS if work == "aco" else (ROWS[0], ROWS[2])):
@@ -148,10 +152,15 @@ def main(argv: list[str] | None = None) -> None:
                 continue
             base = base or r["rate"]
             print(f"{label:38s} {r['rate']:10.2f} {r['unit']:>11s} {r['rate'] / base:8.2f}x", flush=True)
+            table.append([label, r["rate"], r["unit"], r["rate"] / base])
             if d > 1:  # the same process, mesh=None (one device), timed in turn with the mesh
                 print(f"{'  same process, mesh=None (1 device)':38s} {r['one']:10.2f} {r['unit']:>11s} "
                       f"{r['one'] / base:8.2f}x   mesh / mesh=None: {r['rate'] / r['one']:.2f}x", flush=True)
+                table.append(["  same process, mesh=None (1 device)", r["one"], r["unit"], r["one"] / base])
+                record.note(f"With the mesh against mesh=None in the same process, timed in turn: "
+                            f"{r['rate'] / r['one']:.2f}× (the figure to quote).")
     print(steal.summary())
+    record.write()
 
 
 if __name__ == "__main__":

@@ -12,7 +12,8 @@ per map and smoother, relative to the raw path (sums over the rows):
   * seconds per path (after compilation) and the compile + first call time.
 yu2020 reports 5.9 % / 7.2 % length and 15–39 % turns for its line-of-sight pruning.
 Turn counts of sampled curves (fillet, Bezier, B-spline) count every sample, so for them
-read the sharp-turn column.
+read the sharp-turn column. The table also goes to a JSON record in benchmarks/results/ (`_timing.Record`;
+docs/benchmarks.md is made from it).
 """
 
 from __future__ import annotations
@@ -22,10 +23,10 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _timing import Record
 
 import jaxplan as jp
 from jaxplan.metrics import count_sharp_turns, count_turns, path_length
-from jaxplan.smooth import smooth
 
 METHODS = {
     "los": ("los",),
@@ -51,6 +52,10 @@ def main() -> None:
     ap.add_argument("--maps", nargs="*", default=MAPS)
     ap.add_argument("--radius", type=float, default=0.0, help="robot inflation radius (m)")
     args = ap.parse_args()
+    record = Record("bench_smoothing", vars(args))
+    table = record.table("smoothers", ["map", "smoother", "rows", "length cut (%)", "turn cut (%)",
+                                       "sharp-turn cut (%)", "changed", "fallbacks", "ms per path", "compile (s)"],
+                         "each smoother against the exact A* grid path, sums over the rows")
     folder = args.data_dir / "movingai"
     print(f"{'map':24s} {'smoother':11s} {'rows':>4s} {'len cut%':>8s} {'turn cut%':>9s} {'sharp cut%':>10s} "
           f"{'changed':>7s} {'fallback':>8s} {'ms/path':>8s} {'compile s':>9s}")
@@ -67,10 +72,10 @@ def main() -> None:
         s0 = sum(count_sharp_turns(p) for p in raw)
         for label, method in METHODS.items():
             t = time.perf_counter()
-            smooth(pts, grid, method, n=n, radius=args.radius)
+            jp.smooth(pts, grid, method, n=n, radius=args.radius)
             first = time.perf_counter() - t
             t = time.perf_counter()
-            out = smooth(pts, grid, method, n=n, radius=args.radius)
+            out = jp.smooth(pts, grid, method, n=n, radius=args.radius)
             run = time.perf_counter() - t
             paths = [out.points[i, : out.n[i]] for i in range(len(raw))]
             l1 = sum(path_length(p) for p in paths)
@@ -79,6 +84,11 @@ def main() -> None:
             print(f"{name:24s} {label:11s} {len(raw):4d} {100 * (1 - l1 / l0):8.2f} {100 * (1 - t1 / t0):9.1f} "
                   f"{100 * (1 - s1 / s0):10.1f} {int(np.sum(out.removed)):7d} {int(np.sum(out.fallbacks)):8d} "
                   f"{1e3 * run / len(raw):8.2f} {first - run:9.1f}", flush=True)
+            table.append([name, label, len(raw), 100 * (1 - l1 / l0), 100 * (1 - t1 / t0), 100 * (1 - s1 / s0),
+                          int(np.sum(out.removed)), int(np.sum(out.fallbacks)), 1e3 * run / len(raw), first - run])
+    record.note("yu2020 reports 5.9 % and 7.2 % length and 15–39 % turns for its line-of-sight pruning. Sampled "
+                "curves (fillet, Bezier, B-spline) count every sample as a turn: read the sharp-turn column.")
+    record.write()
 
 
 if __name__ == "__main__":

@@ -38,6 +38,8 @@ either, the section says so and is skipped.
 
 For a fair comparison on a shared machine, also run it pinned to one core
 (``taskset -c 0 python benchmarks/bench_tsp.py --only reference``): both then get the same core.
+
+The tables also go to a JSON record in benchmarks/results/ (`_timing.Record`; docs/benchmarks.md is made from it).
 """
 
 from __future__ import annotations
@@ -56,7 +58,7 @@ from pathlib import Path
 
 import jax
 import numpy as np
-from _timing import Steal, machine_line
+from _timing import Record, Steal, machine_line
 
 from jaxplan.aco._tsp import solve_tsp
 from jaxplan.aco._tsplib import TSPProblem, load_tsplib, tour_length
@@ -146,7 +148,7 @@ def _timed_solve(prob: TSPProblem, seed: int, **over) -> tuple[float, float, flo
     return r.time_s / its, cpu / its, r.length
 
 
-def reference_section(folder: Path, optimum: float, args: argparse.Namespace) -> None:
+def reference_section(folder: Path, optimum: float, args: argparse.Namespace, record: Record) -> None:
     """Ant System in jaxplan against ACOTSP, same run (see the module docstring)."""
     ants, its, beta, rho = 500, args.ref_iterations, 5.0, 0.5
     print(f"\nAnt System against ACOTSP: eil51, {ants} ants, {its} iterations per run, {args.ref_seeds} seeds, "
@@ -160,6 +162,10 @@ def reference_section(folder: Path, optimum: float, args: argparse.Namespace) ->
         tau0 = 1.0 / (rho * _nearest_neighbour_length(prob))
         print(f"{'candidate list':<16}{'code':<40}{'wall ms/it':>11}{'ratio':>7}{'CPU ms/it':>10}{'ratio':>7}"
               f"{'mean':>8}{'best':>6}{'mean gap':>10}")
+        table = record.table("against ACOTSP", ["candidates", "code", "wall ms/it", "ratio", "CPU ms/it", "ratio",
+                                                "mean tour", "best", "mean gap (%)"],
+                             f"Ant System, {ants} ants on eil51, {its} iterations, {args.ref_seeds} seeds, "
+                             "no local search")
         for k in [None] + args.candidates:
             g = prob.n - 1 if k is None else k
             over = dict(ants=ants, iterations=its, alpha=1.0, beta=beta, rho=rho, q=1.0, tau0=tau0, candidates=k)
@@ -182,9 +188,14 @@ def reference_section(folder: Path, optimum: float, args: argparse.Namespace) ->
                 ratios = ("", "") if res is ours else (f"{wall / wall0:>6.2f}x", f"{cpu / cpu0:>6.2f}x")
                 print(f"{name:<16}{label[:39]:<40}{1e3 * wall:>11.3f}{ratios[0]:>7}{1e3 * cpu:>10.3f}{ratios[1]:>7}"
                       f"{lengths.mean():>8.1f}{lengths.min():>6.0f}{100 * (lengths.mean() / optimum - 1):>9.2f}%")
+                table.append([name, label, 1e3 * wall, None if res is ours else wall / wall0, 1e3 * cpu,
+                              None if res is ours else cpu / cpu0, lengths.mean(), lengths.min(),
+                              100 * (lengths.mean() / optimum - 1)])
         print(f"(ratio: ACOTSP's time per iteration over jaxplan's, wall and CPU; jaxplan's CPU time sums its "
               f"threads; ACOTSP -g {prob.n - 1} is the full list on eil51; compile {first.info['compile_s']:.2f} s, "
               f"excluded)")
+        record.note("ratio: ACOTSP's time per iteration over jaxplan's (above 1: jaxplan faster), wall and CPU; "
+                    "jaxplan's CPU time sums its threads. ACOTSP 1.03, built, not vendored (`$ACOTSP_BIN`).")
 
 
 def main() -> None:
@@ -201,24 +212,29 @@ def main() -> None:
                     help="candidate-list lengths compared with ACOTSP's -g besides the full list")
     ap.add_argument("--only", nargs="+", choices=SECTIONS, default=list(SECTIONS), help="sections to run")
     args = ap.parse_args()
+    record = Record("bench_tsp", vars(args))
     folder = Path(args.data_dir) / "tsplib"
     optima = _manifest(folder)
     steal = Steal()
     print(f"machine: {machine_line()}; {jax.devices()}; load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}; "
           f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}")
     if "quality" in args.only:
-        quality_section(folder, optima, args)
+        quality_section(folder, optima, args, record)
     if "speed" in args.only:
-        speed_section(folder, args)
+        speed_section(folder, args, record)
     if "reference" in args.only:
-        reference_section(folder, optima["eil51"], args)
+        reference_section(folder, optima["eil51"], args, record)
     print(steal.summary())
+    record.write()
 
 
-def quality_section(folder: Path, optima: dict[str, float], args: argparse.Namespace) -> None:
+def quality_section(folder: Path, optima: dict[str, float], args: argparse.Namespace, record: Record) -> None:
     """praco and aco tour quality on eil51 and berlin52 (see the module docstring)."""
     print(f"\n{'instance':<10}{'planner':<12}{'runs':>5}{'mean':>9}{'min':>7}{'max':>7}{'mean gap':>10}"
           f"{'opt hits':>9}{'conv it':>8}{'run s':>7}{'ms/it':>7}{'compile s':>10}")
+    table = record.table("tour quality", ["instance", "planner", "runs", "mean", "min", "max", "mean gap (%)",
+                                          "optimal tours", "converged at", "run (s)", "ms/it", "compile (s)"],
+                         f"TSPLIB instances, {args.seeds} seeds, no local search unless marked +2opt")
     for name in ("eil51", "berlin52"):
         prob = load_tsplib(folder / f"{name}.tsp")
         opt = optima[name]
@@ -233,16 +249,24 @@ def quality_section(folder: Path, optima: dict[str, float], args: argparse.Names
                   f"{100 * (lengths.mean() / opt - 1):>9.2f}%{int((lengths == opt).sum()):>9}"
                   f"{np.mean([r.info['converged_iteration'] for r in res]):>8.0f}{run_s:>7.2f}"
                   f"{1e3 * run_s / its:>7.2f}{res[0].info['compile_s']:>10.2f}")
+            table.append([name, label, len(res), lengths.mean(), lengths.min(), lengths.max(),
+                          100 * (lengths.mean() / opt - 1), int((lengths == opt).sum()),
+                          float(np.mean([r.info["converged_iteration"] for r in res])), run_s, 1e3 * run_s / its,
+                          res[0].info["compile_s"]])
+    record.note(f"Optima: eil51 {optima['eil51']:.0f}, berlin52 {optima['berlin52']:.0f}. Target: praco's mean gap "
+                "at most 5 %.")
     print(f"(optima: eil51 {optima['eil51']:.0f}, berlin52 {optima['berlin52']:.0f}; target: praco mean gap <= 5 %; "
           f"no local search unless marked +2opt)")
 
 
-def speed_section(folder: Path, args: argparse.Namespace) -> None:
+def speed_section(folder: Path, args: argparse.Namespace, record: Record) -> None:
     """Time per iteration with 500 ants on eil51 against the scikit-opt figure (see the module docstring)."""
     prob = load_tsplib(folder / "eil51.tsp")
     its = args.speed_iterations
     print(f"\n500 ants on eil51, {its} iterations per run, median of {args.speed_seeds} runs (compilation excluded):")
     print(f"{'setting':<34}{'ms/iteration':>13}{'speed-up vs 0.7 s':>19}{'compile s':>11}")
+    table = record.table("time per iteration", ["setting", "ms/iteration", "× scikit-opt's 0.7 s", "compile (s)"],
+                         f"500 ants on eil51, {its} iterations per run, median of {args.speed_seeds} runs")
     for label, planner, over in (("aco, ants=500", "aco", {"ants": 500}),
                                  ("aco, ants=500, one device", "aco", {"ants": 500, "mesh": None}),
                                  ("aco, ants=500, candidates=20", "aco", {"ants": 500, "candidates": 20}),
@@ -252,8 +276,11 @@ def speed_section(folder: Path, args: argparse.Namespace) -> None:
                                    for s in range(args.speed_seeds))
         print(f"{label:<34}{1e3 * per_it:>13.2f}{REFERENCE_S_PER_ITERATION / per_it:>18.0f}x"
               f"{first.info['compile_s']:>11.2f}")
+        table.append([label, 1e3 * per_it, REFERENCE_S_PER_ITERATION / per_it, first.info["compile_s"]])
     target_ms = math.floor(1e4 * REFERENCE_S_PER_ITERATION / TARGET_SPEEDUP) / 10
     print(f"(target: >= {TARGET_SPEEDUP:.0f}x, i.e. <= {target_ms} ms per iteration)")
+    record.note(f"scikit-opt's ACA_TSP is quoted at about 0.7 s per iteration for 500 ants (not measured here). "
+                f"Target: at least {TARGET_SPEEDUP:.0f}× ({target_ms} ms per iteration).")
 
 
 if __name__ == "__main__":

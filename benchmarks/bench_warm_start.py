@@ -25,8 +25,9 @@ Modes (each case runs ``--repeats`` times per mode; the table shows medians):
 
 The commands run as ``python -m jaxplan.cli`` (the ``jaxplan`` script's code), with stdout and stderr captured
 (no progress display). Other processes on the cores inflate every figure: run on an idle machine, or under
-``nice -n 19`` beside other work and say so (the load average is printed and saved). The JSON goes to
-``benchmarks/results/warm_start-<UTC date>.json`` (or ``--json PATH``).
+``nice -n 19`` beside other work and say so (the load average is printed and saved). The JSON record (the tables,
+and every run under ``results``) goes to benchmarks/results/ (`_timing.Record`, or ``--json PATH``);
+docs/benchmarks.md is made from it.
 """
 
 from __future__ import annotations
@@ -41,11 +42,10 @@ import sys
 import tempfile
 import textwrap
 import time
-from datetime import datetime, timezone
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _timing import Steal, machine_line  # noqa: E402 (the benchmarks folder is not a package)
+from _timing import Record, Steal, machine_line  # noqa: E402 (the benchmarks folder is not a package)
 
 ROOT = Path(__file__).resolve().parents[1]
 MAP = "movingai/warehouse-10-20-10-2-1.map"
@@ -159,6 +159,30 @@ def summary(runs: list[dict]) -> dict:
     return out
 
 
+PHASES = ("import_s", "load_map_s", "numba_walk_s", "first_navigate_s", "xla_s", "cache_hits", "second_navigate_s")
+"""The python child's phases, in the order the tables show them."""
+
+
+def record_tables(record: Record, results: dict, modes: list[str]) -> None:
+    """The two tables of `print_tables` as tables of ``record``."""
+    table = record.table("warm starts", ["case", *(f"{m}: {x}" for m in modes for x in ("wall (s)", "CPU (s)")),
+                                         "target (s)"],
+                         "a new process timed from outside, median of the runs: nothing cached (cold), the "
+                         "compilation caches off (off), on and warmed (warm)")
+    for case, by_mode in results.items():
+        table.append([case, *(by_mode[m][k] if m in by_mode else None for m in modes for k in ("wall_s", "cpu_s")),
+                      TARGETS[case]])
+    record.note("Targets apply to the warm mode; the python case's target is its first jp.navigate call "
+                "(the first_navigate_s phase below).")
+    py = results.get("python", {})
+    if py:
+        phases = record.table("python phases", ["mode", *PHASES],
+                              "inside the python child, medians (s): import = import jaxplan + jp.navigate's package; "
+                              "first_navigate includes numba_walk; xla = compiling or loading programs; the rest of "
+                              "first_navigate is tracing, lowering and running")
+        phases += [[m, *(py[m]["phases"][k] for k in PHASES)] for m in modes if m in py]
+
+
 def print_tables(results: dict, modes: list[str]) -> None:
     """The wall-time table (median, range, CPU) and the python child's phases."""
     print(f"\n{'case':<10}" + "".join(f"{m + ' wall (range) cpu':>32}" for m in modes) + f"{'target':>9}")
@@ -172,8 +196,7 @@ def print_tables(results: dict, modes: list[str]) -> None:
         print(f"{case:<10}" + "".join(f"{c:>32}" for c in cells) + f"{target:>9}")
     py = results.get("python", {})
     if py:
-        keys = ("import_s", "load_map_s", "numba_walk_s", "first_navigate_s", "xla_s", "cache_hits",
-                "second_navigate_s")
+        keys = PHASES
         print("\npython child, medians (s): import = import jaxplan + jp.navigate's package; first_navigate "
               "includes numba_walk; xla = compiling or loading programs; the rest of first_navigate is tracing, "
               "lowering and running")
@@ -204,9 +227,9 @@ def main(argv: list[str] | None = None) -> int:
     load = os.getloadavg()
     print(f"machine: {machine_line()}; load average at start {load[0]:.2f}, {load[1]:.2f}, {load[2]:.2f}")
     print(f"map {map_path.name}, start {START}, goal {GOAL}; {args.repeats} timed runs per case and mode")
+    record = Record("bench_warm_start", {k: v for k, v in vars(args).items() if k != "json"})
     steal = Steal()
     results: dict = {}
-    t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="jaxplan-warm-") as tmp:
         for case in cases:
             for mode in modes:
@@ -217,15 +240,10 @@ def main(argv: list[str] | None = None) -> int:
     print_tables(results, modes)
     fraction = steal.fraction()
     print(steal.summary(fraction))
-    end_load = os.getloadavg()
-    out = Path(args.json) if args.json else (
-        ROOT / "benchmarks" / "results" / f"warm_start-{datetime.now(timezone.utc):%Y-%m-%d}.json")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps({"machine": machine_line(), "load_start": load, "load_end": end_load,
-                               "steal": fraction, "repeats": args.repeats, "map": MAP, "start": START, "goal": GOAL,
-                               "targets_s": TARGETS, "wall_s": time.perf_counter() - t0, "results": results},
-                              indent=1))
-    print(f"wrote {out}")
+    record_tables(record, results, modes)
+    record.extra.update(load_end=list(os.getloadavg()), map=MAP, start=START, goal=GOAL, targets_s=TARGETS,
+                        results=results)
+    record.write(args.json)
     return 0
 
 

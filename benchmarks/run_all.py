@@ -1,6 +1,7 @@
 """Every benchmark of jaxplan in one process, printed as one table and saved as JSON.
 
 Run:  python benchmarks/run_all.py [--quick] [--json PATH] [--data-dir ../shared/benchmarks] [--only aco,dwa,...]
+      python benchmarks/run_all.py --page     # docs/benchmarks.md from the JSON records (benchmarks/page.py)
 
 Each row is ``quantity | jaxplan | reference (what it is) | speed-up | unit``. Every reference
 is measured in the same run, on the same machine, right beside the jaxplan figure (the one
@@ -619,6 +620,23 @@ def table(rows: list[Row]) -> str:
     return "\n".join(out)
 
 
+COLUMNS = ["section", "quantity", "jaxplan", "reference", "reference is", "speed-up", "unit", "n"]
+"""The columns of the recorded table (docs/benchmarks.md shows it)."""
+
+
+def rows_table(rows: list[dict]) -> dict:
+    """The JSON record's table of ``rows`` (`Row` as dicts): a row that did not run holds its status as quantity."""
+    out = [[r["section"], r["quantity"], r["value"], r["reference"], r["reference_what"], r["speedup"], r["unit"],
+            r["repeats"]] if r["status"] == "ok" else [r["section"], r["status"], None, None, "", None, "", None]
+            for r in rows]
+    return {"name": "all sections",
+            "title": "every section in one table: jaxplan beside the reference measured (or quoted) in the same run",
+            "columns": COLUMNS, "rows": out,
+            "notes": ["speed-up: how many times faster jaxplan is than the reference (above 1: faster); n: repeats "
+                      "of the median; compilation excluded (its own rows). Every reference is measured in the same "
+                      "run, except the chen2023 row's MATLAB time, the paper's figure."]}
+
+
 def write_json_atomic(path: Path, data: dict) -> None:
     from jaxplan.core.io import atomic_write
 
@@ -633,6 +651,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     ap.add_argument("--data-dir", default=os.environ.get("JAXPLAN_DATA", str(ROOT.parent / "shared" / "benchmarks")))
     ap.add_argument("--only", default=",".join(SECTIONS), help=f"comma-separated sections of {','.join(SECTIONS)}")
     ap.add_argument("--no-progress", action="store_true", help="no progress bar on stderr (drawn only on a terminal)")
+    ap.add_argument("--page", action="store_true",
+                    help="only write docs/benchmarks.md from the JSON records in benchmarks/results/ (runs nothing)")
     args = ap.parse_args(argv)
     sizes = dict(repeats=5, queries=50, rows=1000, paths=10_000, subset=500, episodes=64, nav_repeats=3,
                  nav_singles=5, population=16,
@@ -654,6 +674,11 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
+    if args.page:
+        from page import write_page
+
+        print(f"wrote {write_page()}")
+        return
     import jaxplan
 
     jaxplan.use_host_devices()  # first, before JAX's backend starts: one host device per core (the scale rows)
@@ -693,9 +718,13 @@ def main(argv: list[str] | None = None) -> None:
     mach["steal_fraction"] = steal.fraction()
     print(steal.summary(mach["steal_fraction"]))
     print(f"\nwall time {wall:.0f} s ({', '.join(f'{k} {v:.0f} s' for k, v in timings.items())})")
-    data = {"started_utc": started.isoformat(timespec="seconds"), "quick": args.quick, "machine": mach,
-            "options": {k: v for k, v in vars(args).items() if k not in ("json", "no_progress")}, "wall_s": wall,
-            "section_wall_s": timings, "rows": [dataclasses.asdict(r) for r in rows]}
+    data = {"bench": "run_all", "command": " ".join(["python", "benchmarks/run_all.py", *sys.argv[1:]]),
+            "started_utc": started.isoformat(timespec="seconds"), "quick": args.quick,
+            "machine_line": mach["cpu_line"], "machine": mach, "load_avg": mach["load_avg"],
+            "steal": mach["steal_fraction"],
+            "options": {k: v for k, v in vars(args).items() if k not in ("json", "no_progress", "page")},
+            "wall_s": wall, "section_wall_s": timings, "rows": [dataclasses.asdict(r) for r in rows]}
+    data["tables"] = [rows_table(data["rows"])]
     name = f"run_all-{started:%Y-%m-%d}-{mach['git_rev'] or 'norev'}{'-quick' if args.quick else ''}.json"
     out = HERE / "results" / name
     write_json_atomic(out, data)
