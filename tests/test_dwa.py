@@ -418,8 +418,8 @@ def test_bad_input_is_a_clear_error(bad, match):
                 path=None)
     args.update(bad)
     with pytest.raises(ValueError, match=match):
-        dwa_step(args["state"], args["subgoal"], grid, args["obstacles"], args["params"], config=args["config"],
-                 path=args["path"])
+        dwa_step(args["state"], args["subgoal"], grid, obstacles=args["obstacles"], params=args["params"],
+                 config=args["config"], path=args["path"])
 
 
 def test_softmax_episode_is_differentiable_in_the_weights():
@@ -580,7 +580,7 @@ def _brakes_clear(start, v, w, decel, disc_xy, disc_vel, disc_r, robot_r, t0, dt
 
 
 def test_admissible_samples_can_brake_before_a_predicted_contact():
-    """A disc coming head-on down an open hall: with ``admissible=True`` every feasible sample — the chosen one
+    """A disc coming head-on down an open hall: with ``safety="predicted"`` every feasible sample — the chosen one
     included — can still brake to rest before the disc's predicted path reaches it; without, some cannot."""
     grid = jp.grid_from_array(np.ones((12, 30), bool), resolution=1.0)
     disc_xy, disc_vel = np.array([11.5, 6.0]), np.array([-1.5, 0.0])
@@ -589,7 +589,7 @@ def test_admissible_samples_can_brake_before_a_predicted_contact():
     state = np.array([5.0, 6.0, 0.0, 1.0, 0.0], np.float32)
     seen = {}
     for admissible in (False, True):
-        config = DWAConfig(n_v=6, n_omega=9, admissible=admissible)
+        config = DWAConfig(n_v=6, n_omega=9, safety="predicted" if admissible else "none")
         u, info = dwa_step(state, np.array([28.0, 6.0]), grid, obstacles=obs, config=config)
         r = config.robot
         ends = np.asarray(info.rollouts)[:, -1]

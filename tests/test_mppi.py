@@ -165,7 +165,7 @@ def test_admissible_never_chooses_a_sequence_that_cannot_stop(corridor):
     """A disc parked 2 m ahead of a fast robot: with the admissibility option every sequence with weight is one
     whose braking run from its end stays clear, and the robot brakes."""
     _, table = corridor
-    cfg = CFG.replace(admissible=True, d_safe=0.3)
+    cfg = CFG.replace(safety="predicted", d_safe=0.3)
     disc = DiscObstacles(jnp.array([[8.0, 3.5]]), jnp.zeros((1, 2)), jnp.array([0.25]))
     state = jnp.array([4.5, 3.5, 0.0, 1.2, 0.0], jnp.float32)
     u, info = jax.jit(lambda s: mppi_control(table, cfg, PARAMS, s, initial_sequence(cfg, s), jax.random.key(3),
@@ -197,7 +197,7 @@ def test_admissible_with_a_walker_coming_head_on(corridor):
     from test_dwa import _brakes_clear
 
     _, table = corridor
-    cfg = CFG.replace(admissible=True)
+    cfg = CFG.replace(safety="predicted")
     disc_xy, disc_vel = np.array([12.0, 3.5]), np.array([-1.0, 0.0])
     disc = DiscObstacles(jnp.asarray([disc_xy], jnp.float32), jnp.asarray([disc_vel], jnp.float32),
                          jnp.array([0.25]))

@@ -34,7 +34,7 @@ def _prepared(local: str, behavior: str, group: int):
         return jp.random_obstacles(grid, n=5, speed=1.0, radius=0.25, seed=10_000 * seed + e, avoid=avoid,
                                    avoid_radius=3.0, behavior=behavior)
 
-    return prepare_episodes(grid, S, G, f"astar_kng_{local}", [0], walkers,
+    return prepare_episodes(grid, S, G, pipeline=f"astar_kng_{local}", seeds=[0], obstacles=walkers,
                             config=NavConfig(max_time=40.0, replan_group=group), mesh=None)
 
 

@@ -27,11 +27,30 @@ from jaxplan.dwa._clearance import (
     speed_cap,
     static_clearance,
 )
-from jaxplan.dwa._config import CLEARANCE_MODES, EVALUATORS, SELECTIONS, DWAConfig, DWAParams, default_params
+from jaxplan.dwa._config import (
+    CLEARANCE_MODES,
+    EVALUATORS,
+    SAFETY_MODES,
+    SELECTIONS,
+    DWAConfig,
+    DWAParams,
+    default_params,
+    safety_from_admissible,
+)
 from jaxplan.dwa._core import DWAInfo, dwa_control, dwa_control_batch, evaluate, trajectory
 from jaxplan.dwa._critics import Critics, critics
 from jaxplan.dwa._fastmath import abs_angle, rotor
 from jaxplan.dwa._fuzzy import fuzzy_evaluate, input_memberships, rule_table
+from jaxplan.dwa._passive import (
+    DEFAULT_WALKER_SPEED,
+    FLOAT_SLACK,
+    POINTS_PER_PERIOD,
+    brake,
+    braking_periods,
+    passive_slack,
+    walker_speed_bound,
+    with_brake_periods,
+)
 from jaxplan.dwa._robot import (
     Ackermann,
     Disc,
@@ -46,6 +65,7 @@ from jaxplan.dwa._robot import (
 from jaxplan.dwa._rollout import Rollouts, rollout
 from jaxplan.dwa._step import (
     as_obstacles,
+    check_safety,
     dwa_step,
     obstacles_to_local,
     table_of,
@@ -53,7 +73,14 @@ from jaxplan.dwa._step import (
     validate_params,
 )
 from jaxplan.dwa._stepper import DWAStepper, make_stepper
-from jaxplan.dwa._window import Window, dynamic_window, sample_controls
+from jaxplan.dwa._window import (
+    Window,
+    clamp_controls,
+    curvature_window,
+    dynamic_window,
+    sample_controls,
+    window_of,
+)
 
 __all__ = [
     "Robot", "abs_angle", "as_obstacles", "braking_clearance", "curvature_limit", "rotor",
@@ -65,4 +92,7 @@ __all__ = [
     "input_memberships", "make_stepper", "no_obstacles", "rollout", "rule_table", "sample_controls",
     "obstacles_to_local", "speed_cap", "static_clearance", "table_of",
     "trajectory", "validate_config", "validate_params",
+    "DEFAULT_WALKER_SPEED", "FLOAT_SLACK", "POINTS_PER_PERIOD", "SAFETY_MODES", "brake", "braking_periods",
+    "check_safety", "clamp_controls", "curvature_window", "passive_slack", "safety_from_admissible",
+    "walker_speed_bound", "window_of", "with_brake_periods",
 ]

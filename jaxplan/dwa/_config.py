@@ -13,7 +13,8 @@ and differentiates (docs/guide/experiments.md), never a reason to recompile.
 from __future__ import annotations
 
 import dataclasses
-from typing import NamedTuple
+import warnings
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -21,7 +22,8 @@ import numpy as np
 
 from jaxplan.dwa._robot import Robot, Unicycle
 
-__all__ = ["DWAConfig", "DWAParams", "EVALUATORS", "CLEARANCE_MODES", "SELECTIONS", "RECOVERIES", "default_params"]
+__all__ = ["DWAConfig", "DWAParams", "EVALUATORS", "CLEARANCE_MODES", "SELECTIONS", "RECOVERIES", "SAFETY_MODES",
+           "default_params", "safety_from_admissible"]
 
 EVALUATORS = ("weighted", "fuzzy", "classic")
 """Rollout evaluators: cui2025's Eq. (7) weighted sum, cui2025's fuzzy evaluation, PythonRobotics' costs."""
@@ -34,6 +36,30 @@ RECOVERIES = ("rotate", "flee")
 
 SELECTIONS = ("argmax", "softmax")
 """How the control is chosen from the scored samples."""
+
+SAFETY_MODES = ("none", "predicted", "passive")
+"""What a local planner checks before it commits to a control (docs/guide/navigation.md, "Safety"):
+
+* ``"none"`` (default): nothing beyond its own clearance to the predicted obstacles;
+* ``"predicted"``: a rollout counts only if the robot can brake to rest after its horizon before any *predicted*
+  contact (`jaxplan.dwa.braking_clearance`; the option once called ``admissible=True``);
+* ``"passive"``: a control counts only if, after its first control period, the robot can brake to rest before
+  reaching any point a walker *can* reach at ``walker_speed_max`` from where it is now, and before the map
+  (`jaxplan.dwa.passive_slack`): whatever the walkers do, the robot is at rest whenever one touches it.
+"""
+
+
+def safety_from_admissible(owner: object, admissible: bool | None) -> None:
+    """The deprecated ``admissible`` field of a local planner's config mapped onto ``safety`` (in place, from
+    ``__post_init__``): True becomes ``"predicted"`` with a `DeprecationWarning`; the field is then cleared, so
+    that configs equal in meaning compare and hash equal."""
+    if admissible is None:
+        return
+    warnings.warn(f"{type(owner).__name__}(admissible=...) is deprecated; use safety='predicted' (admissible=True) "
+                  "or safety='none' (admissible=False)", DeprecationWarning, stacklevel=4)
+    if admissible:
+        object.__setattr__(owner, "safety", "predicted")
+    object.__setattr__(owner, "admissible", None)
 
 
 @jax.tree_util.register_dataclass
@@ -77,9 +103,17 @@ class DWAConfig:
         (v, ω) for the next period, as for the others: the straight part is only a promise
         the next steps may keep. Each fraction must leave at least one point on either part.
       n_omega_straight: yaw-rate samples per speed in each ``straighten`` grid (static).
-      admissible: passive motion safety (static): a sample is feasible only if, from its rollout's end, the
-        robot can still brake to rest along its path before any predicted contact (`braking_clearance`).
-      brake_points: points of that braking check (static).
+      safety: ``"none"`` (default), ``"predicted"`` or ``"passive"`` (static; `SAFETY_MODES`). ``"predicted"``: a
+        sample is feasible only if, from its rollout's end, the robot can still brake to rest along its path before
+        any predicted contact (`braking_clearance`). ``"passive"``: only if, after one control period at the
+        sample's (v, ω), braking as hard as the robot can keeps it off the map and out of every walker's reach
+        (`passive_slack`); when no sample passes, the robot brakes (`brake`).
+      walker_speed_max: the walkers' speed bound (m/s) of ``safety="passive"``, or None: the scenario's in a
+        navigation episode, else the larger of `DEFAULT_WALKER_SPEED` and the fastest disc's current speed.
+      brake_points: points of the ``"predicted"`` braking check (static).
+      brake_periods: control periods the ``"passive"`` braking run may take to stop (static), or None: enough
+        for the robot's limits (`braking_periods`); a run not at rest by then does not pass.
+      admissible: deprecated: ``True`` is ``safety="predicted"`` (a `DeprecationWarning`; read back as None).
     """
 
     robot: Robot = Unicycle()
@@ -100,8 +134,14 @@ class DWAConfig:
     recovery: str = dataclasses.field(default="rotate", metadata=dict(static=True))
     straighten: tuple[float, ...] = dataclasses.field(default=(), metadata=dict(static=True))
     n_omega_straight: int = dataclasses.field(default=20, metadata=dict(static=True))
-    admissible: bool = dataclasses.field(default=False, metadata=dict(static=True))
+    safety: str = dataclasses.field(default="none", metadata=dict(static=True))
+    walker_speed_max: float | None = None
     brake_points: int = dataclasses.field(default=8, metadata=dict(static=True))
+    brake_periods: int | None = dataclasses.field(default=None, metadata=dict(static=True))
+    admissible: bool | None = dataclasses.field(default=None, metadata=dict(static=True))
+
+    def __post_init__(self) -> None:
+        safety_from_admissible(self, self.admissible)
 
     @property
     def steps(self) -> int:
@@ -117,7 +157,7 @@ class DWAConfig:
         """Points each ``straighten`` grid turns for, round(f·T)."""
         return tuple(int(round(f * self.steps)) for f in self.straighten)
 
-    def replace(self, **changes) -> "DWAConfig":
+    def replace(self, **changes: Any) -> "DWAConfig":
         return dataclasses.replace(self, **changes)
 
 

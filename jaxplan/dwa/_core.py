@@ -24,6 +24,12 @@ heading for a stopped robot hits it, which among random walkers was most of the 
 Among the samples that keep d_safe from the map, if any do: the most clearance from anything
 can lead into a wall (see `_flee`).
 
+Safety (`DWAConfig.safety`): with ``"predicted"`` a sample is feasible only if the robot can brake to rest from its
+rollout's end before any predicted contact (`braking_clearance`); with ``"passive"`` only if one period at its
+(v, ω) and then the hardest braking keep the robot off the map and out of every walker's reachable set
+(`jaxplan.dwa._passive`). In passive mode the recovery is restricted to such samples, and with none the robot
+brakes; a softmax blend, a stuck-escape turn or a turn in place is checked too and replaced when it fails.
+
 The ``"classic"`` evaluator adds PythonRobotics' stuck-escape rule: when the chosen
 speed and the current speed are both below 0.001 m/s, turn (PythonRobotics commands
 ``-max_delta_yaw_rate``; here the most negative yaw rate inside the window, so the
@@ -46,6 +52,7 @@ from jaxplan.dwa._brake import braking_clearance
 from jaxplan.dwa._clearance import ClearanceTable, DiscObstacles, disc_clearance, speed_cap, static_clearance
 from jaxplan.dwa._config import DWAConfig, DWAParams
 from jaxplan.dwa._fuzzy import fuzzy_evaluate
+from jaxplan.dwa._passive import brake, braking_periods, passive_slack, walker_speed_bound
 from jaxplan.dwa._robot import Disc, curvature_limit, footprint_offsets, footprint_radius
 from jaxplan.dwa._rollout import rollout
 from jaxplan.dwa._window import dynamic_window, sample_controls
@@ -158,16 +165,23 @@ def _current_clearance(clearance, state: jnp.ndarray, footprint) -> jnp.ndarray:
     return jnp.min(jnp.concatenate(c)) if len(c) > 1 else c[0][0]
 
 
-def _flee(ro, d_safe) -> jnp.ndarray:
-    """Index of the sample that keeps the most clearance, among those that keep d_safe from the map if any do.
+def _flee(ro, d_safe, allowed: jnp.ndarray | None = None) -> jnp.ndarray:
+    """Index of the sample that keeps the most clearance, among those that keep d_safe from the map if any do
+    (and among the ``allowed`` ones, ``bool[S]``, if given: the passively safe ones).
 
     The most clearance from anything can be a flight from a walker into a wall: among walkers,
     robots fleeing by clearance alone ended on walls.
     """
-    if ro.static is None:
-        return jnp.argmax(ro.clearance)
-    safe = ro.static >= d_safe
-    return jnp.argmax(jnp.where(safe | ~jnp.any(safe), ro.clearance, -jnp.inf))
+    if allowed is None:
+        if ro.static is None:
+            return jnp.argmax(ro.clearance)
+        safe = ro.static >= d_safe
+        return jnp.argmax(jnp.where(safe | ~jnp.any(safe), ro.clearance, -jnp.inf))
+    pick = allowed
+    if ro.static is not None:
+        safe = (ro.static >= d_safe) & allowed
+        pick = jnp.where(jnp.any(safe), safe, allowed)
+    return jnp.argmax(jnp.where(pick, ro.clearance, -jnp.inf))
 
 
 def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, state: jnp.ndarray,
@@ -234,15 +248,26 @@ def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, sta
     if config.escape:
         threshold = jnp.minimum(threshold, _current_clearance(combined, state, robot.footprint) - ESCAPE_SLACK)
     feasible = ro.clearance >= threshold
-    if config.admissible:
+    passive = None
+    if config.safety == "passive":
+        discs = obstacles if moving else None
+
+        def admissible(v_, w_):
+            return passive_slack(table, config.clearance, robot, state, v_, w_, config.period, discs,
+                                 walker_speed_bound(config.walker_speed_max, discs),
+                                 braking_periods(robot, config.period, config.brake_periods)) >= 0.0
+
+        passive = admissible(v, w)
+        feasible = feasible & passive
+    elif config.safety == "predicted":
         # The turn-then-straight samples end driving straight: they brake along a straight line.
         w_end = w if not config.straighten else jnp.concatenate([w[:config.n_v * config.n_omega],
                                                                  jnp.zeros_like(w[config.n_v * config.n_omega:])])
         closing = jnp.max(jnp.sqrt(jnp.sum(obstacles.velocities ** 2, axis=-1)), initial=0.0) if moving else 0.0
-        brake = braking_clearance(combined, robot, ro.end[:, 0], ro.end[:, 1],
-                                  lax.complex(ro.end_dir[:, 0], ro.end_dir[:, 1]), v, w_end, steps * dt,
-                                  config.brake_points, closing)
-        feasible = feasible & (brake >= footprint_radius(robot.footprint))
+        stopping = braking_clearance(combined, robot, ro.end[:, 0], ro.end[:, 1],
+                                     lax.complex(ro.end_dir[:, 0], ro.end_dir[:, 1]), v, w_end, steps * dt,
+                                     config.brake_points, closing)
+        feasible = feasible & (stopping >= footprint_radius(robot.footprint))
     reach = jnp.maximum(jnp.abs(robot.v_min), robot.v_max) * (steps * dt)
     cr = C.critics(ro.end, ro.clearance, v, state, subgoal, robot, config.d_clip, config.path_clip, reach, path,
                    ro.end_dir)
@@ -277,12 +302,23 @@ def dwa_control(table: ClearanceTable, config: DWAConfig, params: DWAParams, sta
         u = jnp.where(stuck, jnp.stack([u[0], w_escape]), u)
 
     if config.recovery == "flee":
-        u_rec = u_samples[_flee(ro, config.d_safe)]
+        u_rec = u_samples[_flee(ro, config.d_safe, passive)]
     elif config.recovery == "rotate":
         u_rec = _recovery(config, state, subgoal, window)
     else:
         raise ValueError(f"unknown recovery {config.recovery!r}")
+    if passive is not None:
+        # Nothing passively safe: brake (the remainder of the last safe manoeuvre; see `jaxplan.dwa._passive`).
+        stop = brake(robot, state, config.period)
+        safe_rec = jnp.where(jnp.any(passive), u_samples[_flee(ro, config.d_safe, passive)], stop)
+        if config.recovery == "flee":
+            u_rec = safe_rec
     u = jnp.where(any_feasible, u, u_rec)
+    if passive is not None and (config.selection == "softmax" or config.evaluator == "classic"
+                                or config.recovery == "rotate"):
+        # A blend, a stuck-escape turn or a turn in place is none of the checked samples: check it too.
+        ok = admissible(u[None, 0], u[None, 1])[0]
+        u = jnp.where(ok, u, jnp.where(any_feasible, u_samples[chosen], safe_rec))
     info = DWAInfo(
         scores=scores, rollouts=ro.poses, feasible=feasible, chosen=jnp.where(any_feasible, chosen, -1),
         samples=u_samples, clearance=ro.clearance, window=jnp.stack(list(window)),

@@ -25,12 +25,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from jaxplan.core.cache import lru_cache, memoize
+from jaxplan.core.deprecation import keyword_only
 from jaxplan.core.xla import one_thread_options
 from jaxplan.dwa._clearance import ClearanceTable, DiscObstacles, clearance_table
 from jaxplan.dwa._config import (
     CLEARANCE_MODES,
     EVALUATORS,
     RECOVERIES,
+    SAFETY_MODES,
     SELECTIONS,
     DWAConfig,
     DWAParams,
@@ -38,10 +40,12 @@ from jaxplan.dwa._config import (
 )
 from jaxplan.dwa._core import DWAInfo, dwa_control, dwa_control_batch
 from jaxplan.dwa._fastmath import MAX_ROTOR_ANGLE
+from jaxplan.dwa._passive import with_brake_periods
 from jaxplan.dwa._robot import Ackermann, Disc, Rectangle, Unicycle, footprint_radius
 from jaxplan.grid import GridMap, collision_map
 
-__all__ = ["dwa_step", "table_of", "validate_config", "validate_params", "as_obstacles", "obstacles_to_local"]
+__all__ = ["dwa_step", "table_of", "validate_config", "validate_params", "as_obstacles", "obstacles_to_local",
+           "check_safety"]
 
 CHUNK = 128
 """Robots per vectorised chunk of a batched step (see `dwa_control_batch`)."""
@@ -187,9 +191,20 @@ def _check_config(config: DWAConfig) -> None:
         raise ValueError(f"{name}.omega_max · config.dt = {float(r.omega_max) * dt:.3g} rad: a sample may turn at most "
                          f"π rad per rollout step (shorten dt)")
     for field, choices in (("evaluator", EVALUATORS), ("clearance", CLEARANCE_MODES), ("selection", SELECTIONS),
-                            ("recovery", RECOVERIES)):
+                            ("recovery", RECOVERIES), ("safety", SAFETY_MODES)):
         if getattr(config, field) not in choices:
             raise ValueError(f"config.{field} must be one of {choices}, got {getattr(config, field)!r}")
+    check_safety(config, "config")
+
+
+def check_safety(config: Any, name: str) -> None:
+    """Checks the passive-safety fields shared by `DWAConfig` and `jaxplan.mppi.MPPIConfig` (``name`` prefixes the
+    error): ``walker_speed_max`` None or a finite number >= 0, ``brake_periods`` None or a positive integer."""
+    if config.walker_speed_max is not None:
+        _number(f"{name}.walker_speed_max", config.walker_speed_max, nonneg=True)
+    n = config.brake_periods
+    if n is not None and (not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 1):
+        raise ValueError(f"{name}.brake_periods must be None or a positive integer, got {n!r}")
 
 
 _checked_config = lru_cache(maxsize=64)(_check_config)
@@ -330,10 +345,15 @@ def one_robot(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, config: DWACo
     return np.array([x, y, th, v, w], np.float32), np.array([gx, gy], np.float32)
 
 
-def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any = None,
-             params: DWAParams | Mapping[str, float] | None = None, *, config: DWAConfig | None = None,
+@keyword_only("obstacles", "params")
+def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, *, obstacles: Any = None,
+             params: DWAParams | Mapping[str, float] | None = None, config: DWAConfig | None = None,
              path: ArrayLike | None = None, full_info: bool = True) -> tuple[np.ndarray, DWAInfo | None]:
     """One Dynamic Window Approach step for one robot or a batch (docs/guide/navigation.md).
+
+    The signature is `jaxplan.mppi_step`'s: ``(state, subgoal, grid, *, obstacles, params, config, path,
+    full_info)``. ``obstacles`` and ``params`` given by position (the old form) still work, with a
+    `DeprecationWarning`.
 
     Args:
       state: ``[5]`` = (x, y, theta, v, omega) in m, rad, m/s, rad/s, or ``[B, 5]``.
@@ -372,7 +392,7 @@ def dwa_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, obstacles: Any
       >>> u.shape, info.rollouts.shape, bool(info.feasible[info.chosen])
       ((2,), (800, 20, 3), True)
     """
-    config = validate_config(DWAConfig() if config is None else config)
+    config = with_brake_periods(validate_config(DWAConfig() if config is None else config))
     prm = validate_params(params, config.evaluator)
     if obstacles is None and path is None and isinstance(grid, GridMap):
         robot = one_robot(state, subgoal, grid, config)

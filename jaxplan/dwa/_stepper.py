@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike
 from jaxplan.dwa._clearance import ClearanceTable
 from jaxplan.dwa._config import DWAConfig, DWAParams
 from jaxplan.dwa._core import DWAInfo
+from jaxplan.dwa._passive import with_brake_periods
 from jaxplan.dwa._step import (
     _numpy_info,
     _single,
@@ -124,7 +125,7 @@ def make_stepper(grid: GridMap, config: DWAConfig | None = None,
     """
     if not isinstance(grid, GridMap):
         raise ValueError(f"grid must be a GridMap, got {type(grid).__name__}")
-    config = validate_config(DWAConfig() if config is None else config)
+    config = with_brake_periods(validate_config(DWAConfig() if config is None else config))
     prm = validate_params(params, config.evaluator)
     # The stepper's own copy of the layers it reads: later writes into grid's arrays do not reach it.
     free = np.array(grid.free, dtype=bool)

@@ -23,6 +23,7 @@ Pure core, for episodes::
     mean = shift(info.sequence)
 """
 
+from jaxplan.dwa import clamp_controls
 from jaxplan.mppi._config import CRITICS, MPPIConfig, MPPIParams, default_params
 from jaxplan.mppi._core import (
     BRAKE_ROW,
@@ -35,7 +36,7 @@ from jaxplan.mppi._core import (
     shift,
 )
 from jaxplan.mppi._critics import Context, Terms
-from jaxplan.mppi._rollout import Sequences, clamp_controls, rollout
+from jaxplan.mppi._rollout import Sequences, rollout
 from jaxplan.mppi._step import mppi_step, validate_config, validate_params
 
 __all__ = [

@@ -1,7 +1,7 @@
 """Configuration (what shapes and switches the compiled step) and parameters (what tuning changes) of MPPI.
 
 `MPPIConfig` is a frozen dataclass registered as a pytree, like `jaxplan.dwa.DWAConfig`: its counts
-and switches (``samples``, ``steps``, ``substeps``, ``iterations``, ``clearance``, ``admissible``,
+and switches (``samples``, ``steps``, ``substeps``, ``iterations``, ``clearance``, ``safety``,
 ``keep_rollouts``, the robot's class and footprint kind) are static — one compilation per combination
 — while distances and the robot's limits are traced leaves. `MPPIParams` holds the critic weights,
 the softmax temperature λ and the sampling noise as arrays: what tuning ``vmap``-s over and
@@ -12,13 +12,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxplan.dwa import Robot, Unicycle
+from jaxplan.dwa import Robot, Unicycle, safety_from_admissible
 
 __all__ = ["MPPIConfig", "MPPIParams", "default_params", "CRITICS"]
 
@@ -48,10 +48,19 @@ class MPPIConfig:
         and 0.2 s a single point per control would step 0.24 m past a corner.
       iterations: MPPI iterations per control step (static; Nav2 recommends 1 with more samples).
       clearance: static-map lookup of `jaxplan.dwa.static_clearance` (static).
-      admissible: passive motion safety (static): a sequence counts only if, after its horizon, the
-        robot can still brake to rest along its path before any predicted contact (see
-        `jaxplan.mppi._rollout`). Sequences that cannot are never chosen.
-      brake_points: points of the braking check after the horizon (static).
+      safety: ``"none"`` (default), ``"predicted"`` or ``"passive"`` (static; `jaxplan.dwa.SAFETY_MODES`).
+        ``"predicted"``: a sequence counts only if, after its horizon, the robot can still brake to rest along its
+        path before any predicted contact (see `jaxplan.mppi._rollout`). ``"passive"``: only if, after its first
+        control's period, braking as hard as the robot can keeps it off the map and out of every walker's reach
+        (`jaxplan.dwa.passive_slack`); the applied control (the softmax blend's first) is checked too, and gives
+        way to the best-weighted safe sequence, or to braking when no sequence is safe. Sequences that do not
+        count are never chosen.
+      walker_speed_max: the walkers' speed bound (m/s) of ``safety="passive"``, or None: the scenario's in a
+        navigation episode, else as `jaxplan.dwa.walker_speed_bound`.
+      brake_points: points of the ``"predicted"`` braking check after the horizon (static).
+      brake_periods: control periods the ``"passive"`` braking run may take to stop (static), or None: enough
+        for the robot's limits (`jaxplan.dwa.braking_periods`).
+      admissible: deprecated: ``True`` is ``safety="predicted"`` (a `DeprecationWarning`; read back as None).
       escape: when the robot is already closer than d_safe (a disc came close), a sequence is also
         feasible if it never gets closer than the current clearance (static; as the DWA's).
       keep_rollouts: return every sample's points ``[K, T·substeps, 3]`` in `MPPIInfo` (static).
@@ -69,10 +78,16 @@ class MPPIConfig:
     substeps: int = dataclasses.field(default=2, metadata=dict(static=True))
     iterations: int = dataclasses.field(default=1, metadata=dict(static=True))
     clearance: str = dataclasses.field(default="hybrid", metadata=dict(static=True))
-    admissible: bool = dataclasses.field(default=False, metadata=dict(static=True))
+    safety: str = dataclasses.field(default="none", metadata=dict(static=True))
+    walker_speed_max: float | None = None
     brake_points: int = dataclasses.field(default=8, metadata=dict(static=True))
+    brake_periods: int | None = dataclasses.field(default=None, metadata=dict(static=True))
     escape: bool = dataclasses.field(default=True, metadata=dict(static=True))
     keep_rollouts: bool = dataclasses.field(default=False, metadata=dict(static=True))
+    admissible: bool | None = dataclasses.field(default=None, metadata=dict(static=True))
+
+    def __post_init__(self) -> None:
+        safety_from_admissible(self, self.admissible)
 
     @property
     def horizon(self) -> float:
@@ -84,7 +99,7 @@ class MPPIConfig:
         """Rollout points per sequence, ``steps · substeps``."""
         return self.steps * self.substeps
 
-    def replace(self, **changes) -> "MPPIConfig":
+    def replace(self, **changes: Any) -> "MPPIConfig":
         return dataclasses.replace(self, **changes)
 
 

@@ -9,12 +9,14 @@
 2. every sequence is clamped to the robot's dynamic window period by period and rolled out
    (`jaxplan.mppi._rollout`), its critics summed (`jaxplan.mppi._critics`);
 3. cost = Σ weight·critic + ``collision`` if its clearance drops below d_safe (+ the control cost
-   γ·Σ u·ε/σ² when γ > 0); with ``admissible`` on, a sequence whose end state cannot brake to rest
-   before a predicted contact is excluded;
+   γ·Σ u·ε/σ² when γ > 0); with ``safety="predicted"``, a sequence whose end state cannot brake to rest
+   before a predicted contact is excluded, and with ``safety="passive"`` one whose first control is not passively
+   safe (`jaxplan.dwa.passive_slack`: the robot can still brake out of every walker's reach);
 4. the new mean is the softmax average of the clamped sequences with weights
    ``exp(−(cost − min cost)/λ)``; its first control is applied. With no feasible sequence the
    robot takes the one that keeps the most clearance (among those that keep d_safe from the map,
-   if any: the DWA's "flee"), and with none admissible the braking candidate;
+   if any: the DWA's "flee"), and with none admissible the braking candidate. With ``safety="passive"`` the
+   applied control itself is checked too: a blend that is not safe gives way to the best-weighted safe sequence;
 5. the caller shifts the new mean by one period (`shift`) to warm-start the next step.
 
 Everything is differentiable through the softmax in the critic weights and λ (the noise is drawn
@@ -29,7 +31,17 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from jaxplan.dwa import ClearanceTable, DiscObstacles, curvature_limit, disc_clearance, speed_cap, static_clearance
+from jaxplan.dwa import (
+    ClearanceTable,
+    DiscObstacles,
+    braking_periods,
+    curvature_limit,
+    disc_clearance,
+    passive_slack,
+    speed_cap,
+    static_clearance,
+    walker_speed_bound,
+)
 from jaxplan.mppi import _critics as C
 from jaxplan.mppi._config import MPPIConfig, MPPIParams
 from jaxplan.mppi._noise import gaussian
@@ -150,26 +162,41 @@ def _iteration(table, config: MPPIConfig, params: MPPIParams, state, mean, key, 
     if config.escape:
         threshold = jnp.minimum(threshold, _current_clearance(clearance, state, inflate(0.0)) - ESCAPE_SLACK)
     feasible = seq.clearance >= threshold
+    admissible = seq.admissible
+    if config.safety == "passive":
+        discs = obstacles if moving else None
+
+        def passive(u):  # u [n, 2]: the first controls to check
+            return passive_slack(table, config.clearance, config.robot, state, u[:, 0], u[:, 1], config.period,
+                                 discs, walker_speed_bound(config.walker_speed_max, discs),
+                                 braking_periods(config.robot, config.period, config.brake_periods)) >= 0.0
+
+        admissible = passive(seq.controls[:, 0])
     costs = C.cost(seq.terms, params) + params.collision * (~feasible)
     sigma2 = jnp.stack([params.noise_v, params.noise_omega]) ** 2
     costs = costs + params.gamma * jnp.sum(mean[None] * noise / sigma2, axis=(1, 2))
-    costs = jnp.where(seq.admissible, costs, jnp.inf)
-    any_admissible = jnp.any(seq.admissible)
+    costs = jnp.where(admissible, costs, jnp.inf)
+    any_admissible = jnp.any(admissible)
     finite = jnp.where(jnp.isfinite(costs), costs, jnp.max(jnp.where(jnp.isfinite(costs), costs, -jnp.inf)))
     logits = -(finite - jnp.min(finite)) / params.temperature
-    weights = jax.nn.softmax(jnp.where(seq.admissible | ~any_admissible, logits, -jnp.inf))
+    weights = jax.nn.softmax(jnp.where(admissible | ~any_admissible, logits, -jnp.inf))
     blended = jnp.einsum("k,ktc->tc", weights, seq.controls)
 
-    any_feasible = jnp.any(feasible & seq.admissible)
+    any_feasible = jnp.any(feasible & admissible)
     safe = seq.static >= config.d_safe
-    flee = jnp.argmax(jnp.where((safe | ~jnp.any(safe)) & seq.admissible, seq.clearance, -jnp.inf))
+    flee = jnp.argmax(jnp.where((safe | ~jnp.any(safe)) & admissible, seq.clearance, -jnp.inf))
     new = jnp.where(any_feasible, blended, seq.controls[flee])
     new = jnp.where(any_admissible, new, seq.controls[BRAKE_ROW])
     kappa = curvature_limit(config.robot)
     if kappa is not None:  # |ω| <= κ|v| is a bow-tie with reversing, not convex: clip the blend
         new = new.at[:, 1].set(jnp.clip(new[:, 1], -kappa * jnp.abs(new[:, 0]), kappa * jnp.abs(new[:, 0])))
     chosen = jnp.argmax(weights).astype(jnp.int32)
-    info = MPPIInfo(new, costs, weights, feasible, seq.admissible, seq.clearance, seq.controls, chosen,
+    if config.safety == "passive":
+        # The admissible set is not convex: a blend of safe first controls need not be safe. Then the
+        # best-weighted safe sequence, or braking (the braking row) when none is safe.
+        ok = passive(new[None, 0])[0]
+        new = jnp.where(ok, new, jnp.where(any_admissible, seq.controls[chosen], seq.controls[BRAKE_ROW]))
+    info = MPPIInfo(new, costs, weights, feasible, admissible, seq.clearance, seq.controls, chosen,
                     ~any_feasible, seq.points)
     return new, info
 

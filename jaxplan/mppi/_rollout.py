@@ -15,12 +15,13 @@ sums, and the path-align sum at the end of every period — so no ``[K, T]`` arr
 stored unless asked for. The critics themselves (`jaxplan.mppi._critics`) are small pure
 functions of the point values; this module only sums them.
 
-Passive safety (``MPPIConfig.admissible``): from a sequence's end state the robot brakes as hard
-as it can (decel) along the curvature it ends on; the sequence is admissible if no point of that
-braking run (checked at ``brake_points`` times against the map and the discs predicted at those
-times) comes closer than the footprint radius — the end state is then not an inevitable
-collision state, and a contact, if any, finds the robot at rest (Fraichard's passive motion
-safety; Bouraine et al. 2012; `jaxplan.dwa.braking_clearance`, shared with the DWA's option).
+Predicted-contact safety (``MPPIConfig.safety = "predicted"``): from a sequence's end state the robot
+brakes as hard as it can (decel) along the curvature it ends on; the sequence is admissible if no point
+of that braking run (checked at ``brake_points`` times against the map and the discs predicted at those
+times) comes closer than the footprint radius — the end state is then not an inevitable collision state
+*if the discs move as predicted* (`jaxplan.dwa.braking_clearance`, shared with the DWA's option). The
+guarantee against any walker of bounded speed is ``safety="passive"``, checked by the step
+(`jaxplan.mppi._core`, `jaxplan.dwa.passive_slack`).
 """
 
 from __future__ import annotations
@@ -33,16 +34,15 @@ from jax import lax
 
 from jaxplan.dwa import (
     Disc,
-    Robot,
     braking_clearance,
-    curvature_limit,
+    clamp_controls,
     footprint_offsets,
     footprint_radius,
     rotor,
 )
 from jaxplan.mppi import _critics as C
 
-__all__ = ["Sequences", "clamp_controls", "rollout"]
+__all__ = ["Sequences", "rollout"]
 
 ClearanceFn = Callable[[jnp.ndarray, jnp.ndarray, jnp.ndarray], tuple[jnp.ndarray, jnp.ndarray]]
 """``clearance(x, y, t) -> (map, discs)``: metres from points ``x, y [K]`` to the map and to the moving discs
@@ -59,8 +59,8 @@ class Sequences(NamedTuple):
       clearance: ``f32[K]`` minimum clearance (m) over the T·substeps points (map and discs).
       static: ``f32[K]`` the same minimum from the map alone.
       terms: `jaxplan.mppi._critics.Terms` the per-point critic means ``f32[K]`` and the end pose.
-      admissible: ``bool[K]`` the braking run from the end state is contact-free (all True when the
-        config does not ask).
+      admissible: ``bool[K]`` the braking run from the end state is free of predicted contacts (all True unless
+        ``safety="predicted"``; the passive check is the step's, `jaxplan.mppi._core`).
       points: ``f32[K, T·substeps, 3]`` every point (x, y, θ), or None when not kept.
     """
 
@@ -70,37 +70,6 @@ class Sequences(NamedTuple):
     terms: C.Terms
     admissible: jnp.ndarray
     points: jnp.ndarray | None
-
-
-def clamp_controls(robot: Robot, v_prev, w_prev, v_raw, w_raw, period) -> tuple[jnp.ndarray, jnp.ndarray]:
-    """The controls reachable within one period from ``(v_prev, w_prev)`` nearest to the raw ones (elementwise).
-
-    Speed: within ``[v_prev − decel·P, v_prev + accel·P] ∩ [v_min, v_max]``; yaw rate within
-    ``[w_prev − alpha·P, w_prev + alpha·P] ∩ [−omega_max, omega_max]``, then for an `Ackermann` robot
-    within ``|ω| <= κ|v|`` (the rate-reachable value nearest the cone when they do not meet). An empty
-    interval (a state already outside the limits) collapses to the reachable value nearest the limits,
-    as `jaxplan.dwa.dynamic_window` does.
-    """
-    v_lo = jnp.maximum(v_prev - robot.decel * period, robot.v_min)
-    v_hi = jnp.minimum(v_prev + robot.accel * period, robot.v_max)
-    v_only = jnp.clip(jnp.clip(v_prev, robot.v_min, robot.v_max), v_prev - robot.decel * period,
-                      v_prev + robot.accel * period)
-    v_empty = v_lo > v_hi
-    v = jnp.clip(v_raw, jnp.where(v_empty, v_only, v_lo), jnp.where(v_empty, v_only, v_hi))
-    step = robot.alpha * period
-    w_lo = jnp.maximum(w_prev - step, -robot.omega_max)
-    w_hi = jnp.minimum(w_prev + step, robot.omega_max)
-    w_only = jnp.clip(jnp.clip(w_prev, -robot.omega_max, robot.omega_max), w_prev - step, w_prev + step)
-    w_empty = w_lo > w_hi
-    w_lo, w_hi = jnp.where(w_empty, w_only, w_lo), jnp.where(w_empty, w_only, w_hi)
-    kappa = curvature_limit(robot)
-    if kappa is not None:
-        cap = kappa * jnp.abs(v)
-        lo, hi = jnp.maximum(w_lo, -cap), jnp.minimum(w_hi, cap)
-        only = jnp.clip(jnp.clip((w_lo + w_hi) / 2, -cap, cap), w_lo, w_hi)
-        empty = lo > hi
-        w_lo, w_hi = jnp.where(empty, only, lo), jnp.where(empty, only, hi)
-    return v, jnp.clip(w_raw, w_lo, w_hi)
 
 
 def _footprint_clearance(clearance: ClearanceFn, footprint, x, y, h, t):
@@ -186,7 +155,7 @@ def rollout(config, state: jnp.ndarray, raw: jnp.ndarray, clearance: ClearanceFn
     controls = jnp.stack([jnp.swapaxes(v_seq, 0, 1), jnp.swapaxes(w_seq, 0, 1)], axis=-1)  # [K, T, 2]
     end = C.End(carry["x"], carry["y"], carry["h"], carry["v"], carry["w"])
     terms = C.finish_terms(carry["sums"], config, ctx, end, T)
-    if config.admissible:
+    if config.safety == "predicted":
         brake = braking_clearance(lambda x, y, t: jnp.minimum(*clearance(x, y, t)), robot, end.x, end.y, end.h,
                                   end.v, end.w, T * P, config.brake_points, closing)
         admissible = brake >= footprint_radius(robot.footprint)

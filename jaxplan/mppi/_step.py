@@ -23,7 +23,16 @@ from numpy.typing import ArrayLike
 
 from jaxplan.core.cache import lru_cache
 from jaxplan.core.xla import one_thread_options
-from jaxplan.dwa import CLEARANCE_MODES, DWAConfig, as_obstacles, obstacles_to_local, table_of
+from jaxplan.dwa import (
+    CLEARANCE_MODES,
+    SAFETY_MODES,
+    DWAConfig,
+    as_obstacles,
+    check_safety,
+    obstacles_to_local,
+    table_of,
+    with_brake_periods,
+)
 from jaxplan.dwa import validate_config as validate_dwa_config
 from jaxplan.grid import GridMap
 from jaxplan.mppi._config import MPPIConfig, MPPIParams, default_params
@@ -61,9 +70,12 @@ def _check_config(config: MPPIConfig) -> None:
             raise ValueError(f"MPPIConfig.{name} must be a finite number > 0, got {v!r}")
     if config.clearance not in CLEARANCE_MODES:
         raise ValueError(f"unknown clearance mode {config.clearance!r}; choose from {CLEARANCE_MODES}")
-    for name in ("admissible", "escape", "keep_rollouts"):
+    for name in ("escape", "keep_rollouts"):
         if not isinstance(getattr(config, name), bool):
             raise ValueError(f"MPPIConfig.{name} must be True or False, got {getattr(config, name)!r}")
+    if config.safety not in SAFETY_MODES:
+        raise ValueError(f"MPPIConfig.safety must be one of {SAFETY_MODES}, got {config.safety!r}")
+    check_safety(config, "MPPIConfig")
 
 
 _checked_config = lru_cache(maxsize=64)(_check_config)
@@ -116,29 +128,30 @@ def _on_device(params: MPPIParams) -> MPPIParams:
 _INT32 = (-(2 ** 31), 2 ** 31)
 
 
-def mppi_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, *, sequence: ArrayLike | None = None,
-              key: Any = 0, goal: ArrayLike | None = None, obstacles: Any = None, path: ArrayLike | None = None,
-              config: MPPIConfig | None = None, params: MPPIParams | Mapping[str, float] | None = None,
-              full_info: bool = True) -> tuple[np.ndarray, MPPIInfo]:
-    """One MPPI step for one robot from Python.
+def mppi_step(state: ArrayLike, subgoal: ArrayLike, grid: GridMap, *, obstacles: Any = None,
+              params: MPPIParams | Mapping[str, float] | None = None, config: MPPIConfig | None = None,
+              path: ArrayLike | None = None, full_info: bool = True, sequence: ArrayLike | None = None,
+              key: Any = 0, goal: ArrayLike | None = None) -> tuple[np.ndarray, MPPIInfo]:
+    """One MPPI step for one robot from Python (the signature of `jaxplan.dwa_step`, then MPPI's own keywords).
 
     Args:
       state: ``[5]`` (x, y, θ, v, ω) in m, rad, m/s, rad/s.
       subgoal: ``[2]`` (m) the point to head for now.
       grid: the map.
+      obstacles: moving discs as for `jaxplan.dwa.dwa_step` (`DiscObstacles` or (positions, velocities, radii)).
+      params: `MPPIParams` or a dict of overrides of the defaults.
+      config: `MPPIConfig` (default: `MPPIConfig()`).
+      path: ``[L, 2]`` (m) the stretch of the global path ahead, or None.
+      full_info: False returns an `MPPIInfo` holding the new ``sequence`` only (the other fields None): the
+        same control and sequence, bit for bit, without copying the samples' record.
       sequence: the previous call's ``info.sequence`` ``[T, 2]`` (warm start; shifted here), or None.
       key: an int seed or a JAX PRNG key for this step's noise (same key, same control).
       goal: ``[2]`` (m) the goal (default: the sub-goal).
-      obstacles: moving discs as for `jaxplan.dwa.dwa_step` (`DiscObstacles` or (positions, velocities, radii)).
-      path: ``[L, 2]`` (m) the stretch of the global path ahead, or None.
-      config, params: `MPPIConfig` (default: `MPPIConfig()`), `MPPIParams` or a dict of overrides.
-      full_info: False returns an `MPPIInfo` holding the new ``sequence`` only (the other fields None): the
-        same control and sequence, bit for bit, without copying the samples' record.
 
     Returns:
       ``(control (v, ω) as numpy f32[2], MPPIInfo)``.
     """
-    config = validate_config(MPPIConfig() if config is None else config)
+    config = with_brake_periods(validate_config(MPPIConfig() if config is None else config))
     p = validate_params(params)
     state = np.asarray(state, np.float32)
     if state.shape != (5,) or not np.all(np.isfinite(state)):

@@ -13,7 +13,15 @@ from jax.sharding import Mesh
 from numpy.typing import ArrayLike
 
 from jaxplan.core.names import did_you_mean
-from jaxplan.dwa import DWAParams, footprint_radius, validate_config, validate_params
+from jaxplan.dwa import (
+    SAFETY_MODES,
+    DWAParams,
+    braking_periods,
+    footprint_radius,
+    validate_config,
+    validate_params,
+    with_brake_periods,
+)
 from jaxplan.grid import GridMap
 from jaxplan.mppi import MPPIParams
 from jaxplan.mppi import validate_config as validate_mppi_config
@@ -61,9 +69,11 @@ def resolve_config(config: NavConfig | None, pipeline: Pipeline, local_planner: 
     if cfg.prediction not in PREDICTIONS:
         raise ValueError(f"unknown prediction {cfg.prediction!r}; choose from {PREDICTIONS}")
     evaluator = cfg.evaluator or pipeline.evaluator
-    dwa = cfg.dwa.replace(evaluator=evaluator)
-    dwa = validate_config(dwa.replace(keep_rollouts=False))
-    validate_mppi_config(cfg.replace(dwa=dwa).local_mppi())
+    dwa, mppi = _with_safety(cfg, local)
+    dwa = with_brake_periods(validate_config(dwa.replace(evaluator=evaluator, keep_rollouts=False)))
+    if mppi.safety == "passive" and mppi.brake_periods is None:  # the episode's robot is dwa's
+        mppi = mppi.replace(brake_periods=braking_periods(dwa.robot, dwa.period))
+    validate_mppi_config(cfg.replace(dwa=dwa, mppi=mppi).local_mppi())
     for f in ("switch_radius", "switch_min", "lookahead", "goal_tolerance", "max_time", "replan_period",
               "replan_deviation", "block_distance", "block_margin", "follow_gain", "threat_distance", "threat_speed",
               "corner_exponent", "recheck_gain"):
@@ -94,7 +104,27 @@ def resolve_config(config: NavConfig | None, pipeline: Pipeline, local_planner: 
     if not isinstance(cfg.replan_group, int) or cfg.replan_group < 0:
         raise ValueError(f"NavConfig.replan_group must be an integer >= 0 (0: the whole batch), "
                          f"got {cfg.replan_group!r}")
-    return cfg.replace(dwa=dwa, mppi=cfg.mppi.replace(keep_rollouts=False), local=local, evaluator=evaluator)
+    return cfg.replace(dwa=dwa, mppi=mppi.replace(keep_rollouts=False), local=local, evaluator=evaluator)
+
+
+def _with_safety(cfg: NavConfig, local: str) -> tuple[Any, Any]:
+    """``(dwa, mppi)`` configs with `NavConfig.safety` and `NavConfig.walker_speed_max` set on both (when given),
+    checked."""
+    dwa, mppi = cfg.dwa, cfg.mppi
+    if cfg.safety is not None:
+        if cfg.safety not in SAFETY_MODES:
+            raise ValueError(f"unknown safety {cfg.safety!r}{did_you_mean(str(cfg.safety), SAFETY_MODES)} "
+                             f"(choose from {', '.join(SAFETY_MODES)})")
+        dwa, mppi = dwa.replace(safety=cfg.safety), mppi.replace(safety=cfg.safety)
+    v = cfg.walker_speed_max
+    if v is not None:
+        if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+            raise ValueError(f"NavConfig.walker_speed_max must be None or a finite number >= 0 (m/s), got {v!r}")
+        dwa, mppi = dwa.replace(walker_speed_max=float(v)), mppi.replace(walker_speed_max=float(v))
+    if local == "follow" and cfg.safety not in (None, "none"):
+        raise ValueError(f"safety={cfg.safety!r} needs a local planner that checks its controls ('dwa' or "
+                         "'mppi'); 'follow' avoids nothing")
+    return dwa, mppi
 
 
 def obstacle_sets(obstacles: Any, E: int, R: int, seeds: list[int]) -> list[list[MovingObstacles]]:

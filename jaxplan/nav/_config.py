@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Any
 
 import jax
 
@@ -193,6 +194,15 @@ class NavConfig:
       give_way_move: see ``give_way_time`` (m).
       give_way_hold: the longest a robot gives way (s) before it tracks its path again (it gives way
         again after another ``give_way_time`` if still stuck).
+      safety: what the local planner checks before it commits to a control (static; `jaxplan.dwa.SAFETY_MODES`):
+        ``"none"``, ``"predicted"`` (brake to rest before any *predicted* contact) or ``"passive"`` (brake to rest
+        before any point a walker *can* reach: the robot is touched only at rest, whatever the walkers do;
+        docs/guide/navigation.md), set on both ``dwa`` and ``mppi``; or None (default): their own ``safety``
+        (``"none"`` unless set there). Needs the ``"dwa"`` or ``"mppi"`` local planner.
+      walker_speed_max: the walkers' speed bound (m/s) of ``"passive"``, set on both ``dwa`` and ``mppi``; or
+        None (default): theirs, and if they have none the scenario's — each episode's fastest walker (a walker
+        that sees can go 1.3 times its route speed, `jaxplan.nav._social`), and with several robots at least the
+        robots' top speed (they are discs for each other).
     """
 
     dwa: DWAConfig = DWAConfig(keep_rollouts=False, recovery="flee", d_clip=0.5)
@@ -239,6 +249,8 @@ class NavConfig:
     give_way_distance: float = 1.0
     give_way_move: float = 0.3
     give_way_hold: float = 10.0
+    safety: str | None = dataclasses.field(default=None, metadata=dict(static=True))
+    walker_speed_max: float | None = None
 
     @property
     def steps(self) -> int:
@@ -263,5 +275,5 @@ class NavConfig:
         """The MPPI step's config: ``mppi`` with the episode's robot, period and d_safe (``dwa``'s)."""
         return self.mppi.replace(robot=self.dwa.robot, period=self.dwa.period, d_safe=self.dwa.d_safe)
 
-    def replace(self, **changes) -> "NavConfig":
+    def replace(self, **changes: Any) -> "NavConfig":
         return dataclasses.replace(self, **changes)

@@ -404,6 +404,10 @@ def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams |
         to_point = jnp.sqrt(jnp.sum((gw.point - pos) ** 2, axis=-1)).reshape(-1)
         v_top = jnp.where(gw.active.reshape(-1), jnp.minimum(v_top, jnp.maximum(to_point, 0.1)), v_top)
         goal = jnp.where(gw.active[..., None], gw.point, goal)
+    # Passive safety without a given bound: each episode's fastest walker (`NavConfig.walker_speed_max`).
+    own = config.local_mppi() if config.local == "mppi" else dwa
+    scenario_speed = config.local in ("dwa", "mppi") and own.safety == "passive" and own.walker_speed_max is None
+    walker_speed = jnp.repeat(_walker_speed(obs, robot, N), N) if scenario_speed else None  # [B·N]
     if config.local == "mppi":
         mcfg = config.local_mppi()
         path, n_path = jax.vmap(_local_path)(flat(c.waypoints), flat(c.n_wp), flat(c.index), flat(c.origin))
@@ -416,21 +420,26 @@ def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams |
         keys = jax.vmap(lambda kd, r: jax.random.fold_in(jax.random.wrap_key_data(kd), c.t.astype(jnp.uint32) * N + r))(
             jnp.repeat(inputs.key, N, axis=0), robot_index)
 
-        def mppi(state, mean, key, subgoal, goal, d, path_, n_path_, vmax, finish_, p=params):
+        def mppi(state, mean, key, subgoal, goal, d, path_, n_path_, vmax, finish_, vw, p=params):
             cfg = mcfg.replace(robot=dataclasses.replace(mcfg.robot, v_max=vmax))
+            if vw is not None:
+                cfg = cfg.replace(walker_speed_max=vw)
             return mppi_control(table, cfg, p, state, mean, key, subgoal, goal, d, path_, n_path_, finish_)
 
-        args = (flat(c.state), flat(c.plan), keys, flat(sub), flat(goal), obstacles, path, n_path, v_top, finish)
+        args = (flat(c.state), flat(c.plan), keys, flat(sub), flat(goal), obstacles, path, n_path, v_top, finish,
+                walker_speed)
         u, info = jax.vmap(mppi)(*args, _per_robot(params, N)) if per_episode else jax.vmap(mppi)(*args)
         recovery = info.recovery.reshape(B, N)
         plan = jnp.where(c.done[..., None, None], c.plan, shift(info.sequence).reshape(c.plan.shape))
     elif config.local == "dwa":
 
-        def control(state, subgoal, d, wp, vmax, finish, p=params):
+        def control(state, subgoal, d, wp, vmax, finish, vw, p=params):
             cfg = dataclasses.replace(dwa, robot=dataclasses.replace(robot, v_max=vmax))
+            if vw is not None:
+                cfg = cfg.replace(walker_speed_max=vw)
             return dwa_control(table, cfg, p, state, subgoal, d, wp if config.path_critic else None, finish)
 
-        args = (flat(c.state), flat(sub), obstacles, flat(c.waypoints), v_top, finish)
+        args = (flat(c.state), flat(sub), obstacles, flat(c.waypoints), v_top, finish, walker_speed)
         u, info = jax.vmap(control)(*args, _per_robot(params, N)) if per_episode else jax.vmap(control)(*args)
         recovery = info.recovery.reshape(B, N)
     else:
@@ -440,6 +449,19 @@ def _local_control(config: NavConfig, table: ClearanceTable, params: DWAParams |
     u = u.reshape(B, N, 2)
     u = jnp.where(c.done[..., None], 0.0, u)
     return u, recovery & ~c.done, plan
+
+
+def _walker_speed(obs: MovingObstacles, robot, N: int) -> jnp.ndarray:
+    """``f32[B]``: each episode's walker speed bound — its fastest walker (one that sees, `SOCIAL_FORCE.max_speed`
+    times its route speed), and with ``N > 1`` robots at least the robots' top speed (they are discs for each
+    other)."""
+    speeds = jnp.asarray(obs.speeds, jnp.float32)
+    if obs.reactive is not None:
+        speeds = speeds * jnp.where(obs.reactive, SOCIAL_FORCE.max_speed, 1.0)
+    top = jnp.max(speeds, axis=-1, initial=0.0)
+    if N > 1:
+        top = jnp.maximum(top, jnp.maximum(robot.v_max, -robot.v_min))
+    return top
 
 
 def _per_robot(params, N: int):

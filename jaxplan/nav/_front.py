@@ -452,6 +452,7 @@ def prepare_episodes(grid: GridMap, starts: ArrayLike, goals: ArrayLike, *, pipe
                      seeds: Sequence[int] = range(1), obstacles: Any = None, config: NavConfig | None = None,
                      params: DWAParams | MPPIParams | Mapping[str, float] | None = None,
                      time_limit: float | None = None, mesh: Mesh | str | None = "auto",
+                     safety: str | None = None, walker_speed_max: float | None = None,
                      **overrides: Any) -> PreparedEpisodes:
     """What `navigate_batch` runs, before it runs it: the checked arguments, the global plans, waypoints,
     obstacles and `EpisodeInputs` of ``starts, goals int[E, 2]`` × ``seeds`` (arguments as `navigate_batch`).
@@ -466,6 +467,7 @@ def prepare_episodes(grid: GridMap, starts: ArrayLike, goals: ArrayLike, *, pipe
         raise ValueError(f"starts and goals must both be [E, 2] cells, got {s.shape} and {g.shape}")
     if pipeline is not None and global_planner is not None:
         pipeline = None
+    config = _with_safety(config, safety, walker_speed_max)
     run_args, pf, inputs, _, reason, *_ = _prepare(grid, s[:, None], g[:, None], pipeline, global_planner,
                                                    local_planner, list(seeds), obstacles, config, params,
                                                    time_limit, overrides, mesh, None)
@@ -511,6 +513,14 @@ def _batch_to_world(batch: EpisodeBatch, origin: np.ndarray) -> EpisodeBatch:
         obstacles=_shift_obstacles(batch.obstacles, origin), obstacle_positions=shift(batch.obstacle_positions))
 
 
+def _with_safety(config: NavConfig | None, safety: str | None, walker_speed_max: float | None) -> NavConfig | None:
+    """``config`` with the fronts' ``safety`` and ``walker_speed_max`` keywords set (None: the config's own)."""
+    if safety is None and walker_speed_max is None:
+        return config
+    changes = {k: v for k, v in (("safety", safety), ("walker_speed_max", walker_speed_max)) if v is not None}
+    return (config or NavConfig()).replace(**changes)
+
+
 # ---------------------------------------------------------------------------------------------
 # Fronts
 
@@ -520,7 +530,8 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, *, pipeline: str 
              global_planner: str | None = None, local_planner: str | None = None, seed: int = 0,
              obstacles: MovingObstacles | None = None, config: NavConfig | None = None,
              params: DWAParams | MPPIParams | Mapping[str, float] | None = None, time_limit: float | None = None,
-             progress: bool = False, **overrides: Any) -> Episode:
+             progress: bool = False, safety: str | None = None, walker_speed_max: float | None = None,
+             **overrides: Any) -> Episode:
     """One two-level navigation episode (docs/guide/navigation.md).
 
     Args:
@@ -539,6 +550,10 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, *, pipeline: str 
       time_limit: seconds (default: 60 s + 3 × the waypoint polyline's length at v_max, capped
         at ``config.max_time``).
       progress: the stages on stderr (as `navigate_batch`).
+      safety: what the local planner checks before it commits to a control: ``"none"``, ``"predicted"`` or
+        ``"passive"`` (`NavConfig.safety`; None: the config's own). ``"passive"``: the robot is touched only at
+        rest, whatever walkers no faster than ``walker_speed_max`` do (docs/guide/navigation.md).
+      walker_speed_max: the walkers' speed bound of ``"passive"`` in m/s (None: each episode's fastest walker).
       **overrides: the global planner's parameters (as for `jaxplan.plan`).
 
     Returns:
@@ -552,7 +567,7 @@ def navigate(grid: GridMap, start: ArrayLike, goal: ArrayLike, *, pipeline: str 
     The previous release's positional form ``navigate(grid, start, goal, global_planner, local_planner, seed,
     obstacles)`` still works for one release, with a `DeprecationWarning`.
     """
-    cfg = config
+    cfg = _with_safety(config, safety, walker_speed_max)
     b = _run(grid, np.asarray(start)[None, None], np.asarray(goal)[None, None], pipeline, global_planner,
              local_planner, [seed], obstacles, cfg, params, time_limit, overrides, progress=progress)
     return b.episode(0, 0, 0)
@@ -563,7 +578,8 @@ def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, *, pipeli
                    global_planner: str | None = None, local_planner: str | None = None,
                    seeds: Sequence[int] = range(1), obstacles: Any = None, config: NavConfig | None = None,
                    params: DWAParams | MPPIParams | Mapping[str, float] | None = None, time_limit: float | None = None,
-                   mesh: Mesh | str | None = "auto", progress: bool = False, **overrides: Any) -> EpisodeBatch:
+                   mesh: Mesh | str | None = "auto", progress: bool = False, safety: str | None = None,
+                   walker_speed_max: float | None = None, **overrides: Any) -> EpisodeBatch:
     """Scenarios × seeds single-robot episodes in one compiled global-planning call and one episode call.
 
     Args:
@@ -585,7 +601,7 @@ def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, *, pipeli
       progress: show the stages on stderr (global plans, compiling, the episodes; `jaxplan.core.progress`, only
         on a terminal): the episodes are one compiled call, so the bar names the stage with the elapsed time and
         gives no time left for it. The results are the same either way.
-      config, params, time_limit, **overrides: as in `navigate`.
+      config, params, time_limit, safety, walker_speed_max, **overrides: as in `navigate`.
 
     Returns:
       `EpisodeBatch` with axes ``[E, R, 1]``.
@@ -598,7 +614,7 @@ def navigate_batch(grid: GridMap, starts: ArrayLike, goals: ArrayLike, *, pipeli
         raise ValueError(f"starts and goals must both be [E, 2] cells, got {s.shape} and {g.shape}")
     if pipeline is not None and global_planner is not None:
         pipeline = None
-    cfg = config
+    cfg = _with_safety(config, safety, walker_speed_max)
     return _run(grid, s[:, None], g[:, None], pipeline, global_planner, local_planner, list(seeds), obstacles, cfg,
                 params, time_limit, overrides, mesh, progress)
 
@@ -608,7 +624,8 @@ def navigate_multi(grid: GridMap, starts: ArrayLike, goals: ArrayLike, *, pipeli
                    global_planner: str | None = None, local_planner: str | None = None,
                    seeds: Sequence[int] = range(1), obstacles: Any = None, config: NavConfig | None = None,
                    params: DWAParams | MPPIParams | Mapping[str, float] | None = None, time_limit: float | None = None,
-                   mesh: Mesh | str | None = "auto", progress: bool = False, **overrides: Any) -> EpisodeBatch:
+                   mesh: Mesh | str | None = "auto", progress: bool = False, safety: str | None = None,
+                   walker_speed_max: float | None = None, **overrides: Any) -> EpisodeBatch:
     """Multi-robot episodes: ``starts, goals int[N, 2]`` (one team) or ``[E, N, 2]`` (E teams).
 
     Each robot plans its own global path and runs its own DWA, treating the other robots
@@ -635,6 +652,6 @@ def navigate_multi(grid: GridMap, starts: ArrayLike, goals: ArrayLike, *, pipeli
         raise ValueError(f"starts and goals must both be [N, 2] or [E, N, 2] cells, got {s.shape} and {g.shape}")
     if pipeline is not None and global_planner is not None:
         pipeline = None
-    cfg = config
+    cfg = _with_safety(config, safety, walker_speed_max)
     return _run(grid, s, g, pipeline, global_planner, local_planner, list(seeds), obstacles, cfg, params,
                 time_limit, overrides, mesh, progress)

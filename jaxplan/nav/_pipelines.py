@@ -1,7 +1,7 @@
 """The papers' two-level systems as named pipelines, and the ablations of cui2025's Table 1.
 
 A pipeline is a global planner (a registry name and overrides), the reduction of its path
-to waypoints (smoothers of `jaxplan.smooth`, run with the robot's d_safe as clearance),
+to waypoints (smoothers of `jaxplan.smoothing`, run with the robot's d_safe as clearance),
 and a local planner (DWA with an evaluator, MPPI, or pure path following).
 """
 
@@ -24,7 +24,7 @@ class Pipeline:
       name: registry name.
       global_planner: a `jaxplan.planners()` name.
       planner_overrides: overrides of the global planner's defaults.
-      waypoints: smoothers applied to the global path, in order (`jaxplan.smooth` names).
+      waypoints: smoothers applied to the global path, in order (`jaxplan.smoothing.SMOOTHERS` names).
       local: ``"dwa"``, ``"mppi"`` or ``"follow"``.
       evaluator: the DWA evaluator (``"weighted"``, ``"fuzzy"``, ``"classic"``; unused by MPPI).
       description: one line, citing the seed.

@@ -4,7 +4,7 @@ episodes, ``[E scenarios, R seeds, N robots]``), numpy arrays on the host."""
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import jax
 import numpy as np
@@ -56,7 +56,7 @@ class Episode(NamedTuple):
 
         return plain(self._asdict())
 
-    def to_dataframe(self, what: str = "summary"):
+    def to_dataframe(self, what: str = "summary") -> Any:
         """A `pandas.DataFrame` (pandas: ``pip install 'jaxplan[export]'``).
 
         Args:
@@ -142,6 +142,7 @@ class EpisodeBatch(NamedTuple):
     obstacle_positions: np.ndarray | None = None
     give_ways: np.ndarray | None = None
 
+    # Not annotated: typing.NamedTuple makes every annotated name a field (a ClassVar too, at run time).
     METRICS = ("success", "collisions", "active_contacts", "passive_contacts", "time_s", "rmse", "max_curvature",
                "energy", "path_length", "recoveries", "replans")
 
@@ -179,7 +180,7 @@ class EpisodeBatch(NamedTuple):
 
         return plain(self._asdict())
 
-    def to_dataframe(self, what: str = "summary"):
+    def to_dataframe(self, what: str = "summary") -> Any:
         """A long-form `pandas.DataFrame` (pandas: ``pip install 'jaxplan[export]'``); ``scenario``, ``seed`` and
         ``robot`` index the call's axes.
 
