@@ -59,8 +59,12 @@ BENCHES = (
           "ms per DWA step and trajectory points/s for 1, 64 and 1,024 robots beside numpy; one robot from Python "
           "beside PythonRobotics' `dwa_control` (`PYTHONROBOTICS_DIR`)"),
     Bench("bench_mppi", "MPPI", "python benchmarks/bench_mppi.py [--samples 128,256,...] [--robots 64] [--repeats 5]",
-          "ms per MPPI optimisation on MPPI-Generic's comparison problem, jaxplan beside jax_mppi, and the figures "
-          "MPPI-Generic published"),
+          "ms per MPPI optimisation (K = 128 … 16,384 samples of 100 steps of 0.02 s) on MPPI-Generic's comparison "
+          "problem (differential drive, 11 m costmap, λ = 1, σ = 0.2) for 1 and 64 robots, jaxplan's `mppi_control` "
+          "beside jax_mppi (the JAX port of pytorch_mppi, installed at benchmark time: `pip install jaxtyping && pip "
+          "install --no-deps --ignore-requires-python -C cmake.define.CMAKE_DISABLE_FIND_PACKAGE_CUDAToolkit=ON "
+          "jax-mppi==0.3.0`) on the same dynamics and cost, checks that both compute the same thing, and the "
+          "figures MPPI-Generic and Nav2 published (quoted); about 10 min on 2 cores"),
     Bench("bench_nav", "Navigation",
           "python benchmarks/bench_nav.py [--sections maps,allrows,pipelines,multi,speed] [--local dwa,mppi] "
           "[--oracle] [--quick]",
