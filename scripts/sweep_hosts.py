@@ -9,6 +9,11 @@ Run the same command on every host (see `jaxplan.scale.initialize` for the varia
     python scripts/sweep_hosts.py MAP SCEN --out results/ --merge 2                      # anywhere
 
 Each host writes only ``results/sweep.host-K-of-N.npz``; the merge writes ``results/sweep.npz``.
+
+The no-dependency way past one machine: every process must start and finish together (a dead one ends the sweep)
+and the shares are fixed in advance. Where Ray can be installed, an experiment config run with
+``jaxplan run CONFIG --ray HOST:PORT`` does the same work as retried, resumable tasks in a run folder
+(docs/guide/scale-out.md).
 """
 
 from __future__ import annotations

@@ -196,7 +196,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from jaxplan.experiments.runner import run_experiment
 
     run_dir = run_experiment(args.config, args.out, quick=args.quick, data_dir=args.data_dir,
-                             progress=not args.no_progress, chunk=args.chunk)
+                             progress=not args.no_progress, chunk=args.chunk, executor=args.ray)
     print((run_dir / "summary.md").read_text())
     print(f"wrote {run_dir}/ (trials.csv, summary.csv, summary.md, report.md)")
     return 0
@@ -263,7 +263,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
         configs = []  # only the study matches the pattern
     t0 = time.perf_counter()
     done = reproduce(configs, args.out, args.figures, quick=args.quick, data_dir=args.data_dir,
-                     progress=not args.no_progress, results=results)
+                     progress=not args.no_progress, results=results, executor=args.ray)
     if studies:
         done.append(_reproduce_study(args, results))
     if results is not None and any(r.page is not None for r in done):
@@ -313,7 +313,7 @@ def cmd_study(args: argparse.Namespace) -> int:
     only = None if args.only is None else [m.strip() for m in args.only.split(",") if m.strip()]
     folder = run_study(args.config, out=args.out, quick=args.quick, data_dir=args.data_dir,
                        progress=not args.no_progress, resume=not args.no_resume, results=args.results,
-                       confirm=args.confirm, only=only)
+                       confirm=args.confirm, only=only, executor=args.ray)
     if only is not None:
         print(f"ran {', '.join(only)} in {folder}/runs/; run the command without --only for the page")
         return 0

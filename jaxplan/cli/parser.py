@@ -28,14 +28,20 @@ _RESOLUTION_HELP = ("metres per cell (default: 1.0 for a MovingAI .map; a ROS .y
                    "value it is resampled: a coarse cell is blocked if any fine cell it covers is)")
 
 
-def add_execution_options(parser: argparse.ArgumentParser) -> None:
+def add_execution_options(parser: argparse.ArgumentParser, *, units: str | None = None) -> None:
     """The options of how work runs, shared by the commands that run configs (``run``, ``reproduce``, ``tune``,
-    ``study``): the data folder and the progress line. Options of where and how the work executes (a backend, its
-    workers) belong here too, once for all four commands."""
+    ``study``): the data folder, the progress line and, for a command whose work is independent ``units`` (an
+    experiment's chunks, a study's runs), ``--ray`` (`jaxplan.core.executor`)."""
     parser.add_argument("--data-dir", default=None, help="folder that map paths are relative to (default: "
                                                          "$JAXPLAN_DATA or ../shared/benchmarks)")
     parser.add_argument("--no-progress", action="store_true", help="no progress line on stderr (drawn only on a "
                                                                    "terminal)")
+    if units is not None:
+        parser.add_argument("--ray", default=None, metavar="ADDRESS", help=f"run the {units} as Ray tasks (needs "
+                            f"jaxplan[ray]): 'auto' joins the cluster started on this machine (ray start --head) or "
+                            f"else starts one with its cores; HOST:PORT joins that cluster's head (e.g. "
+                            f"head-node:6379). This process stays the only writer of the run folder; the files are "
+                            f"the same bytes as without --ray")
 
 
 def add_map_args(parser: argparse.ArgumentParser) -> None:
@@ -66,7 +72,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="jaxplan", description="Grid path planning for warehouse robots, in JAX.",
         epilog="Exit codes: 0 done; 2 bad input (fix the command, config or data); 1 a fault (disk, memory, a "
-               "damaged checkpoint, a folder in use; retry once fixed); 130 interrupted (the same command resumes).")
+               "damaged checkpoint, a folder in use, a Ray cluster out of reach; retry once fixed); 130 interrupted "
+               "(Ctrl-C), 143 terminated (SIGTERM): the same command resumes.")
     p.add_argument("--debug", action="store_true", help="print the traceback of a failure (default: one line)")
     sub = p.add_subparsers(dest="command", required=True)
     d = sub.add_parser("demo", help="iaco_dwa vs aco_dwa among moving obstacles on the built-in warehouse; "
@@ -120,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
                                                         "written to OUT/NAME-quick/)")
     r.add_argument("--out", default="runs", help="parent folder of the run folder (default: runs)")
     r.add_argument("--chunk", type=int, default=None, help="scenarios per compiled call (default: the config's)")
-    add_execution_options(r)
+    add_execution_options(r, units="chunks")
     r.set_defaults(func=cmd_run)
     f = sub.add_parser("figures", help="draw the figures a run's config names into OUT/RUN/ (PNG, SVG, index.md)")
     f.add_argument("run", help="a run folder written by `jaxplan run` (e.g. runs/NAME)")
@@ -150,7 +157,7 @@ def build_parser() -> argparse.ArgumentParser:
                                                    "configs/; none with --quick or another --configs)")
     g.add_argument("--no-results", action="store_true", help="write no results pages")
     g.add_argument("--no-cache", action="store_true", help=_NO_CACHE)
-    add_execution_options(g)
+    add_execution_options(g, units="configs' chunks")
     g.set_defaults(func=cmd_reproduce)
     t = sub.add_parser("tune", help="tune a planner's weights from a TOML config (resumable); writes OUT/NAME/")
     t.add_argument("config", help="tuning config (TOML; schema: jaxplan.tune._config)")
@@ -171,8 +178,9 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("--no-resume", action="store_true", help="start afresh instead of resuming")
     st.add_argument("--only", default=None, metavar="METHOD[,METHOD]", help="a worker: run only these methods' "
                     "runs (in the same study folder; workers with disjoint methods run side by side, one per core), "
-                    "then stop; the command without --only writes the page")
-    add_execution_options(st)
+                    "then stop; the command without --only writes the page. The no-dependency way to share a "
+                    "study over processes or machines with one shared folder; --ray needs none")
+    add_execution_options(st, units="(method, tuner seed) runs")
     st.set_defaults(func=cmd_study)
     b = sub.add_parser("bench", help="every benchmark of the library in one table (benchmarks/run_all.py; "
                                      "options after --, e.g. jaxplan bench -- --quick)")

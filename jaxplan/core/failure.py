@@ -6,8 +6,9 @@ Exit codes (`jaxplan --help` says the same):
   that asks for more memory than the limit, a run folder of another experiment, a bad environment variable);
 * ``1`` — a fault of the environment: retrying may work once it is fixed (a read-only or full disk, the
   machine out of memory, a damaged checkpoint, XLA out of resources, a folder in use by another process,
-  or a bug: any other exception);
-* ``130`` — interrupted (Ctrl-C): everything committed so far is kept; the same command resumes.
+  a Ray cluster that cannot be reached, or a bug: any other exception);
+* ``130`` — interrupted (Ctrl-C): everything committed so far is kept; the same command resumes;
+* ``143`` — terminated (SIGTERM: how Slurm, Kubernetes and ``kill`` stop a job): the same as Ctrl-C.
 
 The traceback is printed only with ``jaxplan --debug``. Only the standard library is imported here
 (``jaxplan --help`` answers without JAX): the library's own exception classes are looked up in
@@ -19,13 +20,21 @@ from __future__ import annotations
 import errno
 import sys
 
-__all__ = ["BAD_INPUT", "FAULT", "INTERRUPTED", "describe_failure", "interrupted_line"]
+__all__ = ["BAD_INPUT", "FAULT", "INTERRUPTED", "TERMINATED", "Terminated", "describe_failure", "interrupted_line"]
 
 BAD_INPUT = 2
 FAULT = 1
 INTERRUPTED = 130
+TERMINATED = 143
+"""128 + SIGTERM, the status a shell reports for a process the signal killed."""
 
-_RESUMABLE = ("run", "tune", "reproduce")
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread as Ctrl-C's `KeyboardInterrupt` is, so that a command stops the same way
+    (finished work committed, the rest left for the same command to resume)."""
+
+
+_RESUMABLE = ("run", "tune", "reproduce", "study")
 _FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
 _DENIED = (errno.EACCES, errno.EPERM, errno.EROFS)
 
@@ -41,17 +50,17 @@ def _is(e: BaseException, module: str, name: str) -> bool:
     return cls is not None and isinstance(e, cls)
 
 
-def _first_line(text: str, limit: int = 300) -> str:
+def _first_line(text: object, limit: int = 300) -> str:
     line = next((x.strip() for x in str(text).splitlines() if x.strip()), "")
     return line if len(line) <= limit else line[: limit - 1] + "…"
 
 
-def interrupted_line(command: str | None) -> str:
-    """The line printed after Ctrl-C."""
+def interrupted_line(command: str | None, terminated: bool = False) -> str:
+    """The line printed after Ctrl-C (after SIGTERM with ``terminated``)."""
+    what, code = ("terminated (SIGTERM)", TERMINATED) if terminated else ("interrupted", INTERRUPTED)
     if command in _RESUMABLE:
-        return ("jaxplan: interrupted; everything finished so far is saved: run the same command to resume "
-                "(exit 130)")
-    return "jaxplan: interrupted (exit 130)"
+        return f"jaxplan: {what}; everything finished so far is saved: run the same command to resume (exit {code})"
+    return f"jaxplan: {what} (exit {code})"
 
 
 def _os_error(e: OSError, command: str | None) -> str:
@@ -70,8 +79,12 @@ def _os_error(e: OSError, command: str | None) -> str:
 def describe_failure(e: BaseException, command: str | None = None) -> tuple[int, str]:
     """``(exit code, message)`` of exception ``e`` raised by ``jaxplan COMMAND`` (the message without the
     ``jaxplan: error:`` prefix; one line except a config's list of problems)."""
+    if isinstance(e, Terminated):
+        return TERMINATED, interrupted_line(command, terminated=True)
     if isinstance(e, KeyboardInterrupt):
         return INTERRUPTED, interrupted_line(command)
+    if _is(e, "jaxplan.core.executor", "ClusterUnreachable"):
+        return FAULT, _first_line(e, 1000)
     if _is(e, "jaxplan.experiments.schema", "ConfigError"):
         return BAD_INPUT, f"invalid config {e}"
     if _is(e, "jaxplan.core.io", "FolderInUseError"):

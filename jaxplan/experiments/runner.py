@@ -35,16 +35,25 @@ mixes with the real one)::
 Restarting with the same config skips every committed chunk whose rows and arrays still match their
 SHA-256 (a chunk that fails is recomputed); ``trials.csv`` is the header plus the chunk files in chunk
 order, each checked again as it is read, so it comes out byte-identical to an uninterrupted run's.
+
+Where chunks run (``executor``, ``--ray``; `jaxplan.core.executor`): in this process, one after the other, or as
+Ray tasks on a cluster (`chunk_payload` is the task; the loaded maps travel with the work plan). Either way this
+process is the run folder's only writer: it commits each chunk as it finishes, in whatever order, and merges
+``trials.csv`` in chunk order, so the file is the same bytes whatever the number of workers. ``meta.json`` records
+the machines of each session (``sessions[i].executor``: kind, nodes, CPUs) and where each committed chunk ran
+(``placement``: uid -> node, host, worker pid, session).
 """
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import json
 import os
 import sys
 from pathlib import Path
 
+from jaxplan.core.executor import Executor, Placement, executor_from
 from jaxplan.core.io import atomic_write, confined
 from jaxplan.core.run_folder import Payload, RunFolder
 from jaxplan.experiments import report, stats
@@ -93,31 +102,59 @@ def chunk_payload(prep: Prepared, u: Unit) -> Payload:
     return Payload(text.encode(), arrays, info)
 
 
-def _run_chunks(prep: Prepared, store: RunFolder, progress: bool, stop_after: int | None) -> bool:
-    """Computes and commits every chunk the run folder lacks, in run order; False if ``stop_after`` cut it short."""
+def _placed(payload: Payload, where: Placement) -> Payload:
+    """``payload`` with where it ran in its manifest fields (``meta.json``'s ``placement`` is read from them)."""
+    return Payload(payload.data, payload.arrays, {**payload.info, "node": where.node, "host": where.host,
+                                                  "pid": where.pid})
+
+
+def _run_chunks(prep: Prepared, store: RunFolder, progress: bool, stop_after: int | None,
+                executor: Executor) -> bool:
+    """Computes and commits every chunk the run folder lacks (at most ``stop_after`` of them, in run order); False if
+    ``stop_after`` cut it short. Chunks are committed as they finish, in whatever order the executor yields them."""
     cfg = prep.config
     R = len(cfg.seeds)
     done_units = [u for u in prep.units if store.done(u.uid)]
+    todo = [u for u in prep.units if not store.done(u.uid)]
+    cut = stop_after is not None and len(todo) > stop_after
+    todo = todo[:stop_after] if cut else todo
     done = sum((u.hi - u.lo) * R for u in done_units)
     bar = Progress(cfg.name, prep.trials, done, len(prep.units), progress)
     if progress and done_units:
         print(f"{cfg.name}: resuming, {len(done_units)}/{len(prep.units)} chunks already done", file=sys.stderr)
-    computed = 0
+
+    def label(u: Unit) -> str:
+        return f"{prep.maps[u.m].spec.name}/{cfg.planners[u.p].label}"
+
     try:
-        for u in prep.units:
-            if store.done(u.uid):
-                continue
-            if stop_after is not None and computed >= stop_after:
-                return False
-            label = f"{prep.maps[u.m].spec.name}/{cfg.planners[u.p].label}"
-            bar.start(u.index + 1, label)
-            store.commit(u.uid, chunk_payload(prep, u))
-            computed += 1
-            done += (u.hi - u.lo) * R
-            bar.update(done, u.index + 1, label)
+        if todo and executor.kind == "local":
+            bar.start(todo[0].index + 1, label(todo[0]))
+        elif todo:
+            bar.bar.stage(f"{cfg.name}: {len(todo)} chunks on {executor.kind}")
+        # closing(): an interrupt or a failing chunk stops the executor's remaining units at once
+        with contextlib.closing(executor.run(chunk_payload, prep, todo)) as finished:
+            for k, (i, payload, where) in enumerate(finished):
+                u = todo[i]
+                store.commit(u.uid, _placed(payload, where))
+                done += (u.hi - u.lo) * R
+                bar.update(done, len(done_units) + k + 1, label(u))
+                if executor.kind == "local" and i + 1 < len(todo):
+                    bar.start(todo[i + 1].index + 1, label(todo[i + 1]))
     finally:
         bar.close()
-    return True
+    return not cut
+
+
+def _record_placement(run_dir: Path, prep: Prepared, store: RunFolder, cluster: dict) -> None:
+    """``meta.json``: this session's machines (``sessions[-1].executor``) and where each committed chunk ran
+    (``placement``, from the manifest entries, so chunks of earlier sessions keep theirs)."""
+    p = run_dir / "meta.json"
+    meta = json.loads(p.read_text())
+    if meta.get("sessions"):
+        meta["sessions"][-1]["executor"] = cluster
+    meta["placement"] = {u.uid: {k: e[k] for k in ("node", "host", "pid", "session") if k in e}
+                         for u in prep.units if (e := store.entries.get(u.uid)) is not None and "node" in e}
+    atomic_write(p, json.dumps(meta, indent=1).encode())
 
 
 def _write_results(run_dir: Path, prep: Prepared, store: RunFolder, trials: bytes) -> None:
@@ -140,7 +177,8 @@ _MERGE_ATTEMPTS = 3
 
 def run_experiment(config: ExperimentConfig | str | os.PathLike, out_dir: str | os.PathLike = "runs", *,
                    quick: bool = False, data_dir: str | os.PathLike | None = None, progress: bool = True,
-                   chunk: int | None = None, stop_after: int | None = None) -> Path:
+                   chunk: int | None = None, stop_after: int | None = None,
+                   executor: str | Executor | None = None) -> Path:
     """Runs (or resumes) an experiment and writes its run folder.
 
     Before any work the config is validated in full and the memory of every chunk and of the trials is
@@ -158,6 +196,9 @@ def run_experiment(config: ExperimentConfig | str | os.PathLike, out_dir: str | 
       chunk: scenarios per compiled call, overriding the config's ``experiment.chunk``.
       stop_after: compute at most this many chunks in this session, then return without
         the summary (for tests and for splitting a run over several jobs).
+      executor: where the chunks run (`jaxplan.core.executor`): None, this process (one after the other);
+        ``"auto"`` or ``"HOST:PORT"``, Ray tasks on that cluster (``--ray``; joined here and left at the end); an
+        `Executor`, as it is (the caller closes it). The run folder's files are the same bytes either way.
 
     Returns:
       The run folder.
@@ -167,8 +208,19 @@ def run_experiment(config: ExperimentConfig | str | os.PathLike, out_dir: str | 
       MemoryLimitError: a chunk or the trials would not fit in memory (nothing was run).
       RunFolderError: the folder holds checkpoints of a different experiment.
       FolderInUseError: another process works in the run folder.
+      ClusterUnreachable: ``executor`` names a Ray cluster that cannot be reached (or Ray is not installed).
     """
     cfg = resolve_config(config, quick=quick, data_dir=data_dir, chunk=chunk)
+    ex = executor_from(executor)
+    try:
+        return _run(cfg, out_dir, progress, stop_after, ex)
+    finally:
+        if ex is not executor:  # made here from None or an address: left here
+            ex.close()
+
+
+def _run(cfg: ExperimentConfig, out_dir: str | os.PathLike, progress: bool, stop_after: int | None,
+         executor: Executor) -> Path:
     prep = prepare(cfg)
     check_experiment(prep)
     run_dir = confined(out_dir, cfg.name + ("-quick" if cfg.is_quick else ""))
@@ -179,15 +231,20 @@ def run_experiment(config: ExperimentConfig | str | os.PathLike, out_dir: str | 
         store.write("config.toml", cfg.text.encode())
         write_meta(run_dir, cfg, store.session, started)
         header = ",".join(trial_columns(cfg)) + "\n"
-        for _ in range(_MERGE_ATTEMPTS):
-            if not _run_chunks(prep, store, progress, stop_after):
-                return run_dir
-            trials = store.merged([u.uid for u in prep.units], header.encode())
-            seen = _note(cfg, store, seen)
-            if trials is not None:
-                break
-        else:
-            raise CheckpointError(f"{run_dir}: chunk files keep changing while they are merged (another program "
-                                  f"writes to checkpoints/chunks?); run the same command again when it has stopped")
+        cluster = executor.cluster()
+        try:
+            for _ in range(_MERGE_ATTEMPTS):
+                if not _run_chunks(prep, store, progress, stop_after, executor):
+                    return run_dir
+                trials = store.merged([u.uid for u in prep.units], header.encode())
+                seen = _note(cfg, store, seen)
+                if trials is not None:
+                    break
+            else:
+                raise CheckpointError(f"{run_dir}: chunk files keep changing while they are merged (another program "
+                                      f"writes to checkpoints/chunks?); run the same command again when it has "
+                                      f"stopped")
+        finally:  # an interrupted session too: the chunks it committed say where they ran
+            _record_placement(run_dir, prep, store, cluster)
         _write_results(run_dir, prep, store, trials)
     return run_dir

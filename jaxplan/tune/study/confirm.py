@@ -14,6 +14,7 @@ import os
 import time
 import tomllib
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -169,15 +170,15 @@ def own_gap_table(cfg: StudyConfig, run: Path, data_dir: str | os.PathLike | Non
 
 
 def run_confirmation(cfg: StudyConfig, folder: Path, out: str | os.PathLike, results: str | os.PathLike | None,
-                     data_dir: str | os.PathLike | None, progress: bool) -> Path:
+                     data_dir: str | os.PathLike | None, progress: bool, executor: Any = None) -> Path:
     """Runs the study's confirm.toml (in study folder ``folder``) with `run_experiment` into ``out`` and writes its page
     ``confirm.md`` (also ``results/NAME_confirm.md`` with ``results``): the run's report, introduced. Returns the
-    run folder."""
+    run folder. ``executor``: where its chunks run (`run_experiment`'s)."""
     from jaxplan.experiments import run_experiment
 
     t0 = time.perf_counter()
     load = os.getloadavg()
-    run = run_experiment(folder / "confirm.toml", out, data_dir=data_dir, progress=progress)
+    run = run_experiment(folder / "confirm.toml", out, data_dir=data_dir, progress=progress, executor=executor)
     wall = time.perf_counter() - t0
     report = (run / "report.md").read_text()
     chunks = json.loads((run / "checkpoints" / "manifest.json").read_text())["chunks"].values()

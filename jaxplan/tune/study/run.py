@@ -37,22 +37,31 @@ with its held-out scores in that folder, and commits nothing: workers with disjo
 (one per core, or per machine on a shared file system). A later call without ``only`` finds their runs done
 (`tune_loop` resumes them at their last generation), reads their held-out scores, commits the runs and writes the
 page.
+
+On a Ray cluster (``executor``, ``--ray``; `jaxplan.core.executor`), each run that the study folder lacks is a Ray
+task (`study_task`): the worker runs it in a scratch folder of its own (the unit of resume is then the whole run, not
+a generation) on the study's objective, which travels with the task (maps and scenarios loaded here), and returns
+the `Payload` and the held-out scores it computed; this process commits the runs as they finish and takes the scores
+into ``heldout.json``. The log is the same bytes as a local study's (its wall-time column aside).
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import io
 import json
 import os
 import shutil
 import sys
+import tempfile
 import time
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping, Sequence
 
 import numpy as np
 
+from jaxplan.core.executor import Executor, executor_from
 from jaxplan.core.io import atomic_write, confined
 from jaxplan.core.run_folder import Layout, Payload, RunFolder
 from jaxplan.tune._base import Strategy
@@ -65,7 +74,7 @@ from jaxplan.tune.study.confirm import confirm_config, run_confirmation
 from jaxplan.tune.study.objective import CountedObjective, build_study_objective
 from jaxplan.tune.study.page import figure, page
 
-__all__ = ["STUDY_LAYOUT", "HELDOUT_FILE", "run_study", "study_run", "study_fingerprint"]
+__all__ = ["STUDY_LAYOUT", "HELDOUT_FILE", "run_study", "study_run", "study_task", "study_fingerprint"]
 
 STUDY_LAYOUT = Layout(table="runs", suffix=".csv", arrays="arrays", noun="run",
                       refusal="a different study (its config changed); delete that folder, pass another --out or "
@@ -117,6 +126,13 @@ class _HeldOut:
             atomic_write(self.path, json.dumps(json_safe(self.cache)).encode())
             self.seconds += time.perf_counter() - t0
         return [self.cache[_key(x)] for x in xs]
+
+    def merge(self, cache: Mapping[str, dict]) -> None:
+        """Takes in scores computed elsewhere (a Ray task's) and writes the cache."""
+        new = {k: v for k, v in cache.items() if k not in self.cache}
+        if new:
+            self.cache.update(new)
+            atomic_write(self.path, json.dumps(json_safe(self.cache)).encode())
 
 
 def _run_one(cfg: StudyConfig, objective: Objective, method: str, strategy: Strategy, seed: int, folder: Path,
@@ -190,6 +206,37 @@ def study_run(cfg: StudyConfig, objective: Objective, method: str, strategy: Str
             "best_x": [float(v) for v in np.asarray(r["best_x"]).ravel()], "best_f": float(r["best_f"]),
             "generations_run": int(r["new"])}
     return Payload(buf.getvalue().encode(), {}, info)
+
+
+_WORKER: dict[str, Any] = {}
+"""A Ray worker's study: the objective (its compiled programs) and one strategy per method, kept between the tasks
+that the same worker runs, so that a worker compiles them once per study, not once per run."""
+
+
+def study_task(shared: tuple[str, StudyConfig, Objective], item: tuple[str, int]) -> tuple[Payload, dict]:
+    """One (method, tuner seed) run as a Ray task: `study_run` in a scratch folder of this worker (removed after),
+    scored on the held-out split here. ``shared``: (the study's fingerprint, its config, its objective).
+
+    Returns:
+      The run's `Payload` and the held-out scores computed for it (weight vector key -> scores), for the study's
+      ``heldout.json``.
+    """
+    token, cfg, objective = shared
+    method, seed = item
+    if _WORKER.get("token") != token:  # the first task of this study on this worker
+        _WORKER.clear()
+        # One device, whatever the node's JAX settings: a population split over devices may move the last bit of
+        # a fitness that weights float sums (clearance, roughness), and a run must not depend on where it ran.
+        _WORKER.update(token=token, objective=objective.with_mesh(None), strategies={})
+    objective = _WORKER["objective"]
+    strategies = _WORKER["strategies"]
+    if method not in strategies:
+        strategies[method] = make_strategy(method, cfg.population, cfg.generations, **cfg.options.get(method, {}))
+    with tempfile.TemporaryDirectory(prefix="jaxplan-study-") as tmp:
+        held = _HeldOut(objective, Path(tmp) / HELDOUT_FILE, cfg.population)
+        payload = study_run(cfg, objective, method, strategies[method], seed, Path(tmp) / f"{method}-s{seed}",
+                            lambda _run_dir: held, progress=False, resume=False)
+    return payload, held.cache
 
 
 def _result(data: bytes, info: Mapping[str, Any], names: Sequence[str], new: int) -> dict:
@@ -303,7 +350,7 @@ def _log_csv(cfg: StudyConfig, runs: Mapping[tuple[str, int], Mapping[str, Any]]
 def run_study(config_path: str | os.PathLike, out: str | os.PathLike = "runs", quick: bool = False,
               data_dir: str | os.PathLike | None = None, progress: bool = True, resume: bool = True,
               results: str | os.PathLike | None = None, confirm: bool = False,
-              only: Sequence[str] | None = None) -> Path:
+              only: Sequence[str] | None = None, executor: str | Executor | None = None) -> Path:
     """Runs (or resumes) the study config at ``config_path``; returns its folder ``OUT/NAME`` (``NAME-quick``).
 
     Every method runs once per tuner seed with the same counted budget; then the log, summary, figure,
@@ -327,10 +374,13 @@ def run_study(config_path: str | os.PathLike, out: str | os.PathLike = "runs", q
       results: a folder for the page, figure, best.toml and confirm.toml (e.g. docs/results/tuning).
       confirm: then run the confirmation experiment.
       only: run only these methods' runs, as a worker.
+      executor: where the runs (and the confirmation's chunks) run (`jaxplan.core.executor`): None, this process;
+        ``"auto"`` or ``"HOST:PORT"``, one Ray task per run on that cluster (``--ray``); an `Executor` as it is.
 
     Raises:
       ValueError: ``only`` names a method the study does not run, or is combined with ``resume=False`` (a fresh
-        start would delete the other workers' runs) or ``confirm``.
+        start would delete the other workers' runs), ``confirm`` or ``executor``.
+      ClusterUnreachable: ``executor`` names a Ray cluster that cannot be reached (or Ray is not installed).
       RunFolderError: the folder holds a different study's runs.
       FolderInUseError: another process works in the folder.
     """
@@ -340,9 +390,20 @@ def run_study(config_path: str | os.PathLike, out: str | os.PathLike = "runs", q
         if bad or not only:
             what = f"{', '.join(bad)} not among" if bad else "give at least one of"
             raise ValueError(f"only: {what} the study's methods ({', '.join(cfg.methods)})")
-        if not resume or confirm:
+        if not resume or confirm or executor is not None:
             raise ValueError("only (a worker) resumes and runs its methods' runs alone: not with a fresh start "
-                             "(it would delete the other workers' runs) or the confirmation")
+                             "(it would delete the other workers' runs) or the confirmation, nor on a Ray cluster "
+                             "(--ray runs every method's runs itself)")
+    ex = executor_from(executor)
+    try:
+        return _study(cfg, out, progress, resume, results, confirm, only, data_dir, ex)
+    finally:
+        if ex is not executor:  # made here from None or an address: left here
+            ex.close()
+
+
+def _study(cfg: StudyConfig, out: str | os.PathLike, progress: bool, resume: bool, results: str | os.PathLike | None,
+           confirm: bool, only: Sequence[str] | None, data_dir: str | os.PathLike | None, executor: Executor) -> Path:
     objective = build_study_objective(cfg)
     objective.check_population(cfg.population)
     objective.check_population(cfg.population, "test")
@@ -358,9 +419,10 @@ def run_study(config_path: str | os.PathLike, out: str | os.PathLike = "runs", q
                 shutil.rmtree(p, ignore_errors=True) if p.is_dir() else p.unlink(missing_ok=True)
         with RunFolder.open(folder, study_fingerprint(cfg), STUDY_LAYOUT, fresh=not resume) as store:
             store.verify()
-            _run_study(cfg, objective, store, progress, resume, results, data_dir)
+            _run_study(cfg, objective, store, progress, resume, results, data_dir, executor)
     if confirm:
-        run_confirmation(cfg, folder, out, results, data_dir, progress)
+        run_confirmation(cfg, folder, out, results, data_dir, progress,
+                         executor=None if executor.kind == "local" else executor)
     return folder
 
 
@@ -371,8 +433,35 @@ def _notes(cfg: StudyConfig, store: RunFolder, seen: int) -> int:
     return len(store.notes)
 
 
+def _remote_runs(cfg: StudyConfig, objective: Objective, store: RunFolder, executor: Executor, progress: bool,
+                 held: _HeldOut, done: Callable[[], None]) -> None:
+    """Every run the study folder lacks as a task of ``executor`` (`study_task`), committed as it finishes (any
+    order); ``held`` takes in the tasks' held-out scores; ``done()`` after each commit."""
+    from jaxplan.core.progress import ProgressBar
+
+    todo = [(m, s) for m in cfg.methods for s in cfg.tuner_seeds
+            if (s == cfg.tuner_seeds[0] or STRATEGY_SPECS[m].uses_key) and not store.done(f"{m}-s{s}")]
+    if not todo:
+        return
+    bar = ProgressBar(f"{cfg.name}: {len(todo)} runs on {executor.kind}", len(todo), unit="runs", enabled=progress)
+    shared = (study_fingerprint(cfg), cfg, objective)
+    try:
+        with contextlib.closing(executor.run(study_task, shared, todo)) as finished:
+            for k, (i, (payload, scores), where) in enumerate(finished):
+                m, s = todo[i]
+                store.commit(f"{m}-s{s}", Payload(payload.data, payload.arrays,
+                                                  {**payload.info, "node": where.node, "host": where.host,
+                                                   "pid": where.pid}))
+                held.merge(scores)
+                bar.update(k + 1, description=f"{cfg.name}: {m}-s{s} done ({k + 1}/{len(todo)} runs)")
+                done()
+    finally:
+        bar.close()
+
+
 def _run_study(cfg: StudyConfig, objective: Objective, store: RunFolder, progress: bool, resume: bool,
-               results: str | os.PathLike | None, data_dir: str | os.PathLike | None) -> Path:
+               results: str | os.PathLike | None, data_dir: str | os.PathLike | None,
+               executor: Executor | None = None) -> Path:
     folder = store.path
     t_start = time.perf_counter()
     load0 = os.getloadavg()
@@ -383,6 +472,15 @@ def _run_study(cfg: StudyConfig, objective: Objective, store: RunFolder, progres
     names = list(objective.bounds.names)
     earlier = _read_sessions(folder)
     runs: dict[tuple[str, int], dict] = {}
+    if executor is not None and executor.kind != "local":
+
+        def committed() -> None:
+            new = sum(int(e.get("generations_run", 0)) for e in store.entries.values()
+                      if e.get("session") == store.session)
+            _sessions(store, earlier, time.perf_counter() - t_start, load0, new)
+
+        _remote_runs(cfg, objective, store, executor, progress, held, committed)
+    # (after a cluster's tasks, every run is committed: this reads them back, in the order of the log's rows)
     for m in cfg.methods:
         for _ in _method_runs(cfg, objective, m, folder, progress, resume, lambda _run_dir: held, runs, store):
             _sessions(store, earlier, time.perf_counter() - t_start, load0, sum(x["new"] for x in runs.values()))
