@@ -23,15 +23,16 @@ POS = inspect.Parameter.POSITIONAL_OR_KEYWORD
 # name -> its positional parameters, then its keyword-only parameters with their defaults, in order.
 NAV_KEYWORDS = ["pipeline", "global_planner", "local_planner"]
 NAV_TAIL = ["config", "params", "time_limit"]
+SAFETY = {"safety": None, "walker_speed_max": None}
 SIGNATURES = {
     "plan": (["grid", "start", "goal"], {"planner": "astar", "seed": 0}),
     "plan_batch": (["grid", "starts", "goals"], {"planner": "astar", "seeds": range(1), "mesh": "auto",
                                                  "progress": False}),
     "navigate": (["grid", "start", "goal"], {**dict.fromkeys(NAV_KEYWORDS), "seed": 0, "obstacles": None,
-                                             **dict.fromkeys(NAV_TAIL), "progress": False}),
+                                             **dict.fromkeys(NAV_TAIL), "progress": False, **SAFETY}),
     "navigate_batch": (["grid", "starts", "goals"], {**dict.fromkeys(NAV_KEYWORDS), "pipeline": "iaco_dwa",
                                                      "seeds": range(1), "obstacles": None, **dict.fromkeys(NAV_TAIL),
-                                                     "mesh": "auto", "progress": False}),
+                                                     "mesh": "auto", "progress": False, **SAFETY}),
 }
 SIGNATURES["navigate_multi"] = SIGNATURES["navigate_batch"]
 

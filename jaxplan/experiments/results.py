@@ -22,6 +22,9 @@ The hand-written parts (a sentence per table, a paragraph per paper, the not-com
 baselines not reproduced) come from a notes file (``configs/results/notes.toml``, see `load_notes`).
 """
 
+# Over 800 lines, knowingly: the table pages and the index share one set of cell verdicts, claim lookups and
+# page summaries (the index re-reads what each page judged), so they stay one module until the index is written
+# from the pages' own records.
 from __future__ import annotations
 
 import json
@@ -35,6 +38,8 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
+from jaxplan.core import markdown as md
+from jaxplan.core.markdown import fmt
 from jaxplan.experiments.claims import (
     CLAIM_VERDICTS,
     Claim,
@@ -54,7 +59,7 @@ from jaxplan.experiments.evidence import (
     runs,
     units,
 )
-from jaxplan.experiments.report import fmt, p_cell
+from jaxplan.experiments.report import p_cell
 from jaxplan.experiments.stats import Analysis, hedges_g
 from jaxplan.experiments.verdicts import Margin, judge_number, mean_interval, wilson_interval
 
@@ -294,29 +299,11 @@ def _num(x: float | None, metric: str, ref: float = 1.0) -> str:
 
 
 def _pm(mean: float, sd: float | None, metric: str) -> str:
-    if mean is None or not math.isfinite(mean):
-        return "–"
-    if sd is None or not math.isfinite(sd):
-        return _num(mean, metric)
-    return f"{_num(mean, metric)} ± {_num(sd, metric, mean)}"
+    return md.pm(mean, sd, lambda x: _num(x, metric), lambda x: _num(x, metric, mean))
 
 
 def _ci(ci: tuple[float, float], metric: str) -> str:
-    lo, hi = ci
-    if not (math.isfinite(lo) and math.isfinite(hi)):
-        return "–"
-    return f"[{_num(lo, metric)}, {_num(hi, metric)}]"
-
-
-def _table(head: Sequence[str], rows: Sequence[Sequence[str]], text: int = 1, last_text: bool = False) -> str:
-    """A Markdown table: the first ``text`` columns (and the last, with ``last_text``) left-aligned, the rest
-    (numbers) right-aligned."""
-    align = ["---"] * text + ["---:"] * (len(head) - text)
-    if last_text:
-        align[-1] = "---"
-    lines = ["| " + " | ".join(head) + " |", "| " + " | ".join(align) + " |"]
-    lines += ["| " + " | ".join(c.replace("|", "/") for c in r) + " |" for r in rows]
-    return "\n".join(lines)
+    return md.interval(*ci, num=lambda x: _num(x, metric))
 
 
 PAPER_HEAD = "paper"
@@ -338,7 +325,7 @@ def _comparison(cells: Sequence[Cell], few: int) -> str:
         ours = _pm(c.ours_mean, None if c.unit == "trials" else c.ours_sd, c.metric)
         rows.append([c.map, c.planner, _metric_head(c.metric), _paper_text(c), ours, _ci(c.ci, c.metric), n,
                      c.rule or "–", ver])
-    return _table(head, rows, text=3, last_text=True)
+    return md.table(head, rows, text=3, last_text=True)
 
 
 def _ours_table(a: Analysis, ev: Evidence, family: str, few: int, planners: Sequence[str] | None = None,
@@ -373,7 +360,7 @@ def _ours_table(a: Analysis, ev: Evidence, family: str, few: int, planners: Sequ
             warn = " ⚠" if fin.size < few else ""
             row.append(_pm(mean, sd, m) + (f" {_ci(ci, m)}" if fin.size else "") + warn)
         body.append(row)
-    return _table(head, body)
+    return md.table(head, body)
 
 
 def _claims_rows(results: Sequence[ClaimResult], link: Callable[[ClaimResult], str] | None = None) -> str:
@@ -385,7 +372,7 @@ def _claims_rows(results: Sequence[ClaimResult], link: Callable[[ClaimResult], s
         rule = f" — {r.rule}" if r.rule else ""
         rows.append([text + (f" <br>*{c.note}*" if c.note else ""), c.where, r.test, _effect(r),
                      f"**{r.verdict}**{rule}"])
-    return _table(head, rows, text=3, last_text=True)
+    return md.table(head, rows, text=3, last_text=True)
 
 
 def _effect(r: ClaimResult) -> str:
@@ -447,7 +434,7 @@ def _tests(a: Analysis, cfg: ExperimentConfig) -> str:
            "no group has spread is undefined (–), never starred.", ""]
     if anova:
         out += ["One-way ANOVA across planners:", "",
-                _table(["map", "metric", "F", "p", "groups"], text=2, rows=[
+                md.table(["map", "metric", "F", "p", "groups"], text=2, rows=[
                     [t.map, t.metric, fmt(t.statistic), p_cell(t, t.p_value, alpha), str(t.n_b)] for t in anova]),
                 ""]
     if pairs:
@@ -460,7 +447,7 @@ def _tests(a: Analysis, cfg: ExperimentConfig) -> str:
             rows.append([t.map, t.metric, t.planner_a, t.planner_b, fmt(t.statistic), fmt(t.p_value, 3),
                          p_cell(t, t.p_adjusted, alpha), fmt(g, 3)])
         out += ["Pairwise Welch t-tests:", "",
-                _table(["map", "metric", "A", "B", "t", "p", adj, "Hedges' g"], rows, text=4), ""]
+                md.table(["map", "metric", "A", "B", "t", "p", adj, "Hedges' g"], rows, text=4), ""]
     return "\n".join(out)
 
 
@@ -617,9 +604,12 @@ def claim_results(pages: Sequence[tuple[str, dict]], claims: Claims) -> list[tup
 
 def index_page(pages: Sequence[tuple[str, dict]], notes: Notes, claims: Claims | None = None, *,
                quick: bool = False, wall_s: float | None = None, command: str = "jaxplan reproduce",
-               cache: bool | None = None, figures_rel: str | None = None) -> str:
+               cache: bool | None = None, figures_rel: str | None = None,
+               beyond: Sequence[tuple[str, dict]] = ()) -> str:
     """``index.md``: the claims table (every claim of ``claims`` with its verdict, linked to its page and figure),
-    then one row per page (its relative path and `page_summary`) with its number verdicts.
+    then one row per page (its relative path and `page_summary`) with its number verdicts, then the pages beyond
+    the papers (``beyond``: relative path and summary of e.g. the navigation frontier, `jaxplan.experiments.frontier`),
+    which have no paper numbers and count in none of the verdicts.
 
     ``wall_s``: the wall time of the call that wrote the index; ``cache``: whether that call used JAX's
     persistent compilation cache (a warm cache skips most compilation, so the time depends on it);
@@ -683,13 +673,34 @@ def index_page(pages: Sequence[tuple[str, dict]], notes: Notes, claims: Claims |
         c = s["counts"]
         rows.append([s["config"].split("_")[0], f"[{s['config']}]({rel})", str(s["seeds"]),
                      *[str(c.get(v, 0)) for v in VERDICTS]])
-    out += [_table(head, rows, text=2), ""]
+    out += [md.table(head, rows, text=2), ""]
     out += ["All tables: " + ", ".join(f"{v} {tot[v]}" for v in VERDICTS) + ".", ""]
     if not quick:
         missing = [(name, m) for name, ms in notes.not_reproduced.items() for m in ms]
         if missing:
             out += ["## Not reproduced", ""] + [f"- {name}: {m}" for name, m in missing] + [""]
+    if beyond:
+        out += ["## Beyond the papers", "",
+                "Results no paper reports, from this repository's own configs (`jaxplan reproduce --pattern "
+                "'NAME.toml'`; not part of the default run, and in none of the counts above).", ""]
+        out += [f"- {_beyond_line(rel, s)}" for rel, s in beyond] + [""]
     return "\n".join(out).rstrip() + "\n"
+
+
+def _beyond_line(rel: str, s: Mapping[str, Any]) -> str:
+    """One index line of a page beyond the papers: its title linked, its size, and what it must show."""
+    text = md.link(str(s.get("title") or s["config"]), rel)
+    parts = [f"{s['episodes']} episodes" if s.get("episodes") is not None else "",
+             f"{len(s['maps'])} maps" if s.get("maps") else "",
+             f"{s['seeds']} seed{'s' if s['seeds'] != 1 else ''}" if s.get("seeds") is not None else ""]
+    parts = [x for x in parts if x]
+    if parts:
+        text += " — " + ", ".join(parts)
+    zero = s.get("passive_zero")
+    if zero is not None:
+        text += (f"; passive safety: zero active contacts in all {s.get('passive_rows')} rows" if zero else
+                 "; passive safety: active contacts in some rows (see the page)")
+    return text + "."
 
 
 # ---------------------------------------------------------------------------------------------
@@ -779,8 +790,9 @@ def write_index_page(results: str | os.PathLike, notes: Notes, claims: Claims | 
                      quick: bool = False, wall_s: float | None = None, cache: bool | None = None,
                      figures_dir: str | os.PathLike | None = None) -> Path:
     """Writes ``results/index.md`` (``index-quick.md`` for quick pages) from every page found under ``results``
-    (their stored claim results and verdict counts) and the claims file ``claims``; ``figures_dir``: the figure
-    root the claims' figures are linked in."""
+    (their stored claim results and verdict counts; pages beyond the papers, ``results/*.md`` whose summary says
+    ``beyond``, in a section of their own) and the claims file ``claims``; ``figures_dir``: the figure root the
+    claims' figures are linked in."""
     from jaxplan.core.io import atomic_write
 
     root = Path(results)
@@ -794,8 +806,14 @@ def write_index_page(results: str | os.PathLike, notes: Notes, claims: Claims | 
 
     order = {k: i for i, k in enumerate(PAPERS)}
     pages.sort(key=lambda x: (order.get(x[1]["config"].split("_")[0], 99), x[1]["config"]))
+    beyond = []
+    for p in sorted(root.glob("*.md")):
+        s = page_summary(p.read_text()) if not p.name.startswith("index") else None
+        if s is not None and s.get("beyond") and bool(s.get("quick")) == quick:
+            beyond.append((p.name, s))
     out = root / ("index-quick.md" if quick else "index.md")
     rel = Path(os.path.relpath(Path(figures_dir), root)).as_posix() if figures_dir is not None else None
     atomic_write(out, index_page(pages, notes, claims, quick=quick, wall_s=wall_s, cache=cache, figures_rel=rel,
-                                 command="jaxplan reproduce --quick" if quick else "jaxplan reproduce"))
+                                 command="jaxplan reproduce --quick" if quick else "jaxplan reproduce",
+                                 beyond=beyond))
     return out
