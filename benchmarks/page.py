@@ -80,6 +80,10 @@ BENCHES = (
           "every tuning strategy on the same evaluation budget, with a held-out test set"),
     Bench("bench_scale", "Scale-out", "python benchmarks/bench_scale.py [--quick]",
           "batched throughput with 1 and 2 host devices, each configuration in a fresh process"),
+    Bench("ray_scale_out", "Scale-out with Ray",
+          "jaxplan reproduce --quick --ray auto; jaxplan study configs/study_iaco.toml --quick --ray auto",
+          "the same runs in one process and as Ray tasks (2 workers): wall time, compile time per worker, the "
+          "per-task overhead (docs/guide/scale-out.md)"),
     Bench("bench_warm_start", "Warm starts", "python benchmarks/bench_warm_start.py [--repeats 3]",
           "a new process's `jaxplan navigate`, `jaxplan plan --planner iaco` and first `jp.navigate`, with the "
           "compilation caches cold, off and warm (about 15 min; `nice -n 19` beside other work)"),
