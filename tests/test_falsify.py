@@ -4,28 +4,15 @@ generation and finds no active contact in passive mode."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import jax.numpy as jnp
 import numpy as np
 import pytest
-
-ROOT = Path(__file__).resolve().parents[1]
+from conftest import load_benchmark
 
 
 @pytest.fixture(scope="module")
 def bench():
-    path = ROOT / "benchmarks" / "bench_falsify.py"
-    spec = importlib.util.spec_from_file_location("bench_falsify", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.path.insert(0, str(path.parent))  # its `_timing` import
-    try:
-        spec.loader.exec_module(module)
-    finally:
-        sys.path.remove(str(path.parent))
-    return module
+    return load_benchmark("bench_falsify")
 
 
 def test_genomes_make_walkers_in_the_hall_no_faster_than_the_bound(bench):
