@@ -229,7 +229,7 @@ def _crowded(config: NavConfig, discs: _Discs, pos: jnp.ndarray) -> jnp.ndarray:
     return jnp.any(gap < 0.5 * config.block_distance, axis=-1)
 
 
-def _replanning(config: NavConfig, free: jnp.ndarray, resolution, inputs: EpisodeInputs, c: Carry,
+def _replanning(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, inputs: EpisodeInputs, c: Carry,
                 pos: jnp.ndarray, discs: _Discs, crowded: jnp.ndarray) -> Carry:
     """Stage 4: the robots that must re-plan (path blocked, drifted off, stalled) or may re-check a detour,
     and their re-plans (`replan_slots`, in a `lax.cond` taken only on steps where some robot needs one)."""
@@ -284,8 +284,15 @@ def _replanning(config: NavConfig, free: jnp.ndarray, resolution, inputs: Episod
     away = jnp.sum(vel_all * rel, axis=-1) / jnp.maximum(jnp.sqrt(jnp.sum(rel * rel, axis=-1)), 1e-6)
     away = (away >= recede) if (M > 0 or N > 1) else jnp.zeros_like(reach, bool)
     closing = future.reshape(B, N, -1, 2), jnp.repeat(jnp.where(away, 0.0, reach), P, axis=-1)
+    # A robot re-planning after a stall starts its new path from its cell's centre when it cannot go straight on.
+    anchor = c.stall_replan
+
+    def sight(x, y):
+        return static_clearance(table, x, y, "hybrid")
+
     c, tried, replaced = lax.cond(jnp.any(need > 0),
-                                  lambda cc: replan_slots(config, free, resolution, cc, inputs, need, *closing),
+                                  lambda cc: replan_slots(config, free, table.resolution, cc, inputs, need, *closing,
+                                                          anchor=anchor, clearance=sight),
                                   lambda cc: (cc, jnp.zeros_like(must), jnp.zeros_like(must)), c)
     c = c._replace(last_replan=jnp.where(tried, c.t, c.last_replan))
     if M > 0 or N > 1:  # with no disc at all nothing is closed, and no path goes round anything
@@ -577,7 +584,7 @@ def _step(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, params: D
     crowded = _crowded(config, discs, pos)
     c = _watch_progress(config, c, pos, crowded, inputs.goal)  # stage 3
     if config.replan:
-        c = _replanning(config, free, table.resolution, inputs, c, pos, discs, crowded)
+        c = _replanning(config, table, free, inputs, c, pos, discs, crowded)
     sub, c = _subgoal(config, c, pos)
     if c.give_way is not None and discs.pos.shape[2] > 0:  # with no disc at all there is nothing to give way to
         sub, c = _give_way(config, table, c, pos, discs, sub)
