@@ -26,7 +26,8 @@ Sections:
              planner's passive-safety admissibility on; ``--cases`` picks among static, blind, seeing.
   allrows    static episodes of `iaco_dwa` and `iaco_mppi` on EVERY row (optimal <= 80 cells) of
              every scenario file, each failure printed with its scenario row and reason (target:
-             every one arrives).
+             every one arrives); per file: rows, infeasible, arrived, failed. ``--allrows-seeds``
+             runs every row with each of these seeds (default 0).
   pipelines  every pipeline and ablation (`jaxplan.nav.pipelines()`) on the warehouse map
              (``--pipeline-maps`` for others), static and moving.
   multi      li2026's Table 3 set-up: teams of 5 robots on the warehouse map with 5
@@ -55,7 +56,9 @@ from pathlib import Path
 
 import numpy as np
 
-MAPS = ("warehouse-10-20-10-2-1", "random-32-32-20", "random-64-64-20", "room-64-64-8", "maze-32-32-2", "brc202d")
+MAPS = ("warehouse-10-20-10-2-1", "random-32-32-20", "random-64-64-20", "room-64-64-8", "maze-32-32-2", "brc202d",
+        "den520d", "ost003d")
+"""Every scenario file in ../shared/benchmarks/movingai (the maps and allrows sections' default)."""
 WAREHOUSE = "warehouse-10-20-10-2-1"
 AVOID_RADIUS = 3.0
 """m: no walker starts this close to a robot's start or goal (one that starts within a metre of a robot
@@ -123,7 +126,8 @@ def table(name: str, columns: list[str], title: str = "") -> list[list]:
 def variant(args, keys: tuple[str, ...]) -> str:
     """`` (…)`` naming the options among ``keys`` that differ from the defaults (for a table's name), or ``""``."""
     default = {"maps": list(MAPS), "rows": 50, "seeds": 5, "cases": ["static", "blind", "seeing"],
-               "allrows_maps": list(MAPS), "pipeline_maps": [WAREHOUSE], "episodes": 1000, "teams": 10}
+               "allrows_maps": list(MAPS), "allrows_seeds": [0], "pipeline_maps": [WAREHOUSE], "episodes": 1000,
+               "teams": 10}
     parts = [f"{k.replace('_', ' ')} {','.join(map(str, v)) if isinstance(v, list) else v}"
              for k in keys if (v := getattr(args, k)) != default[k]]
     parts += ["quick"] * args.quick + ["oracle"] * (args.oracle and "maps" in keys) + [
@@ -205,9 +209,11 @@ def section_allrows(d: Path, args) -> None:
         pipe = f"iaco_{local}"
         total = failed = 0
         t0 = time.perf_counter()
-        out = table(f"allrows, {pipe}{variant(args, ('allrows_maps',))}",
-                    ["map", "rows", "infeasible", "arrived", "failed", "wall (s)"],
-                    f"static {pipe} episodes on every row (optimal ≤ 80 cells) of every scenario file, seed 0")
+        seeds = args.allrows_seeds
+        out = table(f"allrows, {pipe}{variant(args, ('allrows_maps', 'allrows_seeds'))}",
+                    ["map", "rows", "episodes", "infeasible", "arrived", "failed", "wall (s)"],
+                    f"static {pipe} episodes on every row (optimal ≤ 80 cells) of every scenario file, "
+                    f"seed{'s' * (len(seeds) > 1)} {', '.join(map(str, seeds))}")
         for name in args.allrows_maps:
             grid, scen = load(d, name)
             sel = np.nonzero(scen.optimal <= 80.0)[0][: 20 if args.quick else None]
@@ -216,24 +222,28 @@ def section_allrows(d: Path, args) -> None:
             arrived = infeasible = 0
             wall = 0.0
             lines = []
-            for part in (sel[i:i + ALLROWS_BATCH] for i in range(0, len(sel), ALLROWS_BATCH)):
-                b, w = run(grid, scen.starts[part], scen.goals[part], pipe, [0])
+            per = max(25, ALLROWS_BATCH // len(seeds) // 25 * 25)  # rows per call: about ALLROWS_BATCH episodes
+            for part in (sel[i:i + per] for i in range(0, len(sel), per)):
+                b, w = run(grid, scen.starts[part], scen.goals[part], pipe, seeds)
                 wall += w
-                ok, ran = b.success[:, 0, 0], b.feasible[:, 0, 0]
+                ok, ran = b.success[..., 0], b.feasible[..., 0]  # [rows, seeds]
                 arrived += int((ok & ran).sum())
                 infeasible += int((~ran).sum())
-                for i in np.nonzero(ran & ~ok)[0]:
-                    lines.append(f"    row {int(part[i])}: {b.reason[i, 0, 0]} after "
-                                 f"{float(b.steps[i, 0, 0]) * b.period:.1f} s, contacts {int(b.collisions[i, 0, 0])}")
-            total += len(sel) - infeasible
+                for i, r in zip(*np.nonzero(ran & ~ok), strict=True):
+                    lines.append(f"    row {int(part[i])} {tuple(map(int, scen.starts[part[i]]))} -> "
+                                 f"{tuple(map(int, scen.goals[part[i]]))}, seed {seeds[r]}: {b.reason[i, r, 0]} "
+                                 f"after {float(b.steps[i, r, 0]) * b.period:.1f} s, contacts "
+                                 f"{int(b.collisions[i, r, 0])}")
+            n = len(sel) * len(seeds)
+            total += n - infeasible
             failed += len(lines)
-            print(f"{pipe:<12} {name:<24} rows {len(sel):>4}  infeasible {infeasible:>3}  arrived "
+            print(f"{pipe:<12} {name:<24} rows {len(sel):>4}  episodes {n:>4}  infeasible {infeasible:>3}  arrived "
                   f"{arrived:>4}  failed {len(lines):>3}  ({wall:.0f} s)", flush=True)
-            out.append([name, len(sel), infeasible, arrived, len(lines), wall])
+            out.append([name, len(sel), n, infeasible, arrived, len(lines), wall])
             if lines:
                 print("\n".join(lines), flush=True)
-        print(f"{pipe}: {total - failed} of {total} feasible rows arrived ({time.perf_counter() - t0:.0f} s)")
-        RECORD.note(f"{total - failed} of {total} feasible rows arrived.")
+        print(f"{pipe}: {total - failed} of {total} feasible episodes arrived ({time.perf_counter() - t0:.0f} s)")
+        RECORD.note(f"{total - failed} of {total} feasible episodes arrived (an episode: a row with a seed).")
 
 
 def section_pipelines(d: Path, args) -> None:
@@ -475,6 +485,7 @@ def main() -> None:
     ap.add_argument("--admissible", action="store_true",
                     help="maps: also run the blind walkers with the local planner's passive-safety admissibility on")
     ap.add_argument("--allrows-maps", default=",".join(MAPS), help="maps of the allrows section (comma-separated)")
+    ap.add_argument("--allrows-seeds", default="0", help="seeds of the allrows section (comma-separated)")
     ap.add_argument("--cases", default="static,blind,seeing",
                     help="maps: which of static, blind, seeing to run (--oracle and --admissible add theirs)")
     ap.add_argument("--local", default="dwa,mppi", help="local planners of the maps, allrows and speed sections")
@@ -492,6 +503,7 @@ def main() -> None:
     args.local = [x for x in args.local.split(",") if x]
     args.cases = [x for x in args.cases.split(",") if x]
     args.allrows_maps = [m for m in args.allrows_maps.split(",") if m]
+    args.allrows_seeds = [int(x) for x in args.allrows_seeds.split(",") if x]
     bad = sorted(set(args.cases) - {"static", "blind", "seeing"})
     if bad:
         ap.error(f"unknown --cases {bad}; choose among static, blind, seeing")
