@@ -482,3 +482,29 @@ def test_example_configs_run_quick(name, tmp_path, movingai):
     run_dir = run_experiment(ROOT / "configs" / name, tmp_path, quick=True, data_dir=movingai.parent, progress=False)
     rows = _csv(run_dir / "trials.csv")
     assert rows and all(r["success"] in ("0", "1") for r in rows)
+
+
+def test_planners_sharing_an_obstacle_spec_meet_the_same_discs_drawn_once(tmp_path, monkeypatch):
+    """`obstacle_fn` draws a trial's discs once per map and process: a second planner with the same spec gets the
+    very set the first one met (the comparison is paired), a planner with another spec draws its own."""
+    import jaxplan.nav as nav
+    from jaxplan.experiments.execute import obstacle_fn
+    from jaxplan.experiments.prepare import prepare
+
+    walkers = {"n": 2, "speed": 1.0, "radius": 0.25}
+    nav_planner = {"kind": "navigate", "name": "astar_kng_dwa"}
+    text = config_toml(planners=[{**nav_planner, "label": "a", "obstacles": walkers},
+                                 {**nav_planner, "label": "b", "obstacles": walkers},
+                                 {**nav_planner, "label": "c", "obstacles": {**walkers, "speed": 0.5}}])
+    prep = prepare(parse_config(text, data_dir=tmp_path))
+    mw, (a, b, c) = prep.maps[0], prep.config.planners
+    calls = []
+    draw = nav.random_obstacles
+    monkeypatch.setattr(nav, "random_obstacles", lambda *args, **kw: calls.append(kw["seed"]) or draw(*args, **kw))
+    rows = np.arange(len(mw.starts))
+    first, second, other = (obstacle_fn(mw, 0, p, rows) for p in (a, b, c))
+    assert second(1, 1) is first(1, 1) and len(calls) == 1
+    assert other(1, 1) is not first(1, 1) and len(calls) == 2
+    assert calls[0] == calls[1]  # the same trial's seed: only the spec (its speed) differs
+    np.testing.assert_array_equal(other(1, 1).waypoints, first(1, 1).waypoints)
+    assert float(np.asarray(other(1, 1).speeds).max()) == 0.5

@@ -124,13 +124,18 @@ def obstacle_fn(mw: MapWork, m: int, pc: PlannerConfig, run_idx: np.ndarray) -> 
 
     def fn(e: int, seed: int):
         sc = int(run_idx[e])
+        key = (o, pc.team, sc, int(seed))
+        if key in mw.draws:  # another planner of the config met these discs already
+            return mw.draws[key]
         s = int(np.random.SeedSequence([o.seed, m, sc, int(seed)]).generate_state(1)[0])
         # world metres, as random_obstacles takes them; a team's discs keep clear of every robot of the team
         cells = (np.stack([mw.starts[sc], mw.goals[sc]]) if pc.team is None
                  else np.concatenate(team_cells(mw, m, pc.team, sc)))
         avoid = mw.grid.centre(cells)
-        return random_obstacles(mw.grid, n=o.n, speed=o.speed, radius=o.radius, seed=s, waypoints=o.waypoints,
-                                avoid=avoid, avoid_radius=o.avoid_radius, loop=o.loop, behavior=o.behavior)
+        mw.draws[key] = random_obstacles(mw.grid, n=o.n, speed=o.speed, radius=o.radius, seed=s,
+                                         waypoints=o.waypoints, avoid=avoid, avoid_radius=o.avoid_radius,
+                                         loop=o.loop, behavior=o.behavior)
+        return mw.draws[key]
 
     return fn
 

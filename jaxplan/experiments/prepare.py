@@ -51,6 +51,10 @@ class MapWork:
       digest: SHA-256 of the map (and scenario) file bytes, or of the generated grid.
       problem: a TSP instance's `TSPProblem` (then ``grid`` is None, S = 1, starts/goals are −1 and
         ``optimal`` is the optimal tour length); None for a map.
+      draws: the moving discs drawn so far for this map's trials (`jaxplan.experiments.execute.obstacle_fn`),
+        by (obstacle spec, team, scenario, seed): every planner of a config that shares those meets the same
+        discs, so each set is drawn once per process (a draw plans routes over the map: 0.1-0.4 s on the
+        MovingAI maps). Not part of equality.
     """
 
     spec: MapSpec
@@ -61,6 +65,7 @@ class MapWork:
     rows: np.ndarray
     digest: str
     problem: Any = None
+    draws: dict[Any, Any] = dataclasses.field(default_factory=dict, compare=False, repr=False)
 
 
 @dataclass(frozen=True)
