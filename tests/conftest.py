@@ -3,12 +3,13 @@
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import importlib.util
 import os
 import sys
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 import numpy as np
 import pytest
@@ -196,3 +197,21 @@ def write_config(tmp_path: Path) -> Callable[..., Path]:
         return path
 
     return write
+
+
+@contextlib.contextmanager
+def loopback_ray_cluster() -> Iterator[Any]:
+    """A head and a second node, one CPU each, on this machine (Ray's loopback test cluster): its `RayExecutor`,
+    the cluster shut down afterwards. Skips the test without the ``ray`` extra."""
+    ray = pytest.importorskip("ray")
+    from ray.cluster_utils import Cluster
+
+    from jaxplan.core.executor import RayExecutor
+
+    c = Cluster(initialize_head=True, head_node_args={"num_cpus": 1})
+    c.add_node(num_cpus=1)
+    try:
+        yield RayExecutor(c.address)
+    finally:
+        ray.shutdown()
+        c.shutdown()

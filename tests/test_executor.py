@@ -10,6 +10,7 @@ import threading
 import time
 
 import pytest
+from conftest import loopback_ray_cluster
 
 from jaxplan.core.executor import ClusterUnreachable, LocalExecutor, RayExecutor, executor_from
 
@@ -73,16 +74,10 @@ def test_unreachable_address_is_one_clear_error_fast():
 def cluster():
     """A head and a second node, one CPU each, on this machine (Ray's loopback test cluster)."""
     ray = pytest.importorskip("ray")
-    from ray.cluster_utils import Cluster
-
     # the workers cannot import this test module: its functions travel by value
     ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])
-    c = Cluster(initialize_head=True, head_node_args={"num_cpus": 1})
-    c.add_node(num_cpus=1)
-    ex = RayExecutor(c.address)
-    yield ex
-    ray.shutdown()
-    c.shutdown()
+    with loopback_ray_cluster() as ex:
+        yield ex
 
 
 @pytest.mark.slow

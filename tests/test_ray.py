@@ -15,11 +15,10 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import SMALL_ACO, config_toml
+from conftest import SMALL_ACO, config_toml, loopback_ray_cluster
 
 ray = pytest.importorskip("ray")
 
-from jaxplan.core.executor import RayExecutor  # noqa: E402
 from jaxplan.experiments import run_experiment  # noqa: E402
 
 # Three ACO planners of different shapes (each compiles on its own), two scenarios in chunks of one: six chunks, so a
@@ -46,14 +45,8 @@ def start(*args: str, cwd: Path, env: dict | None = None) -> subprocess.Popen:
 @pytest.fixture(scope="module")
 def cluster():
     """A head and a second node, one CPU each, on this machine (Ray's loopback test cluster): its executor."""
-    from ray.cluster_utils import Cluster
-
-    c = Cluster(initialize_head=True, head_node_args={"num_cpus": 1})
-    c.add_node(num_cpus=1)
-    ex = RayExecutor(c.address)
-    yield ex
-    ray.shutdown()
-    c.shutdown()
+    with loopback_ray_cluster() as ex:
+        yield ex
 
 
 @pytest.fixture(scope="module")
