@@ -16,8 +16,8 @@ from jaxplan.grid._collision import collision_map
 from jaxplan.nav import NavConfig
 from jaxplan.nav._episode import run_episodes
 from jaxplan.nav._front import prepare_episodes
-from jaxplan.nav._replan import entry_clear
 from jaxplan.nav._state import REASONS
+from jaxplan.nav._tracking import way_clear
 
 _run = jax.jit(run_episodes, static_argnums=(0, 1))
 
@@ -34,7 +34,7 @@ def _two_rooms() -> jp.GridMap:
 def test_the_way_to_a_paths_first_vertex_is_checked_end_to_end():
     grid = _two_rooms()
     table = clearance_table(collision_map(grid))
-    clear = jax.jit(lambda a, b: entry_clear(a, b, 0.3, lambda x, y: static_clearance(table, x, y, "hybrid")))
+    clear = jax.jit(lambda a, b: way_clear(a, b, 0.3, lambda x, y: static_clearance(table, x, y, "hybrid"), whole=True))
     beside_the_door, goal = jnp.asarray([4.9, 5.29]), jnp.asarray([4.5, 2.5])
     assert not bool(clear(beside_the_door, goal))  # grazes the door's right jamb, 0.1 m from the robot's centre
     assert bool(clear(jnp.asarray([4.5, 5.5]), goal))  # from the cell's centre: through the door's middle
@@ -44,7 +44,7 @@ def test_the_way_to_a_paths_first_vertex_is_checked_end_to_end():
     free[1, 12:] = False
     free[0, 12:] = True  # the corridor steps up one row at x = 12
     table = clearance_table(collision_map(jp.grid_from_array(free, resolution=1.0)))
-    far = jax.jit(lambda a, b: entry_clear(a, b, 0.3, lambda x, y: static_clearance(table, x, y, "hybrid")))
+    far = jax.jit(lambda a, b: way_clear(a, b, 0.3, lambda x, y: static_clearance(table, x, y, "hybrid"), whole=True))
     assert not bool(far(jnp.asarray([1.5, 1.5]), jnp.asarray([18.5, 0.5])))
 
 

@@ -32,9 +32,10 @@ from jax import lax
 
 from jaxplan.nav._config import NavConfig
 from jaxplan.nav._state import Carry, EpisodeInputs
+from jaxplan.nav._tracking import way_clear
 
-__all__ = ["MOVES", "distance_field", "descend", "turn_vertices", "path_blocked", "disc_cells", "entry_clear",
-           "replan_slots", "group_size"]
+__all__ = ["MOVES", "distance_field", "descend", "turn_vertices", "path_blocked", "disc_cells", "replan_slots",
+           "group_size"]
 
 MOVES = ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1))
 """The 8 grid moves ``(dx, dy)``: four straight, then four diagonal."""
@@ -243,25 +244,6 @@ def group_size(config: NavConfig, batch: int) -> int:
     return min(config.replan_group or batch, batch)
 
 
-_ENTRY_NEAR = 32
-_ENTRY_STEP = 0.1
-_ENTRY_FAR = 64
-"""The straight way from a stalled robot to its new path's first vertex is checked at ``_ENTRY_NEAR`` points
-``_ENTRY_STEP`` m apart, then at ``_ENTRY_FAR`` evenly spaced points of the whole leg."""
-
-
-def entry_clear(position: jnp.ndarray, first: jnp.ndarray, d_safe, clearance) -> jnp.ndarray:
-    """Whether the straight way from ``position [2]`` to ``first [2]`` (m) keeps ``d_safe`` from the map
-    (``clearance(x, y)``, m): checked every 0.1 m for its first 3.2 m and at 64 evenly spaced points in all."""
-    gap = first - position
-    length = jnp.sqrt(jnp.sum(gap * gap))
-    near = jnp.minimum(jnp.arange(1, _ENTRY_NEAR + 1, dtype=position.dtype) * _ENTRY_STEP, length)
-    far = jnp.arange(1, _ENTRY_FAR + 1, dtype=position.dtype) / _ENTRY_FAR * length
-    s = jnp.concatenate([near, far])
-    pts = position + s[:, None] * (gap / jnp.maximum(length, 1e-6))
-    return jnp.all(clearance(pts[:, 0], pts[:, 1]) >= d_safe)
-
-
 def replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: Carry, inputs: EpisodeInputs,
                  need: jnp.ndarray, centres: jnp.ndarray, reach: jnp.ndarray, anchor: jnp.ndarray | None = None,
                  clearance=None) -> tuple[Carry, jnp.ndarray, jnp.ndarray]:
@@ -276,10 +258,10 @@ def replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: Carry, inp
     ``centres [B, N, D, 2]`` / ``reach [B, N, D]``: the discs whose nearby cells are closed.
     ``anchor bool[B, N]`` (with ``clearance(x, y)``, m): robots re-planning after a stall, whose new path begins
     at the centre of the cell they stand in when the straight way from where they stand to its first vertex
-    comes closer than ``config.dwa.d_safe`` to the map (`entry_clear`). The path's runs between its vertices go
-    through free cells from centre to centre; only that first leg starts off a centre, and a robot standing
-    beside a door facing a goal beyond it stood there until the time limit (room-64-64-8, docs/decisions.md,
-    "Stall and orbit watches").
+    comes closer than ``config.dwa.d_safe`` to the map (`jaxplan.nav._tracking.way_clear`, the whole way). The
+    path's runs between its vertices go through free cells from centre to centre; only that first leg starts off
+    a centre, and a robot standing beside a door facing a goal beyond it stood there until the time limit
+    (room-64-64-8, docs/decisions.md, "Stall and orbit watches").
     Only the chosen robots' fields are computed (a gather into fixed slots); robots left over
     try again on the next step. Groups are consecutive episodes, so a device holding whole
     groups computes exactly what one device computes for them. The slots in use are planned
@@ -316,8 +298,8 @@ def replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: Carry, inp
         cells, n = descend(field, plan_free, cell, config.replan_cells)
         pts, m = turn_vertices(cells, jnp.maximum(n, 1), K)
         if anchored:  # a stalled robot off its cell's centre, the way to the first vertex not clear: via the centre
-            via = anchor1 & (n > 1) & ~entry_clear(state1[:2], (pts[0] + 0.5) * resolution, config.dwa.d_safe,
-                                                   clearance)
+            via = anchor1 & (n > 1) & ~way_clear(state1[:2], (pts[0] + 0.5) * resolution, config.dwa.d_safe,
+                                                 clearance, whole=True)
             shifted = jnp.concatenate([cell[None].astype(pts.dtype), pts[:-1]])
             pts, m = jnp.where(via, shifted, pts), jnp.where(via, jnp.minimum(m + 1, K), m)
         # A re-check keeps the current path unless the new one is clearly shorter: the field's
