@@ -24,6 +24,7 @@ indexed ``[y, x]``.
 from __future__ import annotations
 
 import math
+from typing import Callable
 
 import jax
 import jax.numpy as jnp
@@ -245,8 +246,8 @@ def group_size(config: NavConfig, batch: int) -> int:
 
 
 def replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: Carry, inputs: EpisodeInputs,
-                 need: jnp.ndarray, centres: jnp.ndarray, reach: jnp.ndarray, anchor: jnp.ndarray | None = None,
-                 clearance=None) -> tuple[Carry, jnp.ndarray, jnp.ndarray]:
+                 need: jnp.ndarray, centres: jnp.ndarray, reach: jnp.ndarray, anchor: jnp.ndarray,
+                 clearance: Callable) -> tuple[Carry, jnp.ndarray, jnp.ndarray]:
     """Re-plans up to `NavConfig.replan_slots` of the robots with ``need [B, N] > 0`` per group
     of `NavConfig.replan_group` episodes (0: the whole batch is one group).
 
@@ -286,7 +287,6 @@ def replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: Carry, inp
     kind = take(need)
     use, check = kind > 0, kind == 1
     state, wp, n_wp, index = take(c.state), take(c.waypoints), take(c.n_wp), take(c.index)
-    anchored = anchor is not None and clearance is not None
 
     def one(args):
         need1, check1, state1, wp1, n1, index1, goal_cell1, cen, rch, anchor1 = args
@@ -297,11 +297,11 @@ def replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: Carry, inp
         field = distance_field(plan_free, goal_cell1, need1, config.replan_sweeps, until=cell)
         cells, n = descend(field, plan_free, cell, config.replan_cells)
         pts, m = turn_vertices(cells, jnp.maximum(n, 1), K)
-        if anchored:  # a stalled robot off its cell's centre, the way to the first vertex not clear: via the centre
-            via = anchor1 & (n > 1) & ~way_clear(state1[:2], (pts[0] + 0.5) * resolution, config.dwa.d_safe,
-                                                 clearance, whole=True)
-            shifted = jnp.concatenate([cell[None].astype(pts.dtype), pts[:-1]])
-            pts, m = jnp.where(via, shifted, pts), jnp.where(via, jnp.minimum(m + 1, K), m)
+        # A stalled robot off its cell's centre, the way to the first vertex not clear: via the centre.
+        via = anchor1 & (n > 1) & ~way_clear(state1[:2], (pts[0] + 0.5) * resolution, config.dwa.d_safe,
+                                             clearance, whole=True)
+        shifted = jnp.concatenate([cell[None].astype(pts.dtype), pts[:-1]])
+        pts, m = jnp.where(via, shifted, pts), jnp.where(via, jnp.minimum(m + 1, K), m)
         # A re-check keeps the current path unless the new one is clearly shorter: the field's
         # length (the same octile grid metric as the turn-vertex polylines) against what is left.
         new_len = field[cell[1], cell[0]] * resolution
@@ -313,7 +313,7 @@ def replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: Carry, inp
         return (pts + 0.5) * resolution, m, need1 & (n > 1) & (~check1 | better)
 
     args = (use, check, state, wp, n_wp, index, take(inputs.goal_cell), take(centres), take(reach),
-            take(anchor) if anchored else jnp.zeros_like(use))
+            take(anchor))
     # Only the slots in use are planned, one after another: a loop over all S slots paid for every unused
     # one's disc mask and descent (a batch of one-episode groups has S = B slots, mostly unused). An unused
     # slot's outputs are never read (`put` masks by ``ok``, which is False for it).
