@@ -1,7 +1,7 @@
 """Walkers that see and lose sight of their route go back the way they came instead of standing against a wall.
 
 The social force model steers a walker straight at its route's next vertex; pushed off its route behind a wall,
-it used to stand against that wall for good (a local minimum of the model, in 1–6 % of 180 s episodes on the
+it used to stand against that wall for good (a local minimum of the model, in up to 11 % of 180 s episodes on the
 MovingAI maps). These tests pin the trail that takes it back: a walker placed behind a wall, and the maze
 episodes whose walkers stood still."""
 
