@@ -39,7 +39,8 @@ wrong turn goes back the way they came. So each walker keeps a trail of `TRAIL` 
 `jaxplan.nav._tracking.way_clear`), restarted at the walker's position when it takes up a new vertex. A walker
 that cannot see its vertex heads for its latest breadcrumb instead, dropping each as it comes within
 `VERTEX_RADIUS`, back to the first: where it took up this vertex, in sight of it (route segments are clear at the
-walker's radius). A walker that never loses sight of its route moves exactly as without the trail.
+walker's radius). A walker that never loses sight of its route moves exactly as without the trail; most lose it
+for a moment at some corner (the line to the next vertex grazing the corner's square once they have moved on).
 
 Integration: semi-implicit Euler in `SUBSTEPS` steps per control period (0.025 s at the default
 0.2 s): stable for the contact stiffness (``h·sqrt(k/m) ≈ 1 < 2``) and fine against ``τ`` and the
