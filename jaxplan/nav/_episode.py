@@ -72,7 +72,16 @@ from jaxplan.nav._state import (
     EpisodeInputs,
     EpisodeOutput,
 )
-from jaxplan.nav._tracking import corner_cap, follow, lookahead_point, rewatch, subgoal_index, threatened
+from jaxplan.nav._tracking import (
+    SIGHT_CLEARANCE,
+    corner_cap,
+    follow,
+    lookahead_point,
+    rewatch,
+    subgoal_index,
+    threatened,
+    way_clear,
+)
 
 __all__ = ["run_episodes", "initial_carry", "run_chunk"]
 
@@ -246,10 +255,20 @@ def _replanning(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, inp
         moving = (jnp.abs(c.state[..., 3]) >= 0.1) & ~c.done  # [B, N]
         robot_reach = jnp.where(jnp.repeat(moving, C, axis=1)[:, None, :], 0.0, reach[:, :, M:])
         reach = jnp.concatenate([reach[:, :, :M], robot_reach], axis=2)
+
+
+    def sight(x, y):
+        return static_clearance(table, x, y, "hybrid")
+
     # Drifted off the path (e.g. overshot an aisle) — unless a disc is within half the look-ahead:
     # then the drift is an evasion, and a fresh path through the disc undoes it (measured: two
-    # robots crossing re-planned back into each other).
-    lost = (c.error > config.replan_deviation) & ~crowded
+    # robots crossing re-planned back into each other). Not once a wall stands between the robot and
+    # its current waypoint: then the evasion has taken it into another corridor, which leads elsewhere
+    # (maze-32-32-2 among walkers that see: a robot tracked a path 2 m away through a wall into a dead end
+    # and stood there).
+    ahead = _current_waypoint(c)
+    in_sight = jax.vmap(jax.vmap(lambda p, w: way_clear(p, w, SIGHT_CLEARANCE, sight, whole=True)))(pos, ahead)
+    lost = (c.error > config.replan_deviation) & (~crowded | ~in_sight)
     if M > 0 or N > 1:
         # Each disc at its predicted positions over the next block_horizon seconds.
         ts = jnp.arange(int(config.block_horizon / 0.5) + 1, dtype=jnp.float32) * 0.5  # [P]
@@ -286,13 +305,11 @@ def _replanning(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, inp
     closing = future.reshape(B, N, -1, 2), jnp.repeat(jnp.where(away, 0.0, reach), P, axis=-1)
     # A robot re-planning after a stall starts its new path from its cell's centre when it cannot go straight on.
     anchor = c.stall_replan
-
-    def sight(x, y):
-        return static_clearance(table, x, y, "hybrid")
-
+    # Stalled or lost behind a wall: its path cannot be kept, even if every way round the discs is closed.
+    stranded = c.stall_replan | (lost & ~in_sight)
     c, tried, replaced = lax.cond(jnp.any(need > 0),
                                   lambda cc: replan_slots(config, free, table.resolution, cc, inputs, need, *closing,
-                                                          anchor=anchor, clearance=sight),
+                                                          anchor=anchor, clearance=sight, stranded=stranded),
                                   lambda cc: (cc, jnp.zeros_like(must), jnp.zeros_like(must)), c)
     c = c._replace(last_replan=jnp.where(tried, c.t, c.last_replan))
     if M > 0 or N > 1:  # with no disc at all nothing is closed, and no path goes round anything

@@ -247,7 +247,7 @@ def group_size(config: NavConfig, batch: int) -> int:
 
 def replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: Carry, inputs: EpisodeInputs,
                  need: jnp.ndarray, centres: jnp.ndarray, reach: jnp.ndarray, anchor: jnp.ndarray,
-                 clearance: Callable) -> tuple[Carry, jnp.ndarray, jnp.ndarray]:
+                 clearance: Callable, stranded: jnp.ndarray) -> tuple[Carry, jnp.ndarray, jnp.ndarray]:
     """Re-plans up to `NavConfig.replan_slots` of the robots with ``need [B, N] > 0`` per group
     of `NavConfig.replan_group` episodes (0: the whole batch is one group).
 
@@ -263,6 +263,10 @@ def replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: Carry, inp
     path's runs between its vertices go through free cells from centre to centre; only that first leg starts off
     a centre, and a robot standing beside a door facing a goal beyond it stood there until the time limit
     (room-64-64-8, docs/decisions.md, "Stall and orbit watches").
+    ``stranded bool[B, N]``: robots whose current path cannot be kept (stalled, or drifted off it behind a wall).
+    When the discs' closed cells leave such a robot no way to its goal, it takes the path that ignores the discs
+    (the local planner keeps it off them), instead of keeping one that leads it through a wall: in a maze one
+    walker in a corridor closes the only way back, and a robot kept tracking a path beyond a wall into a dead end.
     Only the chosen robots' fields are computed (a gather into fixed slots); robots left over
     try again on the next step. Groups are consecutive episodes, so a device holding whole
     groups computes exactly what one device computes for them. The slots in use are planned
@@ -289,13 +293,19 @@ def replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: Carry, inp
     state, wp, n_wp, index = take(c.state), take(c.waypoints), take(c.n_wp), take(c.index)
 
     def one(args):
-        need1, check1, state1, wp1, n1, index1, goal_cell1, cen, rch, anchor1 = args
+        need1, check1, state1, wp1, n1, index1, goal_cell1, cen, rch, anchor1, stranded1 = args
         closed = disc_cells((H, W), cen, jnp.where(need1, rch, 0.0), resolution, _SPAN)
         cell = jnp.clip(jnp.floor(state1[:2] / resolution).astype(jnp.int32), 0, jnp.asarray([W - 1, H - 1]))
         plan_free = free & ~closed
         plan_free = plan_free.at[cell[1], cell[0]].set(free[cell[1], cell[0]])  # the robot's own cell stays open
-        field = distance_field(plan_free, goal_cell1, need1, config.replan_sweeps, until=cell)
-        cells, n = descend(field, plan_free, cell, config.replan_cells)
+
+        def plan(open_cells):
+            field = distance_field(open_cells, goal_cell1, need1, config.replan_sweeps, until=cell)
+            return (field, *descend(field, open_cells, cell, config.replan_cells))
+
+        field, cells, n = plan(plan_free)
+        # Stranded, and no way round the discs: the way that ignores them (a second field, only then).
+        field, cells, n = lax.cond(stranded1 & need1 & (n <= 1), lambda: plan(free), lambda: (field, cells, n))
         pts, m = turn_vertices(cells, jnp.maximum(n, 1), K)
         # A stalled robot off its cell's centre, the way to the first vertex not clear: via the centre.
         via = anchor1 & (n > 1) & ~way_clear(state1[:2], (pts[0] + 0.5) * resolution, config.dwa.d_safe,
@@ -313,7 +323,7 @@ def replan_slots(config: NavConfig, free: jnp.ndarray, resolution, c: Carry, inp
         return (pts + 0.5) * resolution, m, need1 & (n > 1) & (~check1 | better)
 
     args = (use, check, state, wp, n_wp, index, take(inputs.goal_cell), take(centres), take(reach),
-            take(anchor))
+            take(anchor), take(stranded))
     # Only the slots in use are planned, one after another: a loop over all S slots paid for every unused
     # one's disc mask and descent (a batch of one-episode groups has S = B slots, mostly unused). An unused
     # slot's outputs are never read (`put` masks by ``ok``, which is False for it).

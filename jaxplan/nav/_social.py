@@ -55,10 +55,10 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from jaxplan.nav._tracking import way_clear
+from jaxplan.nav._tracking import SIGHT_CLEARANCE, way_clear
 
 __all__ = ["SocialForce", "WalkerState", "initial_walkers", "advance_walkers", "SUBSTEPS", "VERTEX_RADIUS", "TRAIL",
-           "TRAIL_SPACING", "SIGHT_CLEARANCE"]
+           "TRAIL_SPACING"]
 
 SUBSTEPS = 8
 """Integration steps per control period."""
@@ -72,9 +72,6 @@ TRAIL = 32
 TRAIL_SPACING = 0.5
 """m between a walker's breadcrumbs."""
 
-SIGHT_CLEARANCE = 0.05
-"""m: a walker sees its vertex if the straight line from its centre keeps this far from the map (its centre line
-clear of the blocked squares: it may brush a corner, but no wall stands in between)."""
 
 
 class SocialForce(NamedTuple):

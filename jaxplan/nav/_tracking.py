@@ -14,13 +14,18 @@ from jax import lax
 from jaxplan.dwa import dynamic_window
 from jaxplan.nav._config import NavConfig
 
-__all__ = ["way_clear", "subgoal_index", "lookahead_point", "corner_cap", "rewatch", "threatened", "follow"]
+__all__ = ["SIGHT_CLEARANCE", "way_clear", "subgoal_index", "lookahead_point", "corner_cap", "rewatch", "threatened",
+           "follow"]
 
 _SIGHT_POINTS = 32
 _SIGHT_STEP = 0.1
 _WHOLE_POINTS = 64
 """The straight way to a point is checked at ``_SIGHT_POINTS`` points ``_SIGHT_STEP`` m apart (corners within
 3.2 m), and with ``whole`` also at ``_WHOLE_POINTS`` evenly spaced points of the whole way."""
+
+SIGHT_CLEARANCE = 0.05
+"""m: a point is in sight of another if the straight line between them keeps this far from the map (clear of the
+blocked squares: it may brush a corner, but no wall stands in between)."""
 
 
 def way_clear(pos: jnp.ndarray, target: jnp.ndarray, d_safe, clearance, whole: bool = False) -> jnp.ndarray:
