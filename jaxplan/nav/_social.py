@@ -253,8 +253,9 @@ def advance_walkers(p: SocialForce, state: WalkerState, waypoints: jnp.ndarray, 
         moved_on = reached & (n > 1)
         target = jnp.where(moved_on, jnp.clip(target, 0, last), s.target).astype(jnp.int32)
         step = jnp.where(moved_on, step, s.step)
-        # A new vertex, a new trail: it starts where the walker takes the vertex up.
-        trail = jnp.where(moved_on[:, None, None], pos[:, None], s.trail)
+        # A new vertex, a new trail: it starts at the vertex just reached (on the route, in sight of the new one;
+        # where the walker stands may not be).
+        trail = jnp.where(moved_on[:, None, None], goal_pt[:, None], s.trail)
         depth = jnp.where(moved_on, 1, s.depth)
         r1, r2 = reactive[:, None], reactive[:, None, None]
         new = WalkerState(jnp.where(r1, pos, s.pos), jnp.where(r1, vel, s.vel), jnp.where(reactive, target, s.target),
