@@ -96,3 +96,17 @@ def test_maze_walkers_that_stood_against_a_wall_keep_walking(movingai):
     # Metres walked over the last 50 s [6, 5]: a walker standing against a wall (or jittering in place) walks none.
     walked = np.linalg.norm(np.diff(path[:, -250:], axis=1), axis=-1).sum(axis=1)
     assert (walked > 10.0).all(), {STOOD[i]: walked[i].round(1).tolist() for i in range(len(STOOD))}
+
+
+def test_a_new_trail_starts_at_the_vertex_just_reached(two_corridors):
+    # 0.2 m short of its vertex (8.5, 1.5), the walker moves on to the next (back to 1.5, 1.5: a bounce) within the
+    # period; its new trail is the vertex itself (in sight of the next one), not the spot where it stood.
+    obs = moving_obstacles([[[1.5, 1.5], [8.5, 1.5]]], speeds=1.0, radii=0.25, reactive=True)
+    s = _start(obs)._replace(pos=jnp.asarray([[8.3, 1.5]]), vel=jnp.asarray([[1.0, 0.0]]),
+                             target=jnp.asarray([1], jnp.int32), step=jnp.asarray([1], jnp.int32))
+    table = clearance_table(collision_map(two_corridors))
+    new, _ = advance_walkers(SocialForce(), s, obs.waypoints, obs.n_waypoints, obs.speeds, obs.radii, obs.loop,
+                             obs.reactive, FAR, jnp.zeros((1, 2)), 0.3,
+                             lambda x, y: static_clearance(table, x, y, "hybrid"), 0.2)
+    assert int(new.target[0]) == 0 and int(new.depth[0]) == 1
+    np.testing.assert_allclose(np.asarray(new.trail[0, 0]), [8.5, 1.5])
