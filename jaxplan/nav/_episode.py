@@ -256,7 +256,6 @@ def _replanning(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, inp
         robot_reach = jnp.where(jnp.repeat(moving, C, axis=1)[:, None, :], 0.0, reach[:, :, M:])
         reach = jnp.concatenate([reach[:, :, :M], robot_reach], axis=2)
 
-
     def sight(x, y):
         return static_clearance(table, x, y, "hybrid")
 

@@ -36,11 +36,13 @@ model, in up to 11 % of 180 s episodes on the MovingAI maps with 5 walkers at 1.
 wrong turn goes back the way they came. So each walker keeps a trail of `TRAIL` breadcrumbs, points
 `TRAIL_SPACING` m apart from which it could see its current vertex (the straight line to it keeps
 `SIGHT_CLEARANCE` from the map, checked once per control period over the whole line by
-`jaxplan.nav._tracking.way_clear`), restarted at the walker's position when it takes up a new vertex. A walker
+`jaxplan.nav._tracking.way_clear`), restarted at the vertex just reached when it moves on to the next. A walker
 that cannot see its vertex heads for its latest breadcrumb instead, dropping each as it comes within
-`VERTEX_RADIUS`, back to the first: where it took up this vertex, in sight of it (route segments are clear at the
-walker's radius). A walker that never loses sight of its route moves exactly as without the trail; most lose it
-for a moment at some corner (the line to the next vertex grazing the corner's square once they have moved on).
+`VERTEX_RADIUS`, back to the first: the vertex it last reached, in sight of this one (route segments are clear at
+the walker's radius). Where the walker stood when it moved on (up to `VERTEX_RADIUS` short of the vertex, or past
+it) may be out of sight of the next vertex; walkers that went back there hovered. A walker that never loses sight
+of its route moves exactly as without the trail; most lose it for a moment at some corner (the line to the next
+vertex grazing the corner's square once they have moved on).
 
 Integration: semi-implicit Euler in `SUBSTEPS` steps per control period (0.025 s at the default
 0.2 s): stable for the contact stiffness (``h·sqrt(k/m) ≈ 1 < 2``) and fine against ``τ`` and the
@@ -71,7 +73,6 @@ TRAIL = 32
 
 TRAIL_SPACING = 0.5
 """m between a walker's breadcrumbs."""
-
 
 
 class SocialForce(NamedTuple):
