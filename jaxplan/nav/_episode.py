@@ -103,6 +103,12 @@ def _robot_discs(state: jnp.ndarray, robot) -> tuple[jnp.ndarray, jnp.ndarray]:
 
 
 
+def _map_clearance(table: ClearanceTable):
+    """``f(x, y) -> m``: the clearance to the map at points ``[P]`` (the exact ``"hybrid"`` lookup), as the
+    straight-way checks, the yield point and the walkers' wall force take it."""
+    return lambda x, y: static_clearance(table, x, y, "hybrid")
+
+
 def _current_waypoint(c: Carry) -> jnp.ndarray:
     """``[B, N, 2]`` the waypoint each robot is tracking (m)."""
     return jnp.take_along_axis(c.waypoints, c.index[..., None, None], axis=2)[:, :, 0]
@@ -227,8 +233,7 @@ def _next_waypoints(config: NavConfig, table: ClearanceTable, c: Carry, pos: jnp
     near = jnp.where(c.creep, config.switch_min, config.switch_radius).reshape(-1)
     index = jax.vmap(subgoal_index, in_axes=(0, 0, 0, 0, None, 0, None, None))(
         pos.reshape(B * N, 2), c.waypoints.reshape((B * N,) + c.waypoints.shape[2:]), c.n_wp.reshape(-1),
-        c.index.reshape(-1), config.switch_radius, near, config.dwa.d_safe,
-        lambda x, y: static_clearance(table, x, y, "hybrid")).reshape(B, N)
+        c.index.reshape(-1), config.switch_radius, near, config.dwa.d_safe, _map_clearance(table)).reshape(B, N)
     return c._replace(index=index)
 
 
@@ -255,10 +260,7 @@ def _replanning(config: NavConfig, table: ClearanceTable, free: jnp.ndarray, inp
         moving = (jnp.abs(c.state[..., 3]) >= 0.1) & ~c.done  # [B, N]
         robot_reach = jnp.where(jnp.repeat(moving, C, axis=1)[:, None, :], 0.0, reach[:, :, M:])
         reach = jnp.concatenate([reach[:, :, :M], robot_reach], axis=2)
-
-    def sight(x, y):
-        return static_clearance(table, x, y, "hybrid")
-
+    sight = _map_clearance(table)
     # Drifted off the path (e.g. overshot an aisle) — unless a disc is within half the look-ahead:
     # then the drift is an evasion, and a fresh path through the disc undoes it (measured: two
     # robots crossing re-planned back into each other). Not once a wall stands between the robot and
@@ -351,7 +353,7 @@ def _give_way(config: NavConfig, table: ClearanceTable, c: Carry, pos: jnp.ndarr
         at = jnp.take_along_axis(discs.pos, j[..., None, None], axis=2)[:, :, 0]
         point, found = jax.vmap(jax.vmap(yield_point, in_axes=(0, 0, 0, 0, None, None)),
                                 in_axes=(0, 0, 0, 0, None, None))(
-            pos, at, discs.pos, discs.rad, lambda x, y: static_clearance(table, x, y, "hybrid"), config.dwa.d_safe)
+            pos, at, discs.pos, discs.rad, _map_clearance(table), config.dwa.d_safe)
         begin = due & found
         b2 = begin[..., None]
         # No point to go to: the clock restarts, and the robot looks again after another give_way_time.
@@ -504,11 +506,8 @@ def _move_walkers(config: NavConfig, table: ClearanceTable, obs: MovingObstacles
     # Robots that are done stay where they are, standing: walkers still go round them.
     robots_vel = jnp.where(jnp.repeat(c.done, C, axis=1)[..., None], 0.0, robots_vel)
 
-    def wall(x, y):
-        return static_clearance(table, x, y, "hybrid")
-
     def one(w, wp, n, sp, rad, lp, react, rb, rv):
-        return advance_walkers(SOCIAL_FORCE, w, wp, n, sp, rad, lp, react, rb, rv, discs.radius, wall,
+        return advance_walkers(SOCIAL_FORCE, w, wp, n, sp, rad, lp, react, rb, rv, discs.radius, _map_clearance(table),
                                config.dwa.period)
 
     new, path = jax.vmap(one)(c.walkers, obs.waypoints, obs.n_waypoints, obs.speeds, obs.radii, obs.loop,
