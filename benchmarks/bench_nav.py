@@ -23,7 +23,10 @@ Sections:
              runs the blind walkers with ``NavConfig(prediction="oracle")``: the local planner
              knows their true routes (an upper bound for any walker predictor, not something a
              robot can have). With ``--admissible`` a row runs the blind walkers with the local
-             planner's passive-safety admissibility on; ``--cases`` picks among static, blind, seeing.
+             planner's passive-safety admissibility on; with ``--passive-bounds 0.6,0.8`` a row per bound
+             runs the walkers that see with passive safety against walkers no faster than that bound (the
+             guarantee's bound is the walkers' true top speed; a lower one is an assumption, and the row
+             shows what it buys); ``--cases`` picks among static, blind, seeing.
   allrows    static episodes of `iaco_dwa` and `iaco_mppi` on EVERY row (optimal <= 80 cells) of
              every scenario file, each failure printed with its scenario row and reason (target:
              every one arrives); per file: rows, infeasible, arrived, failed. ``--allrows-seeds``
@@ -48,6 +51,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import subprocess
 import sys
@@ -130,8 +134,10 @@ def variant(args, keys: tuple[str, ...]) -> str:
                "teams": 10}
     parts = [f"{k.replace('_', ' ')} {','.join(map(str, v)) if isinstance(v, list) else v}"
              for k in keys if (v := getattr(args, k)) != default[k]]
+    bounds = ",".join(f"{v:g}" for v in args.passive_bounds)
     parts += ["quick"] * args.quick + ["oracle"] * (args.oracle and "maps" in keys) + [
-        "admissible"] * (args.admissible and "maps" in keys)
+        "admissible"] * (args.admissible and "maps" in keys) + [
+        f"passive bounds {bounds}"] * bool(args.passive_bounds and "maps" in keys)
     return f" ({'; '.join(parts)})" if parts else ""
 
 
@@ -188,6 +194,9 @@ def section_maps(d: Path, args) -> None:
                 cases.append(("blind, oracle", blind, NavConfig(prediction="oracle")))
             if args.admissible:
                 cases.append(("blind, admissible", blind, NavConfig(safety="predicted")))
+            for bound in args.passive_bounds:
+                cases.append((f"seeing, passive {bound:g}", walkers(grid, S, G, 5, 1.0, "social"),
+                              NavConfig(safety="passive", walker_speed_max=bound)))
             for label, obs, cfg in cases:
                 b, wall = run(grid, S, G, pipe, seeds, obs, cfg)
                 print(row(f"{name[:15]} {label[:14]}", b, wall), flush=True)
@@ -484,6 +493,9 @@ def main() -> None:
                     help="maps: also run the walkers with the DWA knowing their true routes (prediction='oracle')")
     ap.add_argument("--admissible", action="store_true",
                     help="maps: also run the blind walkers with the local planner's passive-safety admissibility on")
+    ap.add_argument("--passive-bounds", default="",
+                    help="maps: also run the seeing walkers with passive safety at each of these walker speed bounds "
+                         "(m/s, comma-separated; NavConfig(safety='passive', walker_speed_max=...))")
     ap.add_argument("--allrows-maps", default=",".join(MAPS), help="maps of the allrows section (comma-separated)")
     ap.add_argument("--allrows-seeds", default="0", help="seeds of the allrows section (comma-separated)")
     ap.add_argument("--cases", default="static,blind,seeing",
@@ -504,6 +516,9 @@ def main() -> None:
     args.cases = [x for x in args.cases.split(",") if x]
     args.allrows_maps = [m for m in args.allrows_maps.split(",") if m]
     args.allrows_seeds = [int(x) for x in args.allrows_seeds.split(",") if x]
+    args.passive_bounds = [float(x) for x in args.passive_bounds.split(",") if x]
+    if any(not (math.isfinite(v) and v >= 0.0) for v in args.passive_bounds):
+        ap.error(f"--passive-bounds must be finite speeds >= 0 m/s, got {args.passive_bounds}")
     bad = sorted(set(args.cases) - {"static", "blind", "seeing"})
     if bad:
         ap.error(f"unknown --cases {bad}; choose among static, blind, seeing")
