@@ -195,11 +195,11 @@ def section_maps(d: Path, args) -> None:
             if args.admissible:
                 cases.append(("blind, admissible", blind, NavConfig(safety="predicted")))
             for bound in args.passive_bounds:
-                cases.append((f"seeing, passive {bound:g}", walkers(grid, S, G, 5, 1.0, "social"),
+                cases.append((f"seeing, pass. {bound:g}", walkers(grid, S, G, 5, 1.0, "social"),
                               NavConfig(safety="passive", walker_speed_max=bound)))
             for label, obs, cfg in cases:
                 b, wall = run(grid, S, G, pipe, seeds, obs, cfg)
-                print(row(f"{name[:15]} {label[:14]}", b, wall), flush=True)
+                print(row(f"{name[:13]} {label[:16]}", b, wall), flush=True)
                 out.append([name, label, *cells(b, wall)])
                 if args.verbose:
                     bad = ~b.success & b.feasible
