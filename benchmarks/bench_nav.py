@@ -199,7 +199,7 @@ def section_maps(d: Path, args) -> None:
                               NavConfig(safety="passive", walker_speed_max=bound)))
             for label, obs, cfg in cases:
                 b, wall = run(grid, S, G, pipe, seeds, obs, cfg)
-                print(row(f"{name[:13]} {label[:16]}", b, wall), flush=True)
+                print(row(f"{name[:12]} {label[:17]}", b, wall), flush=True)
                 out.append([name, label, *cells(b, wall)])
                 if args.verbose:
                     bad = ~b.success & b.feasible
