@@ -18,10 +18,10 @@ Sections:
              (discs of 0.25 m at 1.0 m/s bouncing along random routes, starting at least 3 m from the
              robot's start and goal; they do not avoid the robot) and among 5 walkers that see (the
              same routes, avoiding robots, each other and walls with the social force model).
-             Targets: static 100 %; among walkers that see >= 99 %; among blind walkers with MPPI
-             >= 97 % with active contacts in <= 0.5 % of episodes. With ``--oracle`` a row per map
-             runs the blind walkers with ``NavConfig(prediction="oracle")``: the local planner
-             knows their true routes (an upper bound for any walker predictor, not something a
+             Targets: static 100 %; among walkers that see >= 99 % with MPPI, >= 97 % with the DWA;
+             among blind walkers with MPPI >= 97 % with active contacts in <= 0.5 % of episodes. With
+             ``--oracle`` a row per map runs the blind walkers with ``NavConfig(prediction="oracle")``: the local
+             planner knows their true routes (an upper bound for any walker predictor, not something a
              robot can have). With ``--admissible`` a row runs the blind walkers with the local
              planner's passive-safety admissibility on; with ``--passive-bounds 0.6,0.8`` a row per bound
              runs the walkers that see with passive safety against walkers no faster than that bound (the

@@ -41,8 +41,9 @@ def test_a_robot_and_a_walker_facing_each_other_in_a_corridor_pass(corridor, loc
 
 # maze-32-32-2 scenario rows where `iaco_dwa` with passive safety at its guaranteed bound (the walkers' route speed
 # × 1.3 = 1.3 m/s) ran out of time among 5 walkers that see, most in a standoff: a walker standing within the
-# robot's reach freezes a passively safe robot, and the walker waits for the robot (bench_nav's 100-episode batch).
-# In this 28-episode batch the guaranteed bound times out on 3 of them (measured, not asserted).
+# robot's reach freezes a passively safe robot, and the walker waits for the robot (bench_nav's 100-episode batch,
+# its walkers for each row). In this 28-episode batch (both seeds of each row) the guaranteed bound times out on
+# 12 episodes (measured, not asserted).
 STOOD_PASSIVE = [0, 22, 37, 52, 84, 116, 130, 151, 156, 176, 192, 231, 298, 325]
 
 
@@ -53,11 +54,14 @@ def test_passive_dwa_at_a_stated_walker_bound_gets_through_the_maze_standoffs(mo
     # slower than they walk, so no active contact follows — measured here, not guaranteed (docs/decisions.md).
     grid = jp.load_map(movingai / "maze-32-32-2.map", resolution=1.0)
     scen = jp.load_scenarios(movingai / "maze-32-32-2-random-1.scen")
+    ok = np.nonzero(scen.optimal <= 80.0)[0]
+    sel = ok[np.unique(np.linspace(0, len(ok) - 1, 50).round().astype(int))]  # bench_nav's 50 rows
     rows = np.asarray(STOOD_PASSIVE)
     S, G = scen.starts[rows], scen.goals[rows]
 
-    def walkers(e: int, seed: int):
-        avoid = (np.stack([S[e], G[e]]) + 0.5) * grid.resolution
+    def walkers(i: int, seed: int):  # bench_nav's walkers for row rows[i]: seeded by its place among the 50
+        e = int(np.nonzero(sel == rows[i])[0][0])
+        avoid = (np.stack([S[i], G[i]]) + 0.5) * grid.resolution
         return jp.random_obstacles(grid, n=5, speed=1.0, radius=0.25, seed=10_000 * seed + e, avoid=avoid,
                                    avoid_radius=3.0, behavior="social")
 
