@@ -516,7 +516,10 @@ def main() -> None:
     args.cases = [x for x in args.cases.split(",") if x]
     args.allrows_maps = [m for m in args.allrows_maps.split(",") if m]
     args.allrows_seeds = [int(x) for x in args.allrows_seeds.split(",") if x]
-    args.passive_bounds = [float(x) for x in args.passive_bounds.split(",") if x]
+    try:
+        args.passive_bounds = [float(x) for x in args.passive_bounds.split(",") if x]
+    except ValueError:
+        ap.error(f"--passive-bounds must be comma-separated speeds in m/s, got {args.passive_bounds!r}")
     if any(not (math.isfinite(v) and v >= 0.0) for v in args.passive_bounds):
         ap.error(f"--passive-bounds must be finite speeds >= 0 m/s, got {args.passive_bounds}")
     bad = sorted(set(args.cases) - {"static", "blind", "seeing"})
