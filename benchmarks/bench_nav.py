@@ -185,18 +185,18 @@ def section_maps(d: Path, args) -> None:
             sel = rows(scen, args.rows)
             S, G = scen.starts[sel], scen.goals[sel]
             blind = walkers(grid, S, G, 5, 1.0)
+            seeing = walkers(grid, S, G, 5, 1.0, "social")
             cases = [("static", None, None)] if "static" in args.cases else []
             if "blind" in args.cases:
                 cases.append(("blind walkers", blind, None))
             if "seeing" in args.cases:
-                cases.append(("seeing walkers", walkers(grid, S, G, 5, 1.0, "social"), None))
+                cases.append(("seeing walkers", seeing, None))
             if args.oracle:
                 cases.append(("blind, oracle", blind, NavConfig(prediction="oracle")))
             if args.admissible:
                 cases.append(("blind, admissible", blind, NavConfig(safety="predicted")))
             for bound in args.passive_bounds:
-                cases.append((f"seeing, pass. {bound:g}", walkers(grid, S, G, 5, 1.0, "social"),
-                              NavConfig(safety="passive", walker_speed_max=bound)))
+                cases.append((f"seeing, pass. {bound:g}", seeing, NavConfig(safety="passive", walker_speed_max=bound)))
             for label, obs, cfg in cases:
                 b, wall = run(grid, S, G, pipe, seeds, obs, cfg)
                 print(row(f"{name[:12]} {label[:17]}", b, wall), flush=True)
